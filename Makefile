@@ -1,0 +1,44 @@
+# yade-qdem: `make demo` sets everything up and runs the default demo;
+# `make test` builds and runs every test.  See README.md.
+PY      := /usr/bin/python3.11
+BUILD   := build
+JOBS    ?= 2
+# Where YADE's interpreter finds the package: system site for root, user site otherwise.
+SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/dist-packages; \
+             else $(PY) -c 'import site; print(site.getusersitepackages())' 2>/dev/null; fi)
+YADE    := yade -n
+export OMP_NUM_THREADS ?= 2
+
+.PHONY: deps build install demo test test-cpp test-py bench clean
+
+deps:
+	@bash scripts/setup/deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DQDEM_PYTHON=$(PY) > $(BUILD).cmake.log 2>&1 \
+	  || (cat $(BUILD).cmake.log; exit 1)
+	@cmake --build $(BUILD) -j $(JOBS)
+
+install: build
+	@mkdir -p $(SITE)/qdem
+	@cp $(BUILD)/python/qdem/*.py $(BUILD)/python/qdem/_core*.so $(SITE)/qdem/
+	@echo "qdem installed in $(SITE)/qdem"
+
+demo: install
+	@mkdir -p out/demo
+	$(YADE) -x scripts/demo.py
+
+test: build test-cpp test-py
+
+test-cpp:
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-py:
+	@PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q tests/python
+
+bench: build
+	@mkdir -p out/bench
+	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
+
+clean:
+	rm -rf $(BUILD) $(BUILD).cmake.log out

@@ -1,0 +1,75 @@
+// Viscoelastic normal spring-dashpot with a Coulomb-capped tangential spring
+// (Cundall-Strack).  Shared by every contact kind: node-wall, point-polygon,
+// edge-edge.  Why a tangential spring rather than regularised sliding: a block
+// on a slope below the friction angle must stay put, not creep.  Formulas and
+// sources: doc/formulation.md, "Contact law".
+#pragma once
+#include <Eigen/Core>
+#include <cmath>
+
+namespace qdem {
+
+struct ContactParams {
+    double kn;        // normal stiffness [N/m]
+    double cn;        // normal dashpot [N s/m]
+    double kt;        // tangential stiffness [N/m]
+    double ct;        // tangential dashpot [N s/m] (damps stick oscillations)
+    double friction;  // Coulomb coefficient; 0 = no tangential force at all
+};
+
+struct ContactResult {
+    Eigen::Vector3d force;   // on the particle side (the obstacle gets minus this)
+    double elastic = 0;      // energy stored in normal and tangential springs [J]
+    double dampPower = 0;    // dashpot power (>= 0 while dissipating) [W]
+    double slipWork = 0;     // energy dissipated by sliding this step [J]
+};
+
+// n: unit normal towards the particle; overlap > 0; vRel: particle velocity
+// minus obstacle velocity at the contact point; shear: tangential spring
+// elongation carried from step to step (updated in place).
+template <bool Friction>
+inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d& n, double overlap,
+                                  const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
+    ContactResult r;
+    const double vn = vRel.dot(n);
+    const double fnSpring = p.kn * overlap;
+    double fn = fnSpring - p.cn * vn;
+    if (fn < 0) fn = 0;  // a dashpot may not pull the surfaces together
+    r.dampPower = (fnSpring - fn) * vn;  // = -(damping force) * (overlap rate)
+    r.force = fn * n;
+    r.elastic = 0.5 * fnSpring * overlap;
+    if constexpr (Friction) {
+        // Carry the spring onto the current tangent plane, keeping its length,
+        // so a rotating contact does not create or lose tangential force.
+        const double len = shear.norm();
+        shear -= shear.dot(n) * n;
+        const double lenNew = shear.norm();
+        if (lenNew > 0) shear *= len / lenNew;
+        const double storedBefore = 0.5 * p.kt * shear.squaredNorm();
+        const Eigen::Vector3d vt = vRel - vn * n;
+        shear += vt * dt;
+        Eigen::Vector3d ft = -p.kt * shear - p.ct * vt;
+        const double ftMax = p.friction * fn;
+        const double ftNorm = ft.norm();
+        const bool slipping = ftNorm > ftMax;
+        if (slipping) {
+            // Sliding: the force is mu*Fn along the trial direction, and the
+            // spring is reset to what produces it (Luding's rule).
+            ft *= ftNorm > 0 ? ftMax / ftNorm : 0.0;
+            shear = -(ft + p.ct * vt) / p.kt;
+        }
+        r.force += ft;
+        const double stored = 0.5 * p.kt * shear.squaredNorm();
+        r.elastic += stored;
+        // Whatever the tangential force did and the spring did not store was
+        // dissipated: by sliding, or by the tangential dashpot while stuck.
+        const double lost = -ft.dot(vt) * dt - (stored - storedBefore);
+        if (slipping) r.slipWork = lost;
+        else r.dampPower += lost / dt;
+    } else {
+        shear.setZero();
+    }
+    return r;
+}
+
+}  // namespace qdem

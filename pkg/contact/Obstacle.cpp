@@ -1,0 +1,128 @@
+#include "Obstacle.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace qdem {
+
+using Eigen::Vector3d;
+
+void Obstacle::updateDerived() {
+    rot = ori.normalized().toRotationMatrix();
+    const double inf = std::numeric_limits<double>::infinity();
+    switch (kind) {
+        case ObstacleKind::Wall:
+            lo = Vector3d::Constant(-inf);
+            hi = Vector3d::Constant(inf);
+            break;
+        case ObstacleKind::Box: {
+            const Vector3d ext = rot.cwiseAbs() * halfExtents;
+            lo = pos - ext;
+            hi = pos + ext;
+            break;
+        }
+        case ObstacleKind::Facet:
+            for (int k = 0; k < 3; ++k) worldVerts[k] = pos + rot * localVerts[k];
+            lo = worldVerts[0].cwiseMin(worldVerts[1]).cwiseMin(worldVerts[2]);
+            hi = worldVerts[0].cwiseMax(worldVerts[1]).cwiseMax(worldVerts[2]);
+            break;
+    }
+}
+
+Vector3d closestPointOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+    const Vector3d ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0 && d2 <= 0) return a;
+    const Vector3d bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+    const Vector3d cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+bool touchObstacle(const Obstacle& o, const Vector3d& x, double r, int prevSide, ObstacleHit& hit) {
+    switch (o.kind) {
+        case ObstacleKind::Wall: {
+            // One-sided walls push towards their sense however deep the
+            // particle is (as YADE does); two-sided ones towards the side the
+            // contact started on.
+            const double d = x[o.axis] - o.pos[o.axis];
+            const int s = o.sense != 0 ? o.sense : (prevSide != 0 ? prevSide : (d >= 0 ? 1 : -1));
+            hit.side = s;
+            hit.overlap = r - s * d;
+            if (hit.overlap <= 0) return false;
+            hit.normal = Vector3d::Zero();
+            hit.normal[o.axis] = double(s);
+            hit.point = x;
+            hit.point[o.axis] = o.pos[o.axis];
+            return true;
+        }
+        case ObstacleKind::Box: {
+            const Vector3d q = o.rot.transpose() * (x - o.pos);
+            const Vector3d& e = o.halfExtents;
+            const Vector3d clamped = q.cwiseMax(-e).cwiseMin(e);
+            Vector3d nLocal, pLocal;
+            if (clamped != q) {  // outside: nearest point on the surface
+                const Vector3d d = q - clamped;
+                const double dist = d.norm();
+                hit.overlap = r - dist;
+                if (hit.overlap <= 0) return false;
+                nLocal = d / dist;
+                pLocal = clamped;
+            } else {  // inside: push out through the nearest face
+                int k = 0;
+                double best = std::numeric_limits<double>::infinity();
+                for (int a = 0; a < 3; ++a) {
+                    const double depth = e[a] - std::fabs(q[a]);
+                    if (depth < best) {
+                        best = depth;
+                        k = a;
+                    }
+                }
+                nLocal = Vector3d::Zero();
+                nLocal[k] = q[k] >= 0 ? 1.0 : -1.0;
+                pLocal = q;
+                pLocal[k] = nLocal[k] * e[k];
+                hit.overlap = r + best;
+            }
+            hit.normal = o.rot * nLocal;
+            hit.point = o.pos + o.rot * pLocal;
+            return true;
+        }
+        case ObstacleKind::Facet: {
+            const Vector3d c = closestPointOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
+            const Vector3d nf =
+                (o.worldVerts[1] - o.worldVerts[0]).cross(o.worldVerts[2] - o.worldVerts[0]).normalized();
+            const Vector3d d = x - c;
+            const double dist = d.norm();
+            const double h = d.dot(nf);
+            const int sideNow = h >= 0 ? 1 : -1;
+            hit.point = c;
+            if (prevSide != 0 && sideNow != prevSide && std::fabs(h) >= 0.5 * dist) {
+                // Pushed through the facet's face: keep pushing back.
+                hit.side = prevSide;
+                hit.normal = double(prevSide) * nf;
+                hit.overlap = r + dist;
+                return true;
+            }
+            hit.side = sideNow;
+            hit.overlap = r - dist;
+            if (hit.overlap <= 0) return false;
+            hit.normal = dist > 1e-14 * r ? Vector3d(d / dist) : Vector3d(double(sideNow) * nf);
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace qdem

@@ -1,0 +1,62 @@
+// Rigid YADE bodies that QDEM surface nodes touch: Wall (infinite plane),
+// Box (oriented box) and Facet (triangle).  Their state is copied in from
+// YADE every step; their reactions are summed here and handed back to YADE
+// through O.forces.
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace qdem {
+
+enum class ObstacleKind : int { Wall = 0, Box = 1, Facet = 2 };
+
+struct Obstacle {
+    ObstacleKind kind = ObstacleKind::Wall;
+    int bodyId = -1;      // YADE body id (the key of tangential-spring history)
+    double young = 0;     // the body material's Young modulus; <= 0 means rigid
+    double friction = -1; // overrides the piece's frictionWall when >= 0
+    int axis = 2;         // Wall: normal axis 0/1/2
+    int sense = 0;        // Wall: 0 both sides, +1 positive side only, -1 negative side only
+    Eigen::Vector3d halfExtents = Eigen::Vector3d::Zero();  // Box
+    Eigen::Vector3d localVerts[3];                           // Facet, body frame
+
+    // State at the current step (set by World::setObstacleState).
+    Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond ori = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d vel = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angVel = Eigen::Vector3d::Zero();
+
+    // Derived from the state.
+    Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d worldVerts[3];
+    Eigen::Vector3d lo, hi;  // axis-aligned bounds (walls: infinite across)
+
+    // Reaction of the last step: force on the body and torque about its
+    // position (what goes to O.forces).
+    Eigen::Vector3d reactionForce = Eigen::Vector3d::Zero();
+    Eigen::Vector3d reactionTorque = Eigen::Vector3d::Zero();
+
+    void updateDerived();
+    Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return vel + angVel.cross(p - pos); }
+};
+
+// Where a particle of radius r centred at x touches an obstacle.
+struct ObstacleHit {
+    Eigen::Vector3d normal;  // unit, from the obstacle towards the particle
+    Eigen::Vector3d point;   // contact point on the obstacle surface
+    double overlap;          // > 0 when in contact
+    int side = 0;            // two-sided obstacles: +1/-1 side of the particle, kept as history
+};
+
+// Returns false when the particle does not touch the obstacle.  prevSide is
+// the side the particle was on when the contact began (0 = new contact): a
+// particle pushed through a two-sided wall or facet by a hard impact is then
+// still pushed back to where it came from, instead of being let through.
+bool touchObstacle(const Obstacle& o, const Eigen::Vector3d& x, double r, int prevSide, ObstacleHit& hit);
+
+// Closest point on triangle abc to p (Voronoi-region walk; Ericson,
+// Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+}  // namespace qdem

@@ -1,0 +1,128 @@
+// The element kernel of SvkTetra.hpp, evaluated for kLanes tetrahedra at
+// once.  Node data are gathered into lane arrays, the arithmetic runs as one
+// straight-line loop over lanes (which the compiler turns into SIMD code), and
+// forces are scattered back.  Same formulas as svkStress/nodalForces; the
+// unit tests compare the two.
+#pragma once
+#include <cstdint>
+
+#include "SvkTetra.hpp"
+
+namespace qdem {
+
+constexpr int kLanes = 8;
+
+struct BatchOut {
+    double f[4][3][kLanes];  // nodal forces per lane
+    double wElastic[kLanes]; // V0 * strain energy density
+    double diss[kLanes];     // V0 * viscous dissipation rate
+};
+
+// Computes forces for tets e0 .. e0+count-1 (count <= kLanes).  Lanes beyond
+// count are padded with the last tet and must be ignored by the caller.
+template <bool Viscous, bool Energy>
+inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X, const double* V,
+                     const double* Bs, const double* vol, const ElementParams& p, BatchOut& out) {
+    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], B[9][kLanes], V0[kLanes];
+    for (int l = 0; l < kLanes; ++l) {
+        const int32_t e = e0 + (l < count ? l : count - 1);
+        const int32_t* c = conn + 4 * e;
+        const double* x0 = X + 3 * c[0];
+        for (int k = 0; k < 3; ++k) {
+            const double* xk = X + 3 * c[k + 1];
+            for (int i = 0; i < 3; ++i) dx[k][i][l] = xk[i] - x0[i];
+        }
+        if constexpr (Viscous) {
+            const double* v0 = V + 3 * c[0];
+            for (int k = 0; k < 3; ++k) {
+                const double* vk = V + 3 * c[k + 1];
+                for (int i = 0; i < 3; ++i) dv[k][i][l] = vk[i] - v0[i];
+            }
+        }
+        for (int m = 0; m < 9; ++m) B[m][l] = Bs[9 * e + m];
+        V0[l] = vol[e];
+    }
+    const double lam = p.lambda, mu2 = 2 * p.mu, blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l) {
+        // F = Ds * B  (Ds columns are the edge vectors)
+        double F[3][3], Fd[3][3];
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i)
+            #pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) {
+                F[i][j] = dx[0][i][l] * B[0 * 3 + j][l] + dx[1][i][l] * B[1 * 3 + j][l] + dx[2][i][l] * B[2 * 3 + j][l];
+                if constexpr (Viscous)
+                    Fd[i][j] =
+                        dv[0][i][l] * B[0 * 3 + j][l] + dv[1][i][l] * B[1 * 3 + j][l] + dv[2][i][l] * B[2 * 3 + j][l];
+            }
+        // Green-Lagrange strain E = (F^T F - I)/2 (symmetric: 6 entries)
+        double E[3][3];
+        #pragma GCC unroll 3
+        for (int a = 0; a < 3; ++a)
+            #pragma GCC unroll 3
+            for (int b = a; b < 3; ++b) {
+                E[a][b] = 0.5 * (F[0][a] * F[0][b] + F[1][a] * F[1][b] + F[2][a] * F[2][b] - (a == b ? 1.0 : 0.0));
+                E[b][a] = E[a][b];
+            }
+        const double trE = E[0][0] + E[1][1] + E[2][2];
+        double S[3][3];
+        #pragma GCC unroll 3
+        for (int a = 0; a < 3; ++a)
+            #pragma GCC unroll 3
+            for (int b = 0; b < 3; ++b) S[a][b] = mu2 * E[a][b] + (a == b ? lam * trE : 0.0);
+        double wEl = 0, dRate = 0;
+        if constexpr (Energy) {
+            double ee = 0;
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = 0; b < 3; ++b) ee += E[a][b] * E[a][b];
+            wEl = 0.5 * lam * trE * trE + 0.5 * mu2 * ee;
+        }
+        if constexpr (Viscous) {
+            // Green-Lagrange strain rate dE/dt = sym(F^T dF/dt)
+            double Ed[3][3];
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = a; b < 3; ++b) {
+                    const double gab = F[0][a] * Fd[0][b] + F[1][a] * Fd[1][b] + F[2][a] * Fd[2][b];
+                    const double gba = F[0][b] * Fd[0][a] + F[1][b] * Fd[1][a] + F[2][b] * Fd[2][a];
+                    Ed[a][b] = 0.5 * (gab + gba);
+                    Ed[b][a] = Ed[a][b];
+                }
+            const double trEd = Ed[0][0] + Ed[1][1] + Ed[2][2];
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = 0; b < 3; ++b) {
+                    const double sv = bmu2 * Ed[a][b] + (a == b ? blam * trEd : 0.0);
+                    S[a][b] += sv;
+                    if constexpr (Energy) dRate += sv * Ed[a][b];
+                }
+        }
+        // P = F S ;  H = -V0 P B^T : forces on nodes 1..3 as columns
+        double P[3][3];
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i)
+            #pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) P[i][j] = F[i][0] * S[0][j] + F[i][1] * S[1][j] + F[i][2] * S[2][j];
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i) {
+            double sum = 0;
+            #pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) {
+                const double h =
+                    -V0[l] * (P[i][0] * B[k * 3 + 0][l] + P[i][1] * B[k * 3 + 1][l] + P[i][2] * B[k * 3 + 2][l]);
+                out.f[k + 1][i][l] = h;
+                sum += h;
+            }
+            out.f[0][i][l] = -sum;
+        }
+        out.wElastic[l] = V0[l] * wEl;
+        out.diss[l] = V0[l] * dRate;
+    }
+}
+
+}  // namespace qdem

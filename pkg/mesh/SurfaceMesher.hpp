@@ -1,0 +1,33 @@
+// Tetrahedral meshing of a closed triangle surface with CGAL Mesh_3.
+// Compiled only when CGAL is available (QDEM_HAVE_CGAL, target qdemmesher).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "TetMesh.hpp"
+
+namespace qdem {
+
+// Fills the volume bounded by a closed, manifold, non-self-intersecting
+// triangle surface with tetrahedra of target size cellSize.
+//
+//   vertices       3 coordinates per vertex (unused vertices are ignored)
+//   triangles      3 vertex indices per triangle; any consistent or
+//                  inconsistent orientation is accepted
+//   cellSize       upper bound on the circumradius of the tets and on the
+//                  size of the surface triangles and of sharp-edge segments
+//   facetDistance  upper bound on the distance between a surface triangle of
+//                  the result and the input surface; <= 0 means cellSize/10
+//   seed           seed of CGAL's random generators: equal inputs and seeds
+//                  give identical meshes
+//
+// Sharp edges (dihedral angle sharper than 60 degrees) and corners of the
+// input are kept.  The result holds only the tets inside the surface, nodes
+// renumbered without unused ones, every tet positively oriented; it passes
+// checkMesh.  Throws InputError naming the problem for invalid input (too few
+// vertices, bad index, NaN, bad cellSize, an open or non-manifold surface, a
+// self-intersecting surface, ...) or when no tet results.
+TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector<int32_t>& triangles,
+                          double cellSize, double facetDistance = -1.0, unsigned seed = 0);
+
+}  // namespace qdem

@@ -1,0 +1,30 @@
+// A tetrahedral mesh as flat arrays: the input format of every piece.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+namespace qdem {
+
+struct TetMesh {
+    std::vector<double> nodes;   // 3 * nNodes, x y z per node
+    std::vector<int32_t> tets;   // 4 * nTets, node indices (0-based)
+
+    std::size_t nNodes() const { return nodes.size() / 3; }
+    std::size_t nTets() const { return tets.size() / 4; }
+};
+
+// Six times the signed volume of tetrahedron t (positive = right-handed).
+double tetSixVolume(const TetMesh& m, std::size_t t);
+
+// Throws InputError naming the first problem found: wrong array sizes, NaN or
+// infinite coordinates, node indices out of range, repeated nodes in a tet,
+// inverted tets (negative volume) and zero-volume tets (volume below
+// relTol * mean-edge^3).  Unused nodes are allowed.
+void checkMesh(const TetMesh& m, double relTol = 1e-10);
+
+// Flips every tetrahedron with negative volume (swaps its last two nodes).
+// Returns the number flipped.  Use for files written with the opposite
+// orientation convention, never to hide a mesh that is tangled.
+std::size_t orientPositive(TetMesh& m);
+
+}  // namespace qdem

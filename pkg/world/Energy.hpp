@@ -1,0 +1,24 @@
+// Energy bookkeeping of the QDEM part of a scene.  Signs follow YADE's
+// O.energy: the sum of all terms stays constant for an isolated scene, so
+// "gravity" is minus the work done by gravity (the potential energy change)
+// and dissipation terms grow from zero.
+#pragma once
+
+namespace qdem {
+
+struct Energy {
+    double kinetic = 0;         // state: 1/2 m v^2 at the integer time level
+    double elastic = 0;         // state: strain energy of all tets
+    double gravity = 0;         // accumulated: -(work of gravity)
+    double viscous = 0;         // accumulated: Kelvin-Voigt dissipation
+    double contactElastic = 0;  // state: energy in contact springs
+    double contactDamping = 0;  // accumulated: dashpot dissipation
+    double friction = 0;        // accumulated: Coulomb slip dissipation
+    double boundaryWork = 0;    // accumulated: -(work of moving obstacles on the nodes)
+
+    double total() const {
+        return kinetic + elastic + gravity + viscous + contactElastic + contactDamping + friction + boundaryWork;
+    }
+};
+
+}  // namespace qdem

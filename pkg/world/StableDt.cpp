@@ -1,0 +1,139 @@
+// Stable time step of the explicit scheme.  Derivation: doc/formulation.md,
+// "Stable time step".
+//
+// Element: by Irons' element eigenvalue theorem the highest frequency of the
+// assembled lumped-mass mesh is below the highest frequency of any single
+// element with its own lumped mass rho*V/4 per node.  For each element a cheap
+// upper bound of that frequency comes first (lambda_max(K_e) <=
+// V (lambda + 2 mu) sum_a |grad N_a|^2); exact 12x12 eigenvalues are then
+// computed only for the elements whose bound could still be the largest.
+// Kelvin-Voigt viscosity here is stiffness-proportional (C_e = beta K_e), so
+// each element mode of frequency w has damping ratio beta*w/2.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <map>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "../element/SvkTetra.hpp"
+#include "World.hpp"
+
+namespace qdem {
+
+namespace {
+
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+
+// Linear (small-strain) stiffness of one element in the reference state.
+Mat12 elementStiffness(const Mat3& B, double V, double lambda, double mu) {
+    // grad N_a: rows of B for nodes 1..3, minus their sum for node 0.
+    Eigen::Matrix<double, 4, 3> G;
+    G.row(1) = B.row(0);
+    G.row(2) = B.row(1);
+    G.row(3) = B.row(2);
+    G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
+    Mat12 K;
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+            const double gg = G.row(a).dot(G.row(b));
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j)
+                    K(3 * a + i, 3 * b + j) =
+                        V * (lambda * G(a, i) * G(b, j) + mu * G(a, j) * G(b, i) + (i == j ? mu * gg : 0.0));
+        }
+    return K;
+}
+
+}  // namespace
+
+double World::elementOmegaMax(const PieceInfo& p) const {
+    const Material& m = materials[p.material];
+    const double lam = m.lambda(), mu = m.mu();
+    const int32_t n = p.tetEnd - p.tetBegin;
+    std::vector<double> bound(n);
+    for (int32_t e = 0; e < n; ++e) {
+        const Mat3 B = loadRowMajor(&tetB[9 * (p.tetBegin + e)]);
+        const double sumG2 = B.squaredNorm() + (B.row(0) + B.row(1) + B.row(2)).squaredNorm();
+        // omega^2 = lambda_max(K) / (rho V / 4); V cancels.
+        bound[e] = 4.0 * (std::max(lam, 0.0) + 2 * mu) * sumG2 / m.density;
+    }
+    std::vector<int32_t> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return bound[a] > bound[b]; });
+    double best = 0;  // exact omega^2 maximum found so far
+    // Structured meshes repeat a few element shapes thousands of times: the
+    // eigenvalue depends only on B, so identical B are solved once.
+    std::map<std::array<double, 9>, double> solved;
+    for (int32_t k = 0; k < n && bound[order[k]] > best; ++k) {
+        const int32_t e = p.tetBegin + order[k];
+        std::array<double, 9> key;
+        std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
+        if (solved.count(key)) continue;
+        const Mat3 B = loadRowMajor(&tetB[9 * e]);
+        const Mat12 K = elementStiffness(B, tetVol0[e], lam, mu);
+        Eigen::SelfAdjointEigenSolver<Mat12> es(K, Eigen::EigenvaluesOnly);
+        const double w2 = es.eigenvalues().maxCoeff() / (m.density * tetVol0[e] / 4.0);
+        solved[key] = w2;
+        best = std::max(best, w2);
+    }
+    return std::sqrt(best);
+}
+
+StableDt World::stableDt() const {
+    const double inf = std::numeric_limits<double>::infinity();
+    StableDt r{inf, inf, inf, inf, "none"};
+    if (omegaCache_.size() != pieces.size()) {
+        omegaCache_.resize(pieces.size());
+        for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
+    }
+    double stiffestObstacle = 0;  // Young of the stiffest obstacle; <= 0 means rigid
+    bool rigid = false;
+    for (const auto& o : obstacles) {
+        if (o.young <= 0) rigid = true;
+        stiffestObstacle = std::max(stiffestObstacle, o.young);
+    }
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const PieceInfo& p = pieces[i];
+        const Material& m = materials[p.material];
+        const double we = omegaCache_[i];
+        const double beta = viscosityOn ? m.beta() : 0.0;
+        r.elastic = std::min(r.elastic, leapfrogLimit(we, 0.0));
+        r.viscous = std::min(r.viscous, leapfrogLimit(we, 0.5 * beta * we));
+        double wc = 0, xic = 0;
+        if (!obstacles.empty()) {
+            const double kn = rigid ? 2 * m.young * m.radius
+                                    : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
+            wc = std::sqrt(kn / p.minSurfaceNodeMass);
+            xic = dampingRatioFromRestitution(m.restitution);
+            r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
+        }
+        // Element and contact springs on the same node: frequencies add in
+        // quadrature, damping rates (c/m) add.
+        const double w = std::sqrt(we * we + wc * wc);
+        const double c = beta * we * we + 2 * xic * wc;
+        r.combined = std::min(r.combined, leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0));
+    }
+    const double lim = std::min({r.elastic, r.viscous, r.contact});
+    if (std::isfinite(lim)) {
+        if (r.contact == lim) r.limitedBy = "contact";
+        else if (r.viscous < r.elastic) r.limitedBy = "viscosity";
+        else r.limitedBy = "elasticity (P-wave)";
+    }
+    return r;
+}
+
+void World::checkDt(double dt) const {
+    const StableDt s = stableDt();
+    if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+    if (dt > s.combined)
+        throw StabilityError(cat("QDEM: O.dt=", dt, " s exceeds the stable time step ", s.combined,
+                                 " s by a factor ", dt / s.combined, " (limited by ", s.limitedBy,
+                                 "; elastic limit ", s.elastic, " s, with viscosity ", s.viscous,
+                                 " s, contact ", s.contact, " s). Lower O.dt, the viscosity or the stiffness."));
+}
+
+}  // namespace qdem

@@ -1,0 +1,138 @@
+// Set-up of the world: materials, pieces, obstacles.
+#include "World.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "../element/SvkTetra.hpp"
+
+namespace qdem {
+
+int World::addMaterial(const Material& m) {
+    m.validate();
+    materials.push_back(m);
+    omegaCache_.clear();
+    return static_cast<int>(materials.size()) - 1;
+}
+
+int World::addPiece(const TetMesh& mesh, int material) {
+    if (material < 0 || material >= static_cast<int>(materials.size()))
+        throw InputError(cat("addPiece: unknown material index ", material));
+    checkMesh(mesh);
+    const Material& mat = materials[material];
+
+    PieceInfo p;
+    p.material = material;
+    const auto n0 = static_cast<int32_t>(nNodes());
+    const auto t0 = static_cast<int32_t>(nTets());
+    const auto nn = static_cast<int32_t>(mesh.nNodes());
+    const auto nt = static_cast<int32_t>(mesh.nTets());
+    p.nodeBegin = n0;
+    p.nodeEnd = n0 + nn;
+    p.tetBegin = t0;
+    p.tetEnd = t0 + nt;
+    const int pieceId = static_cast<int>(pieces.size());
+
+    // Surface first: it throws on a non-manifold mesh before anything changes.
+    Surface s = extractSurface(mesh);
+
+    const std::size_t N = n0 + nn, T = t0 + nt;
+    pos.resize(3 * N);
+    vel.resize(3 * N, 0.0);
+    refPos.resize(3 * N);
+    force.resize(3 * N, 0.0);
+    extForce.resize(3 * N, 0.0);
+    contactForce_.resize(3 * N, 0.0);
+    mass.resize(N, 0.0);
+    blocked.resize(N, 0);
+    nodePiece.resize(N, pieceId);
+    tetNodes.resize(4 * T);
+    tetPiece.resize(T, pieceId);
+    tetB.resize(9 * T);
+    tetVol0.resize(T);
+
+    for (int32_t i = 0; i < nn; ++i)
+        for (int d = 0; d < 3; ++d) {
+            pos[3 * (n0 + i) + d] = mesh.nodes[3 * i + d];
+            refPos[3 * (n0 + i) + d] = mesh.nodes[3 * i + d];
+        }
+    for (int32_t e = 0; e < nt; ++e) {
+        const int32_t* c = &mesh.tets[4 * e];
+        for (int k = 0; k < 4; ++k) tetNodes[4 * (t0 + e) + k] = n0 + c[k];
+        const Mat3 Dm = edgeMatrix(&mesh.nodes[3 * c[0]], &mesh.nodes[3 * c[1]], &mesh.nodes[3 * c[2]],
+                                   &mesh.nodes[3 * c[3]]);
+        const double V = Dm.determinant() / 6.0;
+        const Mat3 B = Dm.inverse();
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) tetB[9 * (t0 + e) + 3 * i + j] = B(i, j);
+        tetVol0[t0 + e] = V;
+        const double m4 = mat.density * V / 4.0;  // lumped mass: a quarter to each node
+        for (int k = 0; k < 4; ++k) mass[n0 + c[k]] += m4;
+        p.volume += V;
+    }
+    p.mass = mat.density * p.volume;
+    for (int32_t i = 0; i < nn; ++i)
+        if (!(mass[n0 + i] > 0))
+            throw InputError(cat("addPiece: node ", i, " belongs to no tetrahedron (zero mass); remove unused nodes"));
+
+    // Surface in global ids.
+    for (auto& v : s.triangles) v += n0;
+    for (auto& v : s.edges) v += n0;
+    for (auto& v : s.nodes) v += n0;
+    for (auto& v : s.triTet) v += t0;
+    for (auto& v : s.tets) v += t0;
+    p.surfBegin = static_cast<int32_t>(surfNodes.size());
+    surfNodes.resize(surfNodes.size() + s.nodes.size());
+    double mmin = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+        surfNodes[p.surfBegin + i] = s.nodes[i];
+        mmin = std::min(mmin, mass[s.nodes[i]]);
+    }
+    p.surfEnd = static_cast<int32_t>(surfNodes.size());
+    p.minSurfaceNodeMass = mmin;
+    p.surface = std::move(s);
+
+    slotBody_.resize(kSlots * surfNodes.size(), -1);
+    slotShear_.resize(3 * kSlots * surfNodes.size(), 0.0);
+    slotSide_.resize(kSlots * surfNodes.size(), 0);
+    pieces.push_back(std::move(p));
+    omegaCache_.clear();
+    layout_ = ThreadLayout();  // tet count changed: rebuilt at the next step
+    return pieceId;
+}
+
+void World::setObstacles(const std::vector<Obstacle>& obs) {
+    for (const auto& o : obs) {
+        if (o.kind == ObstacleKind::Wall && (o.axis < 0 || o.axis > 2))
+            throw InputError(cat("obstacle ", o.bodyId, ": wall axis must be 0, 1 or 2, got ", o.axis));
+        if (o.kind == ObstacleKind::Box && !(o.halfExtents.minCoeff() >= 0))
+            throw InputError(cat("obstacle ", o.bodyId, ": box extents must be >= 0"));
+    }
+    obstacles = obs;
+    for (auto& o : obstacles) o.updateDerived();
+    omegaCache_.clear();
+}
+
+void World::setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
+                             const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+    if (i < 0 || i >= static_cast<int>(obstacles.size()))
+        throw InputError(cat("setObstacleState: no obstacle ", i));
+    Obstacle& o = obstacles[i];
+    o.pos = p;
+    o.ori = q;
+    o.vel = v;
+    o.angVel = w;
+    o.updateDerived();
+}
+
+void World::checkFinite() const {
+    const std::size_t n = 3 * nNodes();
+    for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(pos[i]) || !std::isfinite(vel[i]))
+            throw StabilityError(cat("QDEM state is not finite at node ", i / 3, " (piece ", nodePiece[i / 3],
+                                     ") after step ", iter, ": the integration blew up"));
+}
+
+}  // namespace qdem

@@ -1,0 +1,115 @@
+// The QDEM world: every piece's nodes and tetrahedra in shared struct-of-
+// arrays storage, the rigid obstacles they touch, and the step pipeline.
+//
+// One step (World::step) = obstacle contacts -> element forces -> leapfrog.
+// Each phase runs only when the scene needs it (no viscous term for a piece
+// with viscosity 0, no friction work at friction 0, no obstacle loop without
+// obstacles, no energy sums unless tracked).
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "../contact/Obstacle.hpp"
+#include "../core/Column.hpp"
+#include "../material/Material.hpp"
+#include "../mesh/Surface.hpp"
+#include "../mesh/TetMesh.hpp"
+#include "Energy.hpp"
+#include "ThreadLayout.hpp"
+
+namespace qdem {
+
+struct PieceInfo {
+    int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
+    int32_t tetBegin, tetEnd;    // [begin, end) in the global tet arrays
+    int32_t surfBegin, surfEnd;  // [begin, end) in surfNodes
+    int material;
+    Surface surface;             // in global node / tet ids
+    double volume = 0, mass = 0;
+    double minSurfaceNodeMass = 0;
+};
+
+// Stable time step and which limit sets it.
+struct StableDt {
+    double elastic;   // undamped P-wave limit of the stiffest element
+    double viscous;   // the same mode with its Kelvin-Voigt damping
+    double contact;   // node-obstacle spring-dashpot on the lightest surface node
+    double combined;  // all of the above acting on one node: the step we enforce
+    std::string limitedBy;
+};
+
+class World {
+public:
+    // ---- set-up -----------------------------------------------------------
+    int addMaterial(const Material& m);
+    // Adds a checked mesh whose coordinates are already in the world frame.
+    int addPiece(const TetMesh& mesh, int material);
+    void setObstacles(const std::vector<Obstacle>& obstacles);
+    // Copies one obstacle's state (from YADE) for the coming step.
+    void setObstacleState(int i, const Eigen::Vector3d& pos, const Eigen::Quaterniond& ori,
+                          const Eigen::Vector3d& vel, const Eigen::Vector3d& angVel);
+
+    // ---- stepping ---------------------------------------------------------
+    void step(double dt);
+    // Throws StabilityError (naming the limit) when dt exceeds the stable step.
+    void checkDt(double dt) const;
+    StableDt stableDt() const;
+    // Throws StabilityError when a position or velocity became NaN/infinite.
+    void checkFinite() const;
+
+    // ---- output -----------------------------------------------------------
+    // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
+    void computeStress(double* out) const;
+
+    // ---- data (struct of arrays; 3 doubles per node for vectors) ----------
+    Column<double> pos, vel, refPos, force, extForce, mass;
+    Column<uint8_t> blocked;  // bit d set: DOF d keeps its velocity (prescribed)
+    Column<int32_t> nodePiece;
+    Column<int32_t> tetNodes, tetPiece;
+    Column<double> tetB, tetVol0;   // inverse reference edge matrix (row-major), volume
+    Column<int32_t> surfNodes;      // global ids of the surface nodes of all pieces
+    std::vector<PieceInfo> pieces;
+    std::vector<Material> materials;
+    std::vector<Obstacle> obstacles;
+
+    // ---- settings -----------------------------------------------------------
+    Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+    bool trackEnergy = false;
+    bool viscosityOn = true;  // user switch: the viscous term can be turned off
+    bool frictionOn = true;   // user switch: tangential forces off
+    double time = 0;
+    long iter = 0;
+    Energy energy;
+
+    std::size_t nNodes() const { return mass.size(); }
+    std::size_t nTets() const { return tetVol0.size(); }
+
+    // Per-phase wall time of the last step [s], for the benchmarks.
+    struct Timings { double obstacles = 0, elements = 0, integrate = 0; } timings;
+
+private:
+    template <bool Viscous, bool Energy>
+    void elementRange(int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo, double& wEl,
+                      double& diss) const;
+    void elementPhase(double dt);
+    void obstaclePhase(double dt);
+    void integratePhase(double dt);
+    double elementOmegaMax(const PieceInfo& p) const;
+
+    ThreadLayout layout_;
+    // Contact history: kSlots (obstacle body id, tangential spring) per surface node.
+    static constexpr int kSlots = 4;
+    Column<int32_t> slotBody_;
+    Column<double> slotShear_;
+    Column<int8_t> slotSide_;
+    Column<double> contactForce_;  // per node, from obstacles (and later piece contacts)
+    bool contactsActive_ = false;  // contactForce_ holds forces for the coming update
+    std::vector<double> obstacleReaction_;  // per thread x obstacle x 6
+    std::vector<int> pieceObstacles_;       // per piece: candidate obstacle list (flattened)
+    std::vector<int> pieceObstacleBegin_;
+    mutable std::vector<double> omegaCache_;  // per piece, element omega_max
+};
+
+}  // namespace qdem

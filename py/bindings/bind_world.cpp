@@ -1,0 +1,213 @@
+// The QDEM world: pieces, obstacles, stepping, energies, NumPy views.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "Arrays.hpp"
+#include "core/Errors.hpp"
+#include "world/World.hpp"
+
+namespace py = pybind11;
+using namespace qdem;
+using qdem::py_::columnView;
+using qdem::py_::flatten;
+
+namespace {
+
+using Nodes = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Tets = py::array_t<int32_t, py::array::c_style | py::array::forcecast>;
+
+py::dict energyDict(const Energy& e) {
+    py::dict d;
+    d["kinetic"] = e.kinetic;
+    d["elastic"] = e.elastic;
+    d["gravity"] = e.gravity;
+    d["viscous"] = e.viscous;
+    d["contactElastic"] = e.contactElastic;
+    d["contactDamping"] = e.contactDamping;
+    d["friction"] = e.friction;
+    d["boundaryWork"] = e.boundaryWork;
+    d["total"] = e.total();
+    return d;
+}
+
+// (begin, end) ranges of piece i in the global arrays.
+const PieceInfo& piece(const World& w, int i) {
+    if (i < 0 || i >= static_cast<int>(w.pieces.size())) throw InputError("no piece " + std::to_string(i));
+    return w.pieces[i];
+}
+
+template <class T>
+py::array_t<T> copyOut(const std::vector<T>& v, py::ssize_t cols) {
+    py::array_t<T> a({static_cast<py::ssize_t>(v.size()) / cols, cols});
+    std::copy(v.begin(), v.end(), a.mutable_data());
+    return a;
+}
+
+}  // namespace
+
+void bindWorld(py::module_& m) {
+    py::class_<Obstacle>(m, "Obstacle", "A rigid YADE body seen by QDEM nodes (wall, box or facet).")
+        .def(py::init<>())
+        .def_property(
+            "kind", [](const Obstacle& o) { return static_cast<int>(o.kind); },
+            [](Obstacle& o, int k) {
+                if (k < 0 || k > 2) throw InputError("Obstacle.kind must be 0 (wall), 1 (box) or 2 (facet)");
+                o.kind = static_cast<ObstacleKind>(k);
+            })
+        .def_readwrite("bodyId", &Obstacle::bodyId)
+        .def_readwrite("young", &Obstacle::young)
+        .def_readwrite("friction", &Obstacle::friction)
+        .def_readwrite("axis", &Obstacle::axis)
+        .def_readwrite("sense", &Obstacle::sense)
+        .def_readwrite("halfExtents", &Obstacle::halfExtents)
+        .def("setVertices",
+             [](Obstacle& o, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+                 o.localVerts[0] = a;
+                 o.localVerts[1] = b;
+                 o.localVerts[2] = c;
+             })
+        .def_readonly("reactionForce", &Obstacle::reactionForce)
+        .def_readonly("reactionTorque", &Obstacle::reactionTorque);
+
+    py::class_<World>(m, "World", "All QDEM pieces of a scene and their step pipeline.")
+        .def(py::init<>())
+        .def(
+            "addMaterial",
+            [](World& w, double young, double poisson, double density, double viscosity, double frictionPiece,
+               double frictionWall, double radius, double restitution) {
+                Material mat{young, poisson, density, viscosity, frictionPiece, frictionWall, radius, restitution};
+                return w.addMaterial(mat);
+            },
+            py::arg("young"), py::arg("poisson"), py::arg("density"), py::arg("viscosity"),
+            py::arg("frictionPiece"), py::arg("frictionWall"), py::arg("radius"), py::arg("restitution"))
+        .def(
+            "addPiece",
+            [](World& w, const Nodes& nodes, const Tets& tets, int material) {
+                TetMesh mesh;
+                mesh.nodes = flatten<double>(nodes, 3, "nodes");
+                mesh.tets = flatten<int32_t>(tets, 4, "tets");
+                return w.addPiece(mesh, material);
+            },
+            py::arg("nodes"), py::arg("tets"), py::arg("material"))
+        .def("setObstacles", &World::setObstacles)
+        .def(
+            "setObstacleStates",
+            [](World& w, const py::array_t<double, py::array::c_style | py::array::forcecast>& s) {
+                if (s.ndim() != 2 || s.shape(1) != 13 || s.shape(0) != static_cast<py::ssize_t>(w.obstacles.size()))
+                    throw InputError("setObstacleStates: expected shape (nObstacles, 13)");
+                auto r = s.unchecked<2>();
+                for (py::ssize_t i = 0; i < s.shape(0); ++i)
+                    w.setObstacleState(static_cast<int>(i), {r(i, 0), r(i, 1), r(i, 2)},
+                                       Eigen::Quaterniond(r(i, 3), r(i, 4), r(i, 5), r(i, 6)),
+                                       {r(i, 7), r(i, 8), r(i, 9)}, {r(i, 10), r(i, 11), r(i, 12)});
+            },
+            "Rows: pos(3), quaternion w x y z, vel(3), angVel(3).")
+        .def(
+            "obstacleReactions",
+            [](const World& w) {
+                py::array_t<double> a({static_cast<py::ssize_t>(w.obstacles.size()), py::ssize_t(6)});
+                auto r = a.mutable_unchecked<2>();
+                for (std::size_t i = 0; i < w.obstacles.size(); ++i)
+                    for (int d = 0; d < 3; ++d) {
+                        r(i, d) = w.obstacles[i].reactionForce[d];
+                        r(i, 3 + d) = w.obstacles[i].reactionTorque[d];
+                    }
+                return a;
+            },
+            "Force and torque (about the body position) on each obstacle in the last step.")
+        .def(
+            "step",
+            [](World& w, double dt, long n) {
+                py::gil_scoped_release nogil;
+                for (long i = 0; i < n; ++i) w.step(dt);
+            },
+            py::arg("dt"), py::arg("n") = 1)
+        .def("checkDt", &World::checkDt, py::arg("dt"))
+        .def("checkFinite", &World::checkFinite)
+        .def("stableDt",
+             [](const World& w) {
+                 const StableDt s = w.stableDt();
+                 py::dict d;
+                 d["elastic"] = s.elastic;
+                 d["viscous"] = s.viscous;
+                 d["contact"] = s.contact;
+                 d["combined"] = s.combined;
+                 d["limitedBy"] = s.limitedBy;
+                 return d;
+             })
+        .def("stress",
+             [](const World& w) {
+                 py::array_t<double> a({static_cast<py::ssize_t>(w.nTets()), py::ssize_t(6)});
+                 w.computeStress(a.mutable_data());
+                 return a;
+             },
+             "Cauchy stress per tet (xx, yy, zz, yz, xz, xy), elastic plus viscous.")
+        .def_property_readonly("energy", [](const World& w) { return energyDict(w.energy); })
+        .def("resetEnergy", [](World& w) { w.energy = Energy(); })
+        .def_property_readonly("timings",
+                               [](const World& w) {
+                                   py::dict d;
+                                   d["obstacles"] = w.timings.obstacles;
+                                   d["elements"] = w.timings.elements;
+                                   d["integrate"] = w.timings.integrate;
+                                   return d;
+                               })
+        .def_property(
+            "gravity", [](const World& w) { return w.gravity; },
+            [](World& w, const Eigen::Vector3d& g) { w.gravity = g; })
+        .def_readwrite("trackEnergy", &World::trackEnergy)
+        .def_readwrite("viscosityOn", &World::viscosityOn)
+        .def_readwrite("frictionOn", &World::frictionOn)
+        .def_readwrite("time", &World::time)
+        .def_readwrite("iter", &World::iter)
+        .def_property_readonly("nNodes", &World::nNodes)
+        .def_property_readonly("nTets", &World::nTets)
+        .def_property_readonly("nPieces", [](const World& w) { return w.pieces.size(); })
+        .def_property_readonly("nObstacles", [](const World& w) { return w.obstacles.size(); })
+        // Whole-world views (N,3) / (N,) / (T,4) ...
+        .def_property_readonly("pos", [](World& w) { return columnView(w.pos, 0, {py::ssize_t(w.nNodes()), 3}); })
+        .def_property_readonly("vel", [](World& w) { return columnView(w.vel, 0, {py::ssize_t(w.nNodes()), 3}); })
+        .def_property_readonly("refPos",
+                               [](World& w) { return columnView(w.refPos, 0, {py::ssize_t(w.nNodes()), 3}, false); })
+        .def_property_readonly("force",
+                               [](World& w) { return columnView(w.force, 0, {py::ssize_t(w.nNodes()), 3}, false); })
+        .def_property_readonly("extForce",
+                               [](World& w) { return columnView(w.extForce, 0, {py::ssize_t(w.nNodes()), 3}); })
+        .def_property_readonly("mass", [](World& w) { return columnView(w.mass, 0, {py::ssize_t(w.nNodes())}, false); })
+        .def_property_readonly("blocked", [](World& w) { return columnView(w.blocked, 0, {py::ssize_t(w.nNodes())}); })
+        .def_property_readonly("nodePiece",
+                               [](World& w) { return columnView(w.nodePiece, 0, {py::ssize_t(w.nNodes())}, false); })
+        .def_property_readonly("tets",
+                               [](World& w) { return columnView(w.tetNodes, 0, {py::ssize_t(w.nTets()), 4}, false); })
+        .def_property_readonly("tetPiece",
+                               [](World& w) { return columnView(w.tetPiece, 0, {py::ssize_t(w.nTets())}, false); })
+        .def_property_readonly("tetVolume",
+                               [](World& w) { return columnView(w.tetVol0, 0, {py::ssize_t(w.nTets())}, false); })
+        .def(
+            "pieceRanges",
+            [](const World& w, int i) {
+                const PieceInfo& p = piece(w, i);
+                return py::make_tuple(p.nodeBegin, p.nodeEnd, p.tetBegin, p.tetEnd);
+            },
+            py::arg("piece"), "(nodeBegin, nodeEnd, tetBegin, tetEnd) of a piece in the world arrays.")
+        .def(
+            "pieceSurface",
+            [](const World& w, int i) {
+                const Surface& s = piece(w, i).surface;
+                py::dict d;
+                d["triangles"] = copyOut(s.triangles, 3);
+                d["edges"] = copyOut(s.edges, 2);
+                d["nodes"] = copyOut(s.nodes, 1).reshape({-1});
+                d["tets"] = copyOut(s.tets, 1).reshape({-1});
+                return d;
+            },
+            py::arg("piece"), "Surface of a piece in global node/tet ids.")
+        .def(
+            "pieceMass", [](const World& w, int i) { return piece(w, i).mass; }, py::arg("piece"))
+        .def(
+            "pieceVolume", [](const World& w, int i) { return piece(w, i).volume; }, py::arg("piece"))
+        .def(
+            "pieceMaterial", [](const World& w, int i) { return piece(w, i).material; }, py::arg("piece"));
+}

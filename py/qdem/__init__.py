@@ -1,0 +1,31 @@
+"""yade-qdem: deformable viscoelastic bodies for YADE, simulated with QDEM
+(Quadruple Discrete Element Method) and colliding through their surfaces.
+
+Typical use inside a YADE script::
+
+    import qdem
+    mat = qdem.QdemMat(young=1e7, viscosity=50)
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=(0, 0, 0.5))
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * qdem.stableDt()["combined"]
+"""
+from . import _core
+from ._core import StabilityError
+from .material import QdemMat
+from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface
+from .piece import Piece
+from .world import World, addPiece, defaultWorld, reset, stableDt
+
+__version__ = "0.1.0"
+
+try:  # the YADE-facing parts need a running YADE
+    import yade  # noqa: F401
+except ImportError:
+    pass
+else:
+    from .engine import QdemEngine
+    from .recorder import VtkRecorder
+
+__all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
+           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "defaultWorld", "reset",
+           "stableDt"]

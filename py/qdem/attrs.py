@@ -1,0 +1,70 @@
+"""YADE-style attribute classes: keyword construction, a docstring per attribute,
+and a clear error for an unknown keyword (YADE users expect ``FrictMat(young=...)``)."""
+
+
+class Attr:
+    """One documented attribute: default value, docstring, optional validator."""
+
+    def __init__(self, default, doc, check=None):
+        self.default, self.doc, self.check = default, doc, check
+        self.name = None
+
+    def __set_name__(self, owner, name):
+        self.name = name
+        self.__doc__ = self.doc
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        return obj.__dict__.get(self.name, self.default)
+
+    def __set__(self, obj, value):
+        if self.check is not None:
+            msg = self.check(value)
+            if msg:
+                raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, msg))
+        obj.__dict__[self.name] = value
+
+
+class AttrObject:
+    """Base class: ``Cls(a=1, b=2)`` sets documented attributes, rejects unknown ones."""
+
+    @classmethod
+    def attrNames(cls):
+        names = []
+        for klass in reversed(cls.__mro__):
+            for k, v in vars(klass).items():
+                if isinstance(v, Attr) and k not in names:
+                    names.append(k)
+        return names
+
+    def __init__(self, **kw):
+        known = self.attrNames()
+        for k, v in kw.items():
+            if k not in known:
+                raise TypeError("%s: unknown keyword %r; known attributes: %s"
+                                % (type(self).__name__, k, ", ".join(known)))
+            setattr(self, k, v)
+
+    def dict(self):
+        """All attributes as a plain dict (like YADE's ``Serializable.dict()``)."""
+        return {k: getattr(self, k) for k in self.attrNames()}
+
+    def __repr__(self):
+        return "%s(%s)" % (type(self).__name__, ", ".join("%s=%r" % kv for kv in self.dict().items()))
+
+
+def positive(v):
+    return None if _isnum(v) and v > 0 else "must be a number > 0"
+
+
+def nonNegative(v):
+    return None if _isnum(v) and v >= 0 else "must be a number >= 0"
+
+
+def _isnum(v):
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return False
+    return f == f and abs(f) != float("inf")

@@ -1,0 +1,133 @@
+"""QdemEngine: advances the QDEM world inside YADE's loop.
+
+Place it after ForceResetter and before NewtonIntegrator::
+
+    O.engines = [ForceResetter(), ..., QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+
+Each YADE step it reads the walls/boxes/facets, gravity and O.dt, steps the
+QDEM nodes with the same leapfrog as NewtonIntegrator (so both advance on one
+clock), writes the walls' reactions into O.forces and the QDEM energies into
+O.energy (when O.trackEnergy is on).  It is a PyRunner: the per-step cost of
+the Python glue is a few microseconds plus a few per obstacle."""
+import sys
+import time
+
+import numpy as np
+from yade import O, PyRunner
+
+from . import _core, yadeglue
+from .attrs import Attr, AttrObject
+from .world import defaultWorld
+
+_engines = {}
+
+ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
+               "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
+               "contactDamping": "qdemContactDamp", "friction": "qdemFrictDissip",
+               "boundaryWork": "qdemBoundaryWork"}
+
+
+
+class QdemEngine(PyRunner):
+    """Steps the QDEM world each YADE iteration.  Keyword construction as for any
+    YADE engine: ``QdemEngine(label='qe', progressPeriod=1000)``; ``world=`` picks
+    a qdem.World other than qdem.defaultWorld()."""
+
+    couple = Attr(True, "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again "
+                        "whenever the number of bodies changes).")
+    checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
+                         "(raises qdem.StabilityError naming the limit).")
+    checkPeriod = Attr(100, "Every this many steps, check that all node positions and velocities "
+                            "are finite (0 = never).")
+    progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
+    viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
+    friction = Attr(True, "Apply tangential (friction) contact forces (False switches them off).")
+    threads = Attr(0, "OpenMP threads for QDEM (0 = keep the current setting, e.g. from yade -j).")
+
+    def __init__(self, world=None, **kw):
+        PyRunner.__init__(self)
+        known = AttrObject.attrNames.__func__(type(self))
+        for k, v in kw.items():
+            if k in ("label", "dead") or k in known:
+                setattr(self, k, v)
+            else:
+                raise TypeError("QdemEngine: unknown keyword %r; known: world, label, dead, %s"
+                                % (k, ", ".join(known)))
+        self.world = world or defaultWorld()
+        self.iterPeriod = 1
+        self.initRun = True
+        key = len(_engines)
+        _engines[key] = self
+        self.command = "import qdem.engine; qdem.engine._step(%d)" % key
+        self._nBodies = -1
+        self._ids, self._states = [], None
+        self._dtChecked = None
+        self._lastProgress = None
+
+    # -- public helpers --------------------------------------------------------
+    def stableDt(self):
+        """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
+        current YADE obstacles included."""
+        self._syncObstacles()
+        return self.world.core.stableDt()
+
+    def stepOnce(self):
+        """One QDEM step at O.dt without YADE's loop (for tests and debugging)."""
+        self._run()
+
+    # -- the step --------------------------------------------------------------
+    def _syncObstacles(self):
+        core = self.world.core
+        if not self.couple:
+            if core.nObstacles:
+                core.setObstacles([])
+            self._ids = []
+            return
+        if len(O.bodies) != self._nBodies:
+            obstacles, self._ids = yadeglue.scanObstacles(O)
+            core.setObstacles(obstacles)
+            self._states = np.zeros((len(self._ids), 13))
+            self._nBodies = len(O.bodies)
+            self._dtChecked = None
+        if self._ids:
+            core.setObstacleStates(yadeglue.obstacleStates(O, self._ids, self._states))
+
+    def _run(self):
+        core = self.world.core
+        if self.threads:
+            _core.setThreads(int(self.threads))
+        self._syncObstacles()
+        core.gravity = yadeglue.findGravity(O)
+        core.trackEnergy = bool(O.trackEnergy)
+        core.viscosityOn = bool(self.viscosity)
+        core.frictionOn = bool(self.friction)
+        dt = O.dt
+        if self.checkDt and self._dtChecked != (dt, core.nPieces, self.viscosity):
+            core.checkDt(dt)
+            self._dtChecked = (dt, core.nPieces, self.viscosity)
+        core.step(dt)
+        if self._ids:
+            yadeglue.applyReactions(O, self._ids, core.obstacleReactions())
+        if core.trackEnergy:
+            for k, v in core.energy.items():
+                if k in ENERGY_KEYS:
+                    O.energy[ENERGY_KEYS[k]] = v
+        if self.checkPeriod and core.iter % self.checkPeriod == 0:
+            core.checkFinite()
+        if self.progressPeriod and core.iter % self.progressPeriod == 0:
+            self._progress(core)
+
+    def _progress(self, core):
+        now = time.time()
+        if self._lastProgress is None:
+            rate = float("nan")
+        else:
+            rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
+        self._lastProgress = (core.iter, now)
+        e = core.energy
+        print("qdem: step %d  t=%.6g s  %.0f steps/s  E_kin=%.4g J  E_el=%.4g J"
+              % (O.iter, O.time, rate, e["kinetic"], e["elastic"]), flush=True)
+
+
+def _step(key):
+    _engines[key]._run()

@@ -1,0 +1,48 @@
+"""QdemMat: the material of deformable QDEM pieces (defaults: seed paper, Table 1)."""
+from .attrs import Attr, AttrObject, positive, nonNegative
+
+
+def _poisson(v):
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return "must be a number"
+    return None if -1.0 < v < 0.5 else "must lie in (-1, 0.5)"
+
+
+def _restitution(v):
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return "must be a number"
+    return None if 0.0 < v <= 1.0 else "must lie in (0, 1]"
+
+
+class QdemMat(AttrObject):
+    """Kelvin-Voigt viscoelastic material of a QDEM piece, plus the contact
+    parameters of its surface particles.  Keyword construction as in YADE::
+
+        mat = QdemMat(young=5e8, poisson=0.4, density=700, viscosity=2.5e5)
+    """
+
+    young = Attr(5.0e8, "Young's modulus E [Pa].", positive)
+    poisson = Attr(0.4, "Poisson's ratio, in (-1, 0.5).", _poisson)
+    density = Attr(700.0, "Mass density [kg/m^3].", positive)
+    viscosity = Attr(2.5e5, "Shear viscosity eta [Pa s] of the Kelvin-Voigt dashpot; the viscous "
+                            "stress is (eta/mu) times the elastic stress of the strain rate "
+                            "(doc/formulation.md). 0 = purely elastic.", nonNegative)
+    frictionPiece = Attr(0.1, "Coulomb kinetic friction coefficient against other QDEM pieces.", nonNegative)
+    frictionWall = Attr(0.5, "Coulomb kinetic friction coefficient against YADE walls, boxes and facets.",
+                        nonNegative)
+    radius = Attr(0.04, "Radius of the surface particles [m]: contacts start when a node comes within "
+                        "this distance of a wall (2x of another piece's surface). Sets the contact "
+                        "stiffness kn = 2 E r (rigid wall).", positive)
+    restitution = Attr(0.5, "Normal restitution coefficient of one particle contact, in (0, 1]; "
+                            "sets the contact dashpot.", _restitution)
+    label = Attr("", "Free text label, as YADE materials have.")
+
+    def coreArgs(self):
+        """Arguments of the compiled World.addMaterial, in order."""
+        return (float(self.young), float(self.poisson), float(self.density), float(self.viscosity),
+                float(self.frictionPiece), float(self.frictionWall), float(self.radius),
+                float(self.restitution))

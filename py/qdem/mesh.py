@@ -1,0 +1,152 @@
+"""Tetrahedral meshes for QDEM pieces: structured boxes, mesh files read by
+meshio (gmsh .msh, .vtu, medit .mesh, ...) and closed triangle surfaces
+(OFF/STL/OBJ) meshed with CGAL Mesh_3."""
+import os
+
+import numpy as np
+
+from . import _core
+
+
+class Mesh:
+    """Nodes (N,3) and tetrahedra (T,4) of one piece, in the piece's own frame.
+    Checked on construction: NaN, bad indices, inverted or zero-volume tets and
+    a non-manifold surface raise ValueError naming the problem."""
+
+    def __init__(self, nodes, tets, check=True):
+        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
+        tets = np.asarray(tets)
+        if nodes.ndim != 2 or nodes.shape[1] != 3:
+            raise ValueError("Mesh: nodes must have shape (N, 3), got %s" % (nodes.shape,))
+        if tets.ndim != 2 or tets.shape[1] != 4:
+            raise ValueError("Mesh: tets must have shape (T, 4), got %s" % (tets.shape,))
+        if not np.issubdtype(tets.dtype, np.integer):
+            raise ValueError("Mesh: tets must hold integer node indices, got dtype %s" % tets.dtype)
+        if len(nodes) >= 2**31 - 1:
+            raise ValueError("Mesh: too many nodes for 32-bit indices")
+        self.nodes = nodes
+        self.tets = np.ascontiguousarray(tets, dtype=np.int32)
+        if check:
+            self.check()
+
+    def check(self):
+        """Raise ValueError on NaN, bad index, inverted/zero-volume tet, non-manifold surface."""
+        _core.checkMesh(self.nodes, self.tets)
+        _core.extractSurface(self.nodes, self.tets)
+
+    @property
+    def nNodes(self):
+        return len(self.nodes)
+
+    @property
+    def nTets(self):
+        return len(self.tets)
+
+    def volumes(self):
+        """Signed volume of each tetrahedron."""
+        return _core.tetVolumes(self.nodes, self.tets)
+
+    def surface(self):
+        """Boundary as a dict: triangles (outward), triTet, edges, nodes, tets."""
+        return _core.extractSurface(self.nodes, self.tets)
+
+    def bounds(self):
+        return self.nodes.min(axis=0), self.nodes.max(axis=0)
+
+    def scaled(self, factor):
+        """A copy scaled about the origin (factor: number or 3 numbers)."""
+        return Mesh(self.nodes * np.asarray(factor, dtype=float), self.tets.copy(), check=False)
+
+    def __repr__(self):
+        return "Mesh(%d nodes, %d tets)" % (self.nNodes, self.nTets)
+
+
+def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
+    """Structured mesh of a box of ``size`` centred on the origin with ``cells``
+    cells per axis.  tetsPerCell: 5, 6 (Kuhn) or 12 (body-centre node, the seed
+    paper's cubes: cells=(8,8,8) gives 1,241 nodes and 6,144 tets)."""
+    size = np.broadcast_to(np.asarray(size, dtype=float), (3,))
+    cells = np.broadcast_to(np.asarray(cells, dtype=int), (3,))
+    nodes, tets = _core.boxMesh(int(cells[0]), int(cells[1]), int(cells[2]),
+                                float(size[0]), float(size[1]), float(size[2]), int(tetsPerCell))
+    return Mesh(nodes, tets, check=False)
+
+
+def loadMesh(path, fixOrientation=False, scale=1.0):
+    """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
+    Only tetra cells are used.  fixOrientation=True flips tets written with the
+    opposite orientation convention instead of rejecting them."""
+    import meshio
+    if not os.path.exists(path):
+        raise ValueError("loadMesh: no such file: %s" % path)
+    try:
+        m = meshio.read(path)
+    except Exception as e:  # meshio raises many types for broken files
+        raise ValueError("loadMesh: cannot read %s: %s" % (path, e)) from None
+    blocks = [c.data for c in m.cells if c.type == "tetra"]
+    if not blocks:
+        raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s)"
+                         % (path, ", ".join(sorted({c.type for c in m.cells})) or "none"))
+    tets = np.concatenate(blocks).astype(np.int64)
+    nodes = np.asarray(m.points, dtype=float)[:, :3] * scale
+    if nodes.shape[1] != 3:
+        raise ValueError("loadMesh: %s has %d-dimensional points; need 3D" % (path, nodes.shape[1]))
+    if tets.min() < 0 or tets.max() >= len(nodes):
+        raise ValueError("loadMesh: %s refers to nodes outside 0..%d" % (path, len(nodes) - 1))
+    used = np.unique(tets)
+    if len(used) < len(nodes):  # drop points that belong to no tet (gmsh geometry points)
+        remap = -np.ones(len(nodes), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        nodes, tets = nodes[used], remap[tets]
+    tets = tets.astype(np.int32)
+    if fixOrientation:
+        tets, _ = _core.orientPositive(nodes, tets)
+    return Mesh(nodes, tets)
+
+
+def loadSurface(path, scale=1.0):
+    """Read a closed triangle surface (OFF, STL, OBJ, PLY, ...) with meshio:
+    returns (vertices (V,3), triangles (F,3)), duplicate STL vertices merged."""
+    import meshio
+    if not os.path.exists(path):
+        raise ValueError("loadSurface: no such file: %s" % path)
+    try:
+        m = meshio.read(path)
+    except Exception as e:
+        raise ValueError("loadSurface: cannot read %s: %s" % (path, e)) from None
+    tris = [c.data for c in m.cells if c.type == "triangle"]
+    if not tris:
+        raise ValueError("loadSurface: %s contains no triangles" % path)
+    verts = np.asarray(m.points, dtype=float)[:, :3] * scale
+    tris = np.concatenate(tris).astype(np.int64)
+    # STL stores every triangle's corners separately: merge equal vertices.
+    uniq, inverse = np.unique(np.round(verts, 12), axis=0, return_inverse=True)
+    return uniq, inverse.reshape(-1)[tris].astype(np.int32)
+
+
+def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0):
+    """Tetrahedral mesh of the solid bounded by a closed triangle surface, with
+    CGAL Mesh_3 to a target element size ``cellSize``.  ``surface`` is a file
+    path (OFF/STL/OBJ) or a tuple (vertices, triangles)."""
+    if not getattr(_core, "haveCgal", False):
+        raise RuntimeError("qdem was built without CGAL: install libcgal-dev and rebuild (make build)")
+    if isinstance(surface, (str, os.PathLike)):
+        verts, tris = loadSurface(surface, scale)
+    else:
+        verts, tris = surface
+        verts = np.asarray(verts, dtype=float) * scale
+    nodes, tets = _core.meshClosedSurface(np.ascontiguousarray(verts, dtype=float),
+                                          np.ascontiguousarray(tris, dtype=np.int32),
+                                          float(cellSize), float(facetDistance), int(seed))
+    return Mesh(nodes, tets)
+
+
+def asMesh(obj):
+    """Mesh from a Mesh, a (nodes, tets) tuple or a mesh file path."""
+    if isinstance(obj, Mesh):
+        return obj
+    if isinstance(obj, (str, os.PathLike)):
+        return loadMesh(obj)
+    if isinstance(obj, tuple) and len(obj) == 2:
+        return Mesh(*obj)
+    raise ValueError("expected a qdem.Mesh, a (nodes, tets) tuple or a mesh file path, got %r" % type(obj))

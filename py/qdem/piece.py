@@ -1,0 +1,109 @@
+"""Piece: the handle of one deformable body, with NumPy views of its nodes."""
+import numpy as np
+
+
+class Piece:
+    """One QDEM piece in a world.  The array properties are NumPy *views* of the
+    world's storage (writing ``piece.vel[:] = ...`` changes the simulation); take
+    them again after adding pieces, since adding pieces moves the storage.
+
+    Node order is the solver's (space-filling-curve) order; ``originalNodeIds[i]``
+    is the index in the mesh you passed of solver node ``i``."""
+
+    def __init__(self, world, pid, material, originalNodeIds):
+        self.world, self.id, self.material = world, pid, material
+        self.originalNodeIds = originalNodeIds
+        n0, n1, t0, t1 = world.core.pieceRanges(pid)
+        self.nodeSlice, self.tetSlice = slice(n0, n1), slice(t0, t1)
+
+    # -- views -----------------------------------------------------------------
+    @property
+    def pos(self):
+        """Node positions (n,3) [m], writable view."""
+        return self.world.core.pos[self.nodeSlice]
+
+    @property
+    def vel(self):
+        """Node velocities (n,3) [m/s] at the last half step, writable view."""
+        return self.world.core.vel[self.nodeSlice]
+
+    @property
+    def force(self):
+        """Total force on each node in the last step (n,3) [N], read-only view."""
+        return self.world.core.force[self.nodeSlice]
+
+    @property
+    def extForce(self):
+        """Persistent user force on each node (n,3) [N], writable view."""
+        return self.world.core.extForce[self.nodeSlice]
+
+    @property
+    def refPos(self):
+        """Reference (initial) node positions (n,3), read-only view."""
+        return self.world.core.refPos[self.nodeSlice]
+
+    @property
+    def mass(self):
+        """Lumped node masses (n,) [kg], read-only view."""
+        return self.world.core.mass[self.nodeSlice]
+
+    @property
+    def blocked(self):
+        """Per node bit mask of prescribed DOFs (1=x, 2=y, 4=z): those keep
+        their velocity, like YADE's blockedDOFs.  Writable view."""
+        return self.world.core.blocked[self.nodeSlice]
+
+    @property
+    def tets(self):
+        """Tetrahedra (t,4) in piece-local node indices (a copy)."""
+        return self.world.core.tets[self.tetSlice] - self.nodeSlice.start
+
+    @property
+    def displacement(self):
+        return self.pos - self.refPos
+
+    def stress(self):
+        """Cauchy stress (t,6: xx yy zz yz xz xy) [Pa] of each tet, elastic + viscous."""
+        return self.world.core.stress()[self.tetSlice]
+
+    def vonMises(self):
+        s = self.stress()
+        return np.sqrt(0.5 * ((s[:, 0] - s[:, 1])**2 + (s[:, 1] - s[:, 2])**2 + (s[:, 2] - s[:, 0])**2)
+                       + 3.0 * (s[:, 3]**2 + s[:, 4]**2 + s[:, 5]**2))
+
+    def surface(self):
+        """Surface triangles/edges/nodes/tets in piece-local indices."""
+        s = self.world.core.pieceSurface(self.id)
+        n0, t0 = self.nodeSlice.start, self.tetSlice.start
+        return {"triangles": s["triangles"] - n0, "edges": s["edges"] - n0,
+                "nodes": s["nodes"] - n0, "tets": s["tets"] - t0}
+
+    # -- rigid-body summaries --------------------------------------------------
+    @property
+    def totalMass(self):
+        return self.world.core.pieceMass(self.id)
+
+    @property
+    def volume(self):
+        return self.world.core.pieceVolume(self.id)
+
+    def centroid(self):
+        """Centre of mass [m]."""
+        m = self.mass
+        return (self.pos * m[:, None]).sum(axis=0) / m.sum()
+
+    def momentum(self):
+        """Linear momentum (sum m v) [kg m/s]."""
+        return (self.vel * self.mass[:, None]).sum(axis=0)
+
+    def velocity(self):
+        """Centre-of-mass velocity [m/s]."""
+        return self.momentum() / self.mass.sum()
+
+    def angularMomentum(self, about=None):
+        c = self.centroid() if about is None else np.asarray(about, dtype=float)
+        return (np.cross(self.pos - c, self.vel) * self.mass[:, None]).sum(axis=0)
+
+    def __repr__(self):
+        return "<qdem.Piece %d: %d nodes, %d tets>" % (
+            self.id, self.nodeSlice.stop - self.nodeSlice.start, self.tetSlice.stop - self.tetSlice.start)

@@ -1,0 +1,65 @@
+"""VtkRecorder: a YADE engine writing the QDEM pieces as a VTU time series."""
+import os
+
+import numpy as np
+from yade import O, PyRunner
+
+from .attrs import Attr, AttrObject
+from .vtu import writePvd, writeVtu
+from .world import defaultWorld
+
+_recorders = {}
+
+
+def vonMises(s):
+    return np.sqrt(0.5 * ((s[:, 0] - s[:, 1])**2 + (s[:, 1] - s[:, 2])**2 + (s[:, 2] - s[:, 0])**2)
+                   + 3.0 * (s[:, 3]**2 + s[:, 4]**2 + s[:, 5]**2))
+
+
+def writeFrame(world, path):
+    """One VTU of every piece: displacement, velocity, von Mises stress, piece id."""
+    core = world.core
+    stress = core.stress()
+    writeVtu(path, core.pos, core.tets,
+             pointData={"displacement": core.pos - core.refPos, "velocity": core.vel,
+                        "piece": core.nodePiece},
+             cellData={"vonMises": vonMises(stress), "stress": stress, "piece": core.tetPiece})
+
+
+class VtkRecorder(PyRunner):
+    """Writes ``<fileBase>NNNNNN.vtu`` every ``iterPeriod`` steps and keeps
+    ``<fileBase>.pvd`` (open it in ParaView) up to date."""
+
+    fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + 'pvd'.")
+
+    def __init__(self, world=None, **kw):
+        PyRunner.__init__(self)
+        known = AttrObject.attrNames.__func__(type(self))
+        for k, v in kw.items():
+            if k in ("label", "dead", "iterPeriod", "virtPeriod", "realPeriod", "initRun") or k in known:
+                setattr(self, k, v)
+            else:
+                raise TypeError("VtkRecorder: unknown keyword %r; known: world, label, dead, iterPeriod, "
+                                "virtPeriod, realPeriod, initRun, %s" % (k, ", ".join(known)))
+        if self.iterPeriod <= 0 and self.virtPeriod <= 0 and self.realPeriod <= 0:
+            self.iterPeriod = 1000
+        self.world = world or defaultWorld()
+        self.frames = []
+        key = len(_recorders)
+        _recorders[key] = self
+        self.command = "import qdem.recorder; qdem.recorder._record(%d)" % key
+
+    def record(self):
+        """Write one frame now."""
+        d = os.path.dirname(self.fileBase)
+        if d:
+            os.makedirs(d, exist_ok=True)
+        path = "%s%06d.vtu" % (self.fileBase, O.iter)
+        writeFrame(self.world, path)
+        self.frames.append((O.time, os.path.basename(path)))
+        writePvd(self.fileBase + "pvd" if self.fileBase.endswith((".", "-", "_")) else self.fileBase + ".pvd",
+                 self.frames)
+
+
+def _record(key):
+    _recorders[key].record()

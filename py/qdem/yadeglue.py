@@ -1,0 +1,65 @@
+"""Reading YADE's scene: rigid obstacles (Wall, Box, Facet), gravity, O.forces.
+Only this module touches YADE objects, so the rest of qdem runs without YADE."""
+import numpy as np
+
+from . import _core
+
+KIND = {"Wall": 0, "Box": 1, "Facet": 2}
+
+
+def findGravity(O):
+    """Gravity of the first NewtonIntegrator in O.engines (zero when none)."""
+    for e in O.engines:
+        if type(e).__name__ == "NewtonIntegrator":
+            g = e.gravity
+            return (g[0], g[1], g[2])
+    return (0.0, 0.0, 0.0)
+
+
+def scanObstacles(O):
+    """Core Obstacle objects for every Wall, Box and Facet body, and their ids."""
+    obstacles, ids = [], []
+    for b in O.bodies:
+        if b is None or b.shape is None:
+            continue
+        kind = KIND.get(type(b.shape).__name__)
+        if kind is None:
+            continue
+        o = _core.Obstacle()
+        o.kind = kind
+        o.bodyId = b.id
+        young = getattr(b.material, "young", None)
+        o.young = float(young) if young else 0.0
+        if kind == 0:
+            o.axis, o.sense = int(b.shape.axis), int(b.shape.sense)
+        elif kind == 1:
+            e = b.shape.extents
+            o.halfExtents = np.array([e[0], e[1], e[2]])
+        else:  # facet vertices are stored relative to the body, in its frame
+            v = b.shape.vertices
+            o.setVertices(*[np.array([p[0], p[1], p[2]]) for p in v])
+        obstacles.append(o)
+        ids.append(b.id)
+    return obstacles, ids
+
+
+def obstacleStates(O, ids, out):
+    """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies."""
+    for i, bid in enumerate(ids):
+        s = O.bodies[bid].state
+        p, q, v, w = s.pos, s.ori, s.vel, s.angVel
+        axis, angle = q.toAxisAngle()
+        h = 0.5 * angle
+        sh = np.sin(h)
+        out[i] = (p[0], p[1], p[2], np.cos(h), axis[0] * sh, axis[1] * sh, axis[2] * sh,
+                  v[0], v[1], v[2], w[0], w[1], w[2])
+    return out
+
+
+def applyReactions(O, ids, reactions):
+    """Add each obstacle's reaction force and torque to O.forces."""
+    from yade import Vector3
+    for bid, r in zip(ids, reactions):
+        if r[0] or r[1] or r[2] or r[3] or r[4] or r[5]:
+            O.forces.addF(bid, Vector3(r[0], r[1], r[2]))
+            O.forces.addT(bid, Vector3(r[3], r[4], r[5]))

@@ -1,0 +1,124 @@
+"""QDEM inside YADE: floors, slopes, O.forces, O.energy, stable-step refusal."""
+import math
+
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+
+def _engines(gravity=(0, 0, -9.81), **kw):
+    from yade import ForceResetter, NewtonIntegrator
+    return [ForceResetter(), qdem.QdemEngine(**kw), NewtonIntegrator(gravity=gravity)]
+
+
+def test_block_at_rest_on_floor_reaction_equals_weight(scene):
+    from yade import utils
+    O = scene
+    mat = rubber(viscosity=2000.0)
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=(0, 0, 0.1 + 0.005))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.5 / O.dt), True)
+    weight = block.totalMass * 9.81
+    assert np.abs(block.vel).max() < 1e-3
+    assert O.forces.f(floor)[2] == pytest.approx(-weight, rel=0.005)
+    assert abs(O.forces.f(floor)[0]) < 1e-3 * weight
+
+
+def _slope(O, theta, mu):
+    """A block on a fixed YADE Box tilted by theta about y; returns (block, slope unit vector)."""
+    from yade import Quaternion, Vector3, utils
+    mat = rubber(viscosity=2000.0, frictionWall=mu)
+    R = qdem.world.rotationMatrix(((0, 1, 0), theta))
+    n, down = R @ (0, 0, 1.0), R @ (1.0, 0, 0)       # normal and down-slope direction
+    if down[2] > 0:
+        down = -down
+    O.bodies.append(utils.box((0, 0, 0), (2, 0.5, 0.05), orientation=Quaternion(Vector3(0, 1, 0), theta),
+                              fixed=True))
+    c = (0.05 + 0.1 + 0.005) * n
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=c, ori=((0, 1, 0), theta))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    return block, down
+
+
+def test_block_slides_down_steep_slope_at_coulomb_acceleration(scene):
+    O = scene
+    theta, mu = math.radians(30), 0.3
+    block, down = _slope(O, theta, mu)
+    O.run(int(0.1 / O.dt), True)                    # settle onto the slope
+    t1, v1 = O.time, block.velocity() @ down
+    O.run(int(0.2 / O.dt), True)
+    t2, v2 = O.time, block.velocity() @ down
+    a = (v2 - v1) / (t2 - t1)
+    expected = 9.81 * (math.sin(theta) - mu * math.cos(theta))
+    assert a == pytest.approx(expected, rel=0.02)
+
+
+def test_block_stays_on_gentle_slope(scene):
+    O = scene
+    theta, mu = math.radians(10), 0.3
+    block, down = _slope(O, theta, mu)
+    O.run(int(0.1 / O.dt), True)
+    x1 = block.centroid() @ down
+    O.run(int(0.3 / O.dt), True)
+    x2 = block.centroid() @ down
+    assert abs(x2 - x1) < 1e-5                      # no creep
+    assert abs(block.velocity() @ down) < 1e-4
+
+
+def test_energy_goes_to_O_energy_and_balances(scene):
+    from yade import utils
+    O = scene
+    mat = rubber(viscosity=50.0)
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=(0, 0, 0.3), ori=((1, 1, 0), 0.3))
+    O.bodies.append(utils.wall(0, axis=2))
+    O.engines = _engines()
+    O.trackEnergy = True
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    worst = 0.0
+    for _ in range(30):
+        O.run(int(0.01 / O.dt), True)
+        e = O.energy
+        total = sum(e[k] for k in qdem.engine.ENERGY_KEYS.values())
+        worst = max(worst, abs(total))
+    keys = set(k for k, _ in O.energy.items())
+    assert {"qdemKinetic", "qdemElastic", "qdemGravWork", "qdemViscDissip"} <= keys
+    assert O.energy["qdemGravWork"] < 0                 # it fell
+    assert O.energy["qdemViscDissip"] > 0
+    # Energy is neither created nor lost by more than 1% of what gravity put in.
+    assert worst < 0.01 * abs(O.energy["qdemGravWork"])
+
+
+def test_engine_refuses_unstable_dt_naming_the_limit(scene):
+    O = scene
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), qdem.QdemMat())
+    O.engines = _engines()
+    limit = O.engines[1].stableDt()
+    O.dt = 1.5 * limit["combined"]
+    with pytest.raises(qdem.StabilityError, match="exceeds the stable time step.*limited by"):
+        O.engines[1].stepOnce()
+    with pytest.raises(RuntimeError, match="stable time step"):
+        O.run(1, True)
+
+
+def test_moving_wall_is_followed_and_pushes(scene):
+    """A floor moving up slowly carries the block resting on it."""
+    from yade import utils
+    O = scene
+    mat = rubber(viscosity=2000.0)
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (3, 3, 3)), mat, pos=(0, 0, 0.105))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.2 / O.dt), True)
+    z0 = block.centroid()[2]
+    O.bodies[floor].state.vel = (0, 0, 0.05)
+    O.run(int(0.5 / O.dt), True)
+    lift = O.bodies[floor].state.pos[2]
+    assert lift == pytest.approx(0.05 * 0.5, rel=0.01)
+    assert block.centroid()[2] - z0 == pytest.approx(lift, rel=0.05)
+    assert block.velocity()[2] == pytest.approx(0.05, rel=0.1)
