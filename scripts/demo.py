@@ -12,12 +12,12 @@ from yade import O, ForceResetter, NewtonIntegrator, PyRunner, utils
 
 OUT = "out/demo"
 os.makedirs(OUT, exist_ok=True)
-duration = float(sys.argv[1]) if len(sys.argv) > 1 else 3.0
+duration = float(sys.argv[1]) if len(sys.argv) > 1 else 4.0
 
 # A rubber-like block, 0.4 m wide, tilted so that it lands on an edge.
-mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=20, frictionWall=0.5, radius=0.01,
+mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=1000, frictionWall=0.5, radius=0.01,
                    restitution=0.5)
-block = qdem.addPiece(qdem.boxMesh((0.4, 0.4, 0.4), (10, 10, 10), tetsPerCell=6), mat, pos=(0, 0, 0.6),
+block = qdem.addPiece(qdem.boxMesh((0.4, 0.4, 0.4), (8, 8, 8), tetsPerCell=6), mat, pos=(0, 0, 0.6),
                       ori=((1, 1, 0), 0.4))
 floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
 
@@ -35,9 +35,9 @@ def sample():
 
 O.engines = [
     ForceResetter(),
-    qdem.QdemEngine(label="qdemEngine", progressPeriod=2000),
-    qdem.VtkRecorder(fileBase=OUT + "/block-", iterPeriod=250),
-    PyRunner(command="sample()", iterPeriod=50),
+    qdem.QdemEngine(label="qdemEngine", progressPeriod=20000),
+    qdem.VtkRecorder(fileBase=OUT + "/block-", iterPeriod=2000),
+    PyRunner(command="sample()", iterPeriod=400),
     NewtonIntegrator(gravity=(0, 0, -9.81)),
 ]
 O.trackEnergy = True
