@@ -122,3 +122,21 @@ def test_moving_wall_is_followed_and_pushes(scene):
     assert lift == pytest.approx(0.05 * 0.5, rel=0.01)
     assert block.centroid()[2] - z0 == pytest.approx(lift, rel=0.05)
     assert block.velocity()[2] == pytest.approx(0.05, rel=0.1)
+
+
+def test_block_on_facet_floor(scene):
+    """Two YADE facets make the floor; their reactions add up to the weight."""
+    from yade import utils
+    O = scene
+    mat = rubber(viscosity=2000.0)
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=(0.05, 0.02, 0.105))
+    a = O.bodies.append(utils.facet([(-1, -1, 0), (1, -1, 0), (1, 1, 0)], fixed=True))
+    b = O.bodies.append(utils.facet([(-1, -1, 0), (1, 1, 0), (-1, 1, 0)], fixed=True))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.5 / O.dt), True)
+    weight = block.totalMass * 9.81
+    load = O.forces.f(a)[2] + O.forces.f(b)[2]
+    assert load == pytest.approx(-weight, rel=0.005)
+    assert O.forces.f(a)[2] < 0 and O.forces.f(b)[2] < 0     # the diagonal splits the load
+    assert block.centroid()[2] == pytest.approx(0.105, abs=2e-3)

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# make bench: every benchmark, figures as JSON under out/bench/ (not asserted:
+# the machines are shared and noisy, so compare ratios within one run).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+mkdir -p out/bench
+BUILD=${BUILD:-build}
+
+echo "bench: QDEM element + integration on the 165,888-tet Figure 6 mesh"
+"$BUILD"/bench_elements "${QDEM_BENCH_STEPS:-200}" 3 > out/bench/elements_qdem.json
+cat out/bench/elements_qdem.json
+
+echo "bench: YADE's own tetrahedral FEM on the same mesh (2 threads)"
+yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 3 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
+  || echo "bench: YADE FEM run failed, see out/bench/yade_fem.log"
+
+/usr/bin/python3.11 scripts/bench/merge_elements.py out/bench/elements_qdem.json out/bench/yade_fem.json \
+  > out/bench/elements.json
+cat out/bench/elements.json
