@@ -104,9 +104,11 @@ StableDt World::stableDt() const {
         r.elastic = std::min(r.elastic, leapfrogLimit(we, 0.0));
         r.viscous = std::min(r.viscous, leapfrogLimit(we, 0.5 * beta * we));
         double wc = 0, xic = 0;
-        if (!obstacles.empty()) {
-            const double kn = rigid ? 2 * m.young * m.radius
-                                    : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
+        if (!obstacles.empty() || pieces.size() > 1) {
+            // Piece-piece springs are at most 2 E r too (the rigid-wall value).
+            const double kn = (rigid || pieces.size() > 1)
+                                  ? 2 * m.young * m.radius
+                                  : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
             wc = std::sqrt(kn / p.minSurfaceNodeMass);
             xic = dampingRatioFromRestitution(m.restitution);
             r.contact = std::min(r.contact, leapfrogLimit(wc, xic));

@@ -98,6 +98,8 @@ int World::addPiece(const TetMesh& mesh, int material) {
     slotShear_.resize(3 * kSlots * surfNodes.size(), 0.0);
     slotSide_.resize(kSlots * surfNodes.size(), 0);
     pieces.push_back(std::move(p));
+    pc_.surf.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
+    pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
     omegaCache_.clear();
     layout_ = ThreadLayout();  // tet count changed: rebuilt at the next step
     return pieceId;

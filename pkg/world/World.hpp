@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../contact/Obstacle.hpp"
+#include "../contact/PieceContactState.hpp"
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../mesh/Surface.hpp"
@@ -79,6 +80,15 @@ public:
     bool trackEnergy = false;
     bool viscosityOn = true;  // user switch: the viscous term can be turned off
     bool frictionOn = true;   // user switch: tangential forces off
+    // Piece-piece surface contacts (seed §3): which kinds, and how the broad
+    // phase registers surface elements.
+    bool pointPolygonOn = true;
+    bool edgeEdgeOn = true;
+    BroadPhase broadPhase = BroadPhase::Triangles;
+    // Edge-edge forces fade out as edges become parallel (the point-polygon
+    // contacts at their ends carry such a contact): full at or above
+    // edgeFadeAngle [rad] between the edges, zero when parallel.
+    double edgeFadeAngle = 0.17453292519943295;  // 10 degrees
     double time = 0;
     long iter = 0;
     Energy energy;
@@ -87,7 +97,19 @@ public:
     std::size_t nTets() const { return tetVol0.size(); }
 
     // Per-phase wall time of the last step [s], for the benchmarks.
-    struct Timings { double obstacles = 0, elements = 0, integrate = 0; } timings;
+    struct Timings {
+        double obstacles = 0, elements = 0, integrate = 0;
+        double broadPhase = 0, pointPolygon = 0, edgeEdge = 0;
+    } timings;
+    // Contacts found in the last step (for tests and diagnostics).
+    struct ContactCounts {
+        long pointPolygon = 0, edgeEdge = 0;
+        long interiorFaceTests = 0;  // cases A/B: interior faces tested for nothing
+        long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
+    } contactCounts;
+    const SurfaceIndex& surfaceIndex() const { return pc_.surf; }
+    // Largest overlap of a piece-piece contact in the last step [m].
+    double maxPieceOverlap = 0;
 
 private:
     template <bool Viscous, bool Energy>
@@ -96,6 +118,13 @@ private:
     void elementPhase(double dt);
     void obstaclePhase(double dt);
     void integratePhase(double dt);
+    void pieceContactPhase(double dt);
+    void updatePieceBounds();
+    void beginContactForces();
+    template <bool Friction>
+    void pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv);
+    template <bool Friction>
+    void edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv);
     double elementOmegaMax(const PieceInfo& p) const;
 
     ThreadLayout layout_;
@@ -106,6 +135,7 @@ private:
     Column<int8_t> slotSide_;
     Column<double> contactForce_;  // per node, from obstacles (and later piece contacts)
     bool contactsActive_ = false;  // contactForce_ holds forces for the coming update
+    PieceContactState pc_;
     std::vector<double> obstacleReaction_;  // per thread x obstacle x 6
     std::vector<int> pieceObstacles_;       // per piece: candidate obstacle list (flattened)
     std::vector<int> pieceObstacleBegin_;

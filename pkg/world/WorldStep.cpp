@@ -14,7 +14,11 @@ namespace qdem {
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     double t0 = omp_get_wtime();
+    contactsActive_ = false;
+    if (trackEnergy) energy.contactElastic = 0;  // a state: summed afresh by the contact phases
+    updatePieceBounds();
     obstaclePhase(dt);
+    pieceContactPhase(dt);
     double t1 = omp_get_wtime();
     elementPhase(dt);
     double t2 = omp_get_wtime();
@@ -102,16 +106,8 @@ void World::obstaclePhase(double dt) {
     pieceObstacleBegin_.assign(pieces.size() + 1, 0);
     pieceObstacles_.clear();
     for (std::size_t ip = 0; ip < pieces.size(); ++ip) {
-        const PieceInfo& p = pieces[ip];
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-        for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
-            const Eigen::Map<const Eigen::Vector3d> x(&pos[3 * surfNodes[s]]);
-            lo = lo.cwiseMin(x);
-            hi = hi.cwiseMax(x);
-        }
-        const double r = materials[p.material].radius;
-        lo.array() -= r;
-        hi.array() += r;
+        const Eigen::Map<const Eigen::Vector3d> lo(&pc_.pieceLo[3 * ip]), hi(&pc_.pieceHi[3 * ip]);
+        const double r = materials[pieces[ip].material].radius;
         for (int i = 0; i < nObs; ++i) {
             const Obstacle& o = obstacles[i];
             bool near;
@@ -131,7 +127,7 @@ void World::obstaclePhase(double dt) {
     }
     if (pieceObstacles_.empty()) return;
 
-    contactForce_.fill(0.0);
+    beginContactForces();
     const int nth = omp_get_max_threads();
     obstacleReaction_.assign(static_cast<std::size_t>(nth) * nObs * 6, 0.0);
     const bool energyOn = trackEnergy;
@@ -218,12 +214,11 @@ void World::obstaclePhase(double dt) {
             obstacles[i].reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
         }
     if (energyOn) {
-        energy.contactElastic = eEl;
+        energy.contactElastic += eEl;
         energy.contactDamping += eDamp;
         energy.friction += eSlip;
         energy.boundaryWork += eBound;
     }
-    contactsActive_ = true;
 }
 
 // ---------------------------------------------------------------------------
@@ -234,7 +229,6 @@ void World::integratePhase(double dt) {
     const int nth = layout_.nThreads;
     const bool energyOn = trackEnergy;
     const bool withContacts = contactsActive_;
-    contactsActive_ = false;
     const double g[3] = {gravity[0], gravity[1], gravity[2]};
     double* X = pos.data();
     double* V = vel.data();

@@ -152,6 +152,9 @@ void bindWorld(py::module_& m) {
                                    d["obstacles"] = w.timings.obstacles;
                                    d["elements"] = w.timings.elements;
                                    d["integrate"] = w.timings.integrate;
+                                   d["broadPhase"] = w.timings.broadPhase;
+                                   d["pointPolygon"] = w.timings.pointPolygon;
+                                   d["edgeEdge"] = w.timings.edgeEdge;
                                    return d;
                                })
         .def_property(
@@ -160,6 +163,27 @@ void bindWorld(py::module_& m) {
         .def_readwrite("trackEnergy", &World::trackEnergy)
         .def_readwrite("viscosityOn", &World::viscosityOn)
         .def_readwrite("frictionOn", &World::frictionOn)
+        .def_readwrite("pointPolygonOn", &World::pointPolygonOn)
+        .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
+        .def_readwrite("edgeFadeAngle", &World::edgeFadeAngle)
+        .def_property(
+            "broadPhase", [](const World& w) { return static_cast<int>(w.broadPhase); },
+            [](World& w, int m) {
+                if (m < 0 || m > 3) throw InputError("broadPhase must be 0 (triangles), 1 (A), 2 (B) or 3 (C)");
+                w.broadPhase = static_cast<BroadPhase>(m);
+            },
+            "0: surface triangles (default); the seed's Figure 6 cases 1 = A (all tets), 2 = B (surface tets), "
+            "3 = C (surface tets, interior faces skipped).")
+        .def_property_readonly("contactCounts",
+                               [](const World& w) {
+                                   py::dict d;
+                                   d["pointPolygon"] = w.contactCounts.pointPolygon;
+                                   d["edgeEdge"] = w.contactCounts.edgeEdge;
+                                   d["interiorFaceTests"] = w.contactCounts.interiorFaceTests;
+                                   d["interiorFaceNear"] = w.contactCounts.interiorFaceNear;
+                                   return d;
+                               })
+        .def_readonly("maxPieceOverlap", &World::maxPieceOverlap)
         .def_readwrite("time", &World::time)
         .def_readwrite("iter", &World::iter)
         .def_property_readonly("nNodes", &World::nNodes)

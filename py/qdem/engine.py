@@ -20,6 +20,7 @@ from .attrs import Attr, AttrObject
 from .world import defaultWorld
 
 _engines = {}
+BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
 
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
@@ -43,6 +44,12 @@ class QdemEngine(PyRunner):
     viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
     friction = Attr(True, "Apply tangential (friction) contact forces (False switches them off).")
     threads = Attr(0, "OpenMP threads for QDEM (0 = keep the current setting, e.g. from yade -j).")
+    pointPolygon = Attr(True, "Point-polygon contacts between pieces (seed paper 3.1).")
+    edgeEdge = Attr(True, "Edge-edge contacts between pieces (seed paper 3.2, with friction).")
+    broadPhase = Attr("triangles", "How surface elements are registered in the cell list: 'triangles' "
+                                   "(default), or the seed's Figure 6 cases 'A' (all tets), 'B' (surface "
+                                   "tets), 'C' (surface tets, interior faces skipped).",
+                       lambda v: None if v in BROAD_PHASES else "must be one of %s" % list(BROAD_PHASES))
 
     def __init__(self, world=None, **kw):
         PyRunner.__init__(self)
@@ -101,6 +108,9 @@ class QdemEngine(PyRunner):
         core.trackEnergy = bool(O.trackEnergy)
         core.viscosityOn = bool(self.viscosity)
         core.frictionOn = bool(self.friction)
+        core.pointPolygonOn = bool(self.pointPolygon)
+        core.edgeEdgeOn = bool(self.edgeEdge)
+        core.broadPhase = BROAD_PHASES[self.broadPhase]
         dt = O.dt
         if self.checkDt and self._dtChecked != (dt, core.nPieces, self.viscosity):
             core.checkDt(dt)

@@ -1,0 +1,62 @@
+// Cell list with linked lists (seed paper §4.2): items are binned by a
+// reference point into cubic cells of side L; a query visits the 27 cells
+// around its own.  Cells live in a hash table sized to the item count, so
+// memory is O(items) however far apart the pieces are.  Items remember their
+// cell, so two cells sharing a bucket never make an item appear twice.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace qdem {
+
+class CellGrid {
+public:
+    // Rebuilds the grid for n items at points (3 per item).  No allocation
+    // once the capacity has grown to the largest n seen.
+    void build(const double* points, int32_t n, double cellSize) {
+        cell_ = cellSize;
+        inv_ = 1.0 / cellSize;
+        std::size_t size = 64;
+        while (size < 2 * static_cast<std::size_t>(n)) size *= 2;
+        mask_ = size - 1;
+        head_.assign(size, -1);
+        next_.resize(n);
+        cx_.resize(n), cy_.resize(n), cz_.resize(n);
+        for (int32_t i = 0; i < n; ++i) {
+            const int64_t x = coord(points[3 * i]), y = coord(points[3 * i + 1]), z = coord(points[3 * i + 2]);
+            cx_[i] = x, cy_[i] = y, cz_[i] = z;
+            const std::size_t h = hash(x, y, z);
+            next_[i] = head_[h];
+            head_[h] = i;
+        }
+    }
+
+    // Calls f(item) for every item in the 27 cells around point p.
+    template <class F>
+    void forNeighbours(const double* p, F&& f) const {
+        const int64_t x = coord(p[0]), y = coord(p[1]), z = coord(p[2]);
+        for (int64_t i = x - 1; i <= x + 1; ++i)
+            for (int64_t j = y - 1; j <= y + 1; ++j)
+                for (int64_t k = z - 1; k <= z + 1; ++k)
+                    for (int32_t it = head_[hash(i, j, k)]; it >= 0; it = next_[it])
+                        if (cx_[it] == i && cy_[it] == j && cz_[it] == k) f(it);
+    }
+
+    double cellSize() const { return cell_; }
+
+private:
+    int64_t coord(double v) const { return static_cast<int64_t>(std::floor(v * inv_)); }
+    std::size_t hash(int64_t x, int64_t y, int64_t z) const {
+        const uint64_t h = static_cast<uint64_t>(x) * 73856093u ^ static_cast<uint64_t>(y) * 19349663u ^
+                           static_cast<uint64_t>(z) * 83492791u;
+        return static_cast<std::size_t>(h ^ (h >> 29)) & mask_;
+    }
+
+    double cell_ = 1, inv_ = 1;
+    std::size_t mask_ = 0;
+    std::vector<int32_t> head_, next_;
+    std::vector<int64_t> cx_, cy_, cz_;
+};
+
+}  // namespace qdem

@@ -1,0 +1,53 @@
+// Working data of the piece-piece contact phase, owned by World.  Everything
+// here is sized once and reused, so the step does not allocate.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../core/Column.hpp"
+#include "CellGrid.hpp"
+#include "SurfaceIndex.hpp"
+
+namespace qdem {
+
+// How surface elements are registered in the cell list.  The seed paper's
+// Figure 6 compares A, B and C; Triangles is ours and the default.
+enum class BroadPhase : int {
+    Triangles = 0,    // surface triangles only, binned by their own size
+    AllTets = 1,      // A: every tetrahedron, all four faces tested
+    SurfaceTets = 2,  // B: surface tetrahedra only, all four faces tested
+    SurfaceFaces = 3  // C: surface tetrahedra only, interior faces skipped
+};
+
+struct PieceContactState {
+    SurfaceIndex surf;
+    CellGrid itemGrid, edgeGrid;
+    std::vector<int32_t> items;        // registered triangle or tet ids
+    std::vector<double> itemPoint;     // their reference points (3 each)
+    std::vector<double> edgeMid;       // midpoints of the registered edges
+    std::vector<int32_t> edgeItems;    // registered edge ids
+    std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
+    std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
+    std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
+
+    // Point-polygon history: kPP slots per surface node.
+    static constexpr int kPP = 6;
+    Column<int32_t> ppKey, ppPiece;   // key = 8 * triangle + feature; -1 = empty
+    Column<double> ppShear;
+    // Edge-edge history: kEE slots per surface edge (owned by the lower edge id).
+    static constexpr int kEE = 4;
+    Column<int32_t> eeOther;
+    Column<int8_t> eeSide;
+    Column<double> eeShear;
+
+    void resizeHistory(std::size_t nSurfNodes, std::size_t nEdges) {
+        ppKey.resize(kPP * nSurfNodes, -1);
+        ppPiece.resize(kPP * nSurfNodes, -1);
+        ppShear.resize(3 * kPP * nSurfNodes, 0.0);
+        eeOther.resize(kEE * nEdges, -1);
+        eeSide.resize(kEE * nEdges, 0);
+        eeShear.resize(3 * kEE * nEdges, 0.0);
+    }
+};
+
+}  // namespace qdem
