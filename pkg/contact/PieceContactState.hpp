@@ -28,6 +28,19 @@ struct PieceContactState {
     std::vector<int32_t> edgeItems;    // registered edge ids
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
+    std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's
+
+    // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
+    bool nearOther(int32_t pa, const double* lo, const double* hi) const {
+        for (int32_t q = nbrStart[pa]; q < nbrStart[pa + 1]; ++q) {
+            const int32_t pb = nbrs[q];
+            bool overlap = true;
+            for (int d = 0; d < 3 && overlap; ++d)
+                overlap = lo[d] <= pieceHi[3 * pb + d] && pieceLo[3 * pb + d] <= hi[d];
+            if (overlap) return true;
+        }
+        return false;
+    }
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
 
     // Point-polygon history: kPP slots per surface node.

@@ -95,15 +95,23 @@ void World::pieceContactPhase(double dt) {
     // cheap next to the node loops for the piece counts of real scenes.)
     const double t0 = omp_get_wtime();
     pc_.pieceActive.assign(np, 0);
+    pc_.nbrStart.assign(np + 1, 0);
+    pc_.nbrs.clear();
     bool any = false;
-    for (std::size_t a = 0; a < np; ++a)
-        for (std::size_t b = a + 1; b < np; ++b) {
+    for (std::size_t a = 0; a < np; ++a) {
+        for (std::size_t b = 0; b < np; ++b) {
+            if (a == b) continue;
             bool overlap = true;
             for (int d = 0; d < 3 && overlap; ++d)
                 overlap = pc_.pieceLo[3 * a + d] <= pc_.pieceHi[3 * b + d] &&
                           pc_.pieceLo[3 * b + d] <= pc_.pieceHi[3 * a + d];
-            if (overlap) pc_.pieceActive[a] = pc_.pieceActive[b] = 1, any = true;
+            if (overlap) {
+                pc_.pieceActive[a] = 1, any = true;
+                pc_.nbrs.push_back(static_cast<int32_t>(b));
+            }
         }
+        pc_.nbrStart[a + 1] = static_cast<int32_t>(pc_.nbrs.size());
+    }
     if (!any) {  // forget all history: nothing touches
         pc_.ppKey.fill(-1);
         pc_.eeOther.fill(-1);
@@ -151,6 +159,9 @@ void World::pieceContactPhase(double dt) {
         for (std::size_t e = 0; e < S.nEdges(); ++e) {
             if (!pc_.pieceActive[S.edgePiece[e]]) continue;
             const Vector3d a = at(pos, S.edge[2 * e]), b = at(pos, S.edge[2 * e + 1]);
+            const double r = materials[pieces[S.edgePiece[e]].material].radius;
+            const Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
+            if (!pc_.nearOther(S.edgePiece[e], lo.data(), hi.data())) continue;
             const Vector3d m = 0.5 * (a + b);
             half = std::max(half, 0.5 * (b - a).norm());
             pc_.edgeItems.push_back(static_cast<int32_t>(e));
@@ -231,6 +242,13 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             }
             const Material& ma = materials[pieces[pa].material];
             const Vector3d A = at(pos, node);
+            {  // a node far from every other piece's box has nothing to touch
+                const Vector3d lo = A.array() - ma.radius, hi = A.array() + ma.radius;
+                if (!pc_.nearOther(pa, lo.data(), hi.data())) {
+                    for (int k = 0; k < K; ++k) key[k] = -1;
+                    continue;
+                }
+            }
             int nc = 0;
             auto consider = [&](int32_t t) {
                 const int32_t pb = S.triPiece[t];
@@ -247,8 +265,10 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 const double reach = ma.radius + materials[pieces[pb].material].radius;
                 // In front: within the two radii.  Behind (inside the other
                 // piece): within one cell, so it is pushed back out.
-                if ((!behind && dist < reach) || (behind && dist < pc_.itemGrid.cellSize()))
-                    cand[nc++] = Candidate{t, cp, dist, behind};
+                // Front-facing points beyond reach are kept as witnesses for
+                // the inside test below, never applied.
+                (void)reach;
+                if (dist < pc_.itemGrid.cellSize()) cand[nc++] = Candidate{t, cp, dist, behind};
             };
             // Broad phase: candidates from the 27 cells around the node.
             pc_.itemGrid.forNeighbours(A.data(), [&](int32_t it) {
@@ -282,6 +302,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             // then in that edge's or corner's region of the surface).  Each
             // point of a surface is thus reported once, and a node sliding
             // across edges and corners keeps one continuous contact.
+            auto reachOf = [&](int32_t t) { return ma.radius + materials[pieces[S.triPiece[t]].material].radius; };
             const double tol = 1e-9;
             const double eps = 1e-12 * ma.radius;
             for (int i = 0; i < nc; ++i) {  // snap rounding-level weights
@@ -296,12 +317,23 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             bool keep[kCandidates];
             for (int i = 0; i < nc; ++i) {
                 const Candidate& c = cand[i];
-                if (c.cp.feature == TriFeature::Face) {
+                if (c.behind) {
+                    // Inside the other piece only if no front-facing point of
+                    // its surface is nearer: an outside point's nearest surface
+                    // point faces it, and is strictly nearer than any point of
+                    // a face seen from behind.
                     keep[i] = true;
+                    for (int j = 0; j < nc && keep[i]; ++j)
+                        if (!cand[j].behind && S.triPiece[cand[j].tri] == S.triPiece[c.tri])
+                            keep[i] = c.dist < cand[j].dist;
+                    continue;
+                }
+                if (c.cp.feature == TriFeature::Face) {
+                    keep[i] = cand[i].dist < reachOf(c.tri);
                     continue;
                 }
                 const int32_t pb = S.triPiece[c.tri];
-                keep[i] = true;
+                keep[i] = c.dist < reachOf(c.tri);
                 for (int j = 0; j < nc && keep[i]; ++j) {
                     if (j == i || S.triPiece[cand[j].tri] != pb) continue;
                     const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
@@ -427,6 +459,11 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                 const Material& mb = materials[pieces[pb].material];
                 const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
                 const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
+                // Quick reject: midpoints farther apart than the half lengths plus reach.
+                const double lim = 0.5 * ((q1 - p1).norm() + (q2 - p2).norm()) + ma.radius + mb.radius;
+                if ((Eigen::Map<const Vector3d>(&pc_.edgeMid[3 * ie]) - Eigen::Map<const Vector3d>(&pc_.edgeMid[3 * it]))
+                        .squaredNorm() > lim * lim)
+                    return;
                 const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
                 constexpr double kEnd = 1e-9;
                 if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;

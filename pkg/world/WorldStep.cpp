@@ -18,13 +18,14 @@ void World::step(double dt) {
     if (trackEnergy) energy.contactElastic = 0;  // a state: summed afresh by the contact phases
     updatePieceBounds();
     obstaclePhase(dt);
+    const double tObs = omp_get_wtime();
     pieceContactPhase(dt);
     double t1 = omp_get_wtime();
     elementPhase(dt);
     double t2 = omp_get_wtime();
     integratePhase(dt);
     double t3 = omp_get_wtime();
-    timings.obstacles = t1 - t0;
+    timings.obstacles = tObs - t0;
     timings.elements = t2 - t1;
     timings.integrate = t3 - t2;
     time += dt;

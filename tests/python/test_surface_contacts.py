@@ -1,0 +1,216 @@
+"""Piece-piece surface contacts (seed §3): conservation, restitution, edge-edge,
+continuity across triangle edges, stacking, sliding friction, degenerate cases."""
+import math
+
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+
+def _pair(mat, L=0.1, cells=4, v0=3e-5):
+    w = qdem.World()
+    r = mat.radius
+    a = w.addPiece(qdem.boxMesh((L, L, L), (cells,) * 3), mat, pos=(-L / 2 - r - 1e-7, 0, 0), vel=(v0, 0, 0))
+    b = w.addPiece(qdem.boxMesh((L, L, L), (cells,) * 3), mat, pos=(L / 2 + r + 1e-7, 0, 0), vel=(-v0, 0, 0))
+    return w, a, b
+
+
+def _lumpedRestitution(mat, a, b):
+    """What the contact law predicts for two cubes meeting face to face when the
+    cubes are rigid next to their contact springs: every face node is a
+    spring-dashpot (both ways: node on face), with the law's kn and dashpot from
+    the nodes' reduced mass, and no tension.  Integrated finely in 1D."""
+    fa = np.isclose(a.refPos[:, 0], a.refPos[:, 0].max())
+    fb = np.isclose(b.refPos[:, 0], b.refPos[:, 0].min())
+    ya, yb = a.refPos[fa][:, 1:], b.refPos[fb][:, 1:]
+    kn = mat.young * mat.radius
+    le = math.log(mat.restitution)
+    xi = -le / math.sqrt(math.pi**2 + le**2)
+    c = []
+    for m1, p in zip(a.mass[fa], ya):
+        m2 = b.mass[fb][np.argmin(((yb - p)**2).sum(axis=1))]
+        c += [2 * xi * math.sqrt(kn * m1 * m2 / (m1 + m2))] * 2
+    c = np.array(c)
+    M = a.totalMass * b.totalMass / (a.totalMass + b.totalMass)
+    period = math.pi * math.sqrt(M / (kn * len(c)))
+    x, v, h = 0.0, -1.0, period / 20000
+    while not (x > 0 and v > 0):
+        f = np.maximum(0.0, -kn * x - c * v) if x < 0 else 0.0
+        v += h * np.sum(f) / M
+        x += h * v
+    return v
+
+
+@pytest.mark.parametrize("e", [0.3, 0.5, 0.8])
+def test_head_on_cubes_conserve_momentum_and_rebound_by_the_law(e):
+    mat = rubber(radius=1e-5, restitution=e)   # contact springs far softer than the cubes
+    w, a, b = _pair(mat)
+    dt = 0.2 * w.stableDt()["combined"]
+    p0 = a.momentum() + b.momentum()
+    scale = np.abs(a.momentum()).max()
+    worst, n, touched = 0.0, 0, False
+    while n < 20000:
+        w.core.step(dt, 10)
+        n += 10
+        worst = max(worst, np.abs(a.momentum() + b.momentum() - p0).max() / scale)
+        touched = touched or w.core.contactCounts["pointPolygon"] > 0
+        if touched and w.core.contactCounts["pointPolygon"] == 0:
+            break
+    assert touched and n < 20000
+    assert worst < 1e-10
+    rebound = (b.velocity()[0] - a.velocity()[0]) / (2 * 3e-5)
+    assert rebound == pytest.approx(_lumpedRestitution(mat, a, b), rel=0.05)
+
+
+def test_frictionless_collision_conserves_angular_momentum():
+    mat = rubber(radius=1e-3, frictionPiece=0.0, restitution=0.7)
+    w = qdem.World()
+    a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0.03, 0.01), vel=(0.05, 0, 0))
+    b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, -0.02, 0), ori=((1, 2, 3), 0.4),
+                   vel=(-0.05, 0, 0), angVel=(0, 0, 1))
+    L0 = a.angularMomentum(about=(0, 0, 0)) + b.angularMomentum(about=(0, 0, 0))
+    dt = 0.3 * w.stableDt()["combined"]
+    touched = 0
+    for _ in range(400):
+        w.core.step(dt, 10)
+        touched += w.core.contactCounts["pointPolygon"] + w.core.contactCounts["edgeEdge"]
+    L1 = a.angularMomentum(about=(0, 0, 0)) + b.angularMomentum(about=(0, 0, 0))
+    assert touched > 0
+    assert np.abs(L1 - L0).max() < 1e-9 * np.abs(L0).max()
+
+
+def test_crossed_bars_touch_edge_on_without_tunnelling():
+    """Two square bars turned 45 degrees about their axes, crossed at 90 degrees
+    and pressed ridge on ridge: the contact is edge-edge (the crossing is in the
+    middle of a segment of both ridges)."""
+    mat = rubber(radius=1e-3, viscosity=2000.0)
+    w = qdem.World()
+    h = 0.01 * math.sqrt(2)                        # half diagonal of the 0.02 square
+    reach = 2 * mat.radius
+    top = w.addPiece(qdem.boxMesh((0.22, 0.02, 0.02), (11, 1, 1)), mat, pos=(0, 0, h + reach / 2),
+                     ori=((1, 0, 0), math.pi / 4))
+    bot = w.addPiece(qdem.boxMesh((0.02, 0.22, 0.02), (1, 11, 1)), mat, pos=(0, 0, -h - reach / 2),
+                     ori=((0, 1, 0), math.pi / 4))
+    bot.blocked[:] = 7
+    top.blocked[:] = 3                             # only vertical motion: a bar balanced on a point tips over
+    F = 2.0                                        # press the top bar down over the crossing
+    middle = np.abs(top.refPos[:, 0]) < 0.015
+    top.extForce[middle, 2] = -F / middle.sum()
+    dt = 0.5 * w.stableDt()["combined"]
+    nearT, nearB = np.abs(top.refPos[:, 0]) < 0.02, np.abs(bot.refPos[:, 1]) < 0.02
+    minGap, edgeContacts, lastKe = np.inf, 0, 0.0
+    for i in range(600):
+        w.core.step(dt, 20)
+        minGap = min(minGap, top.pos[nearT, 2].min() - bot.pos[nearB, 2].max())   # ridge to ridge
+        edgeContacts = max(edgeContacts, w.core.contactCounts["edgeEdge"])
+        if i >= 200:  # after the dynamic phase, relax to the static state (kinetic damping)
+            ke = (top.mass * top.vel[:, 2]**2).sum()
+            if ke < lastKe:
+                top.vel[:] = 0
+            lastKe = ke
+    load = -bot.force[:, 2].sum()
+    assert edgeContacts > 0
+    kn = mat.young * mat.radius
+    static = F / kn                                 # overlap one edge-edge spring needs to carry F
+    assert minGap > 0                               # never through each other
+    assert reach - minGap < 2.5 * static            # overlap bounded by the law (dynamic overshoot < 2.5x)
+    assert load == pytest.approx(F, rel=0.02)      # the edge-edge contact carries the load
+
+
+@pytest.mark.parametrize("y", [0.013, 0.0])
+def test_node_sliding_across_triangle_edges_feels_a_continuous_force(y):
+    """A rigid stylus (one tetrahedron, prescribed motion) drags its apex over a
+    fixed slab at constant depth: across triangle edges (y=0.013) and straight
+    over vertices and along edges (y=0)."""
+    # restitution 1: no dashpot, whose force rightly jumps by c*v at first touch
+    mat = rubber(radius=2e-3, frictionPiece=0.0, restitution=1.0)
+    w = qdem.World()
+    slab = w.addPiece(qdem.boxMesh((0.3, 0.3, 0.05), (6, 6, 1), tetsPerCell=6), mat, pos=(0, 0, -0.025))
+    depth = 0.3 * 2 * mat.radius
+    apex = np.array([-0.1, y, 2 * mat.radius - depth])
+    s = 0.03
+    nodes = np.array([apex, apex + (-s, -s, 2 * s), apex + (s, -s, 2 * s), apex + (0, s, 2 * s)])
+    stylus = w.addPiece((nodes, [[0, 1, 2, 3]]) if qdem.Mesh(nodes, [[0, 1, 2, 3]], check=False).volumes()[0] > 0
+                        else (nodes, [[0, 2, 1, 3]]), mat, reorder=False)
+    slab.blocked[:] = 7
+    stylus.blocked[:] = 7
+    stylus.vel[:] = (10.0, 0, 0)                   # 0.1 m (two cells) in 10,000 steps of 10 um
+    dt = 1e-6
+    fz = []
+    for _ in range(10000):
+        w.core.step(dt, 1)
+        fz.append(stylus.force[0, 2])
+    fz = np.array(fz)
+    assert fz.min() > 0
+    jumps = np.abs(np.diff(fz)) / fz.mean()
+    assert jumps.max() < 0.01
+    if y != 0:  # away from slab nodes only the apex touches: the law's kn * overlap
+        kn = mat.young * mat.radius
+        assert np.median(fz) == pytest.approx(kn * depth, rel=1e-6)
+
+
+def test_block_sliding_on_a_qdem_slab_decelerates_at_mu_g():
+    from yade import O, ForceResetter, NewtonIntegrator
+    O.reset()
+    qdem.reset()
+    mu = 0.3
+    mat = rubber(radius=2e-3, viscosity=2000.0, frictionPiece=mu)
+    slab = qdem.addPiece(qdem.boxMesh((1.0, 0.3, 0.05), (20, 6, 1)), mat, pos=(0.3, 0, -0.025))
+    slab.blocked[:] = 7
+    block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.05 + 2 * mat.radius),
+                          vel=(1.0, 0, 0))
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.05 / O.dt), True)
+    t1, v1 = O.time, block.velocity()[0]
+    O.run(int(0.15 / O.dt), True)
+    t2, v2 = O.time, block.velocity()[0]
+    assert v2 > 0.2                                  # still sliding
+    assert (v1 - v2) / (t2 - t1) == pytest.approx(mu * 9.81, rel=0.03)
+    O.reset()
+    qdem.reset()
+
+
+def test_sliver_and_coincident_edges_stay_finite():
+    """Exactly coincident parallel edges and node-on-node contacts (two aligned
+    cubes stacked on a slab) and a sliver tetrahedron (aspect ratio 25) lying on
+    the slab: finite forces, no NaN, no launch."""
+    mat = rubber(radius=2e-3, viscosity=200.0)
+    reach = 2 * mat.radius
+    w = qdem.World()
+    slab = w.addPiece(qdem.boxMesh((0.4, 0.2, 0.02), (8, 4, 1)), mat, pos=(0.1, 0, -0.01))
+    slab.blocked[:] = 7
+    a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat, pos=(0, 0, 0.05 + reach))
+    b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat, pos=(0, 0, 0.15 + 2 * reach))
+    sliver = np.array([[0.2, 0, 0], [0.3, 0, 0], [0.25, 0.05, 0], [0.25, 0.0251, 2e-3]]) + (0, 0, reach)
+    c = w.addPiece((sliver, [[0, 1, 2, 3]]), mat, reorder=False)
+    w.core.gravity = (0, 0, -9.81)
+    dt = 0.5 * w.stableDt()["combined"]
+    for _ in range(50):
+        w.core.step(dt, 200)
+        w.core.checkFinite()
+        assert np.isfinite(w.core.force).all()
+    for p in (a, b, c):
+        assert np.abs(p.vel).max() < 0.5
+    assert w.core.maxPieceOverlap < 0.5 * reach
+
+
+def test_27_cubes_stack_reaches_static_equilibrium(scene):
+    """The seed's Figure 6 scene, coarser: 3x3x3 cubes stacked on a YADE floor."""
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O = scene
+    mat = rubber(radius=2e-3, viscosity=3000.0, restitution=0.3)
+    L, reach = 0.1, 2 * 2e-3
+    cubes = [qdem.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat,
+                           pos=(i * (L + reach), j * (L + reach), L / 2 + mat.radius + k * (L + reach)))
+             for i in range(3) for j in range(3) for k in range(3)]
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.4 / O.dt), True)
+    weight = sum(c.totalMass for c in cubes) * 9.81
+    assert max(np.abs(c.vel).max() for c in cubes) < 2e-3
+    assert -O.forces.f(floor)[2] == pytest.approx(weight, rel=0.005)
+    assert qdem.defaultWorld().core.maxPieceOverlap < 0.1 * mat.radius
