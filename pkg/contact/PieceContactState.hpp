@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "../core/Column.hpp"
+#include "BoxGrid.hpp"
 #include "CellGrid.hpp"
 #include "SurfaceIndex.hpp"
 
@@ -21,11 +22,19 @@ enum class BroadPhase : int {
 
 struct PieceContactState {
     SurfaceIndex surf;
-    CellGrid itemGrid, edgeGrid;
-    std::vector<int32_t> items;        // registered triangle or tet ids
-    std::vector<double> itemPoint;     // their reference points (3 each)
-    std::vector<double> edgeMid;       // midpoints of the registered edges
-    std::vector<int32_t> edgeItems;    // registered edge ids
+    // Per piece: a cell list of its registered surface elements, so a query
+    // from one piece visits only the other pieces' elements.
+    std::vector<CellGrid> itemGrid;
+    std::vector<BoxGrid> edgeGrid;
+    std::vector<int32_t> itemStart, items;      // CSR per piece: registered triangle or tet ids
+    std::vector<double> itemPoint;              // their reference points (3 each)
+    std::vector<double> itemRadius;             // and bounding radii about them
+    std::vector<int32_t> edgeStart, edgeItems;  // CSR per piece: registered edge ids
+    std::vector<double> edgeLo, edgeHi;         // their boxes grown by half the contact reach (3 each)
+    double itemReach = 0;                       // largest bounding radius + contact reach
+    // Per step, per triangle: unit outward normal (3), for the quick plane test.
+    std::vector<double> triNormal;
+    std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's
@@ -54,6 +63,8 @@ struct PieceContactState {
     Column<double> eeShear;
 
     void resizeHistory(std::size_t nSurfNodes, std::size_t nEdges) {
+        ppStamp.resize(nSurfNodes, -2);
+        eeStamp.resize(nEdges, -2);
         ppKey.resize(kPP * nSurfNodes, -1);
         ppPiece.resize(kPP * nSurfNodes, -1);
         ppShear.resize(3 * kPP * nSurfNodes, 0.0);

@@ -100,6 +100,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     pieces.push_back(std::move(p));
     pc_.surf.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
     pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
+    pc_.surf.classifyEdges(refPos.data(), edgeFeatureAngle);
     omegaCache_.clear();
     layout_ = ThreadLayout();  // tet count changed: rebuilt at the next step
     return pieceId;

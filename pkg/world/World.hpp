@@ -89,6 +89,9 @@ public:
     // contacts at their ends carry such a contact): full at or above
     // edgeFadeAngle [rad] between the edges, zero when parallel.
     double edgeFadeAngle = 0.17453292519943295;  // 10 degrees
+    // Edge-edge contacts are sought between feature edges only: those whose
+    // two faces meet at more than this angle [rad] in the reference shape.
+    double edgeFeatureAngle = 0.5235987755982988;  // 30 degrees
     double time = 0;
     long iter = 0;
     Energy energy;

@@ -112,62 +112,90 @@ void World::pieceContactPhase(double dt) {
         }
         pc_.nbrStart[a + 1] = static_cast<int32_t>(pc_.nbrs.size());
     }
-    if (!any) {  // forget all history: nothing touches
-        pc_.ppKey.fill(-1);
-        pc_.eeOther.fill(-1);
-        return;
-    }
+    if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     beginContactForces();
 
     double rMax = 0;
     for (std::size_t ip = 0; ip < np; ++ip)
         if (pc_.pieceActive[ip]) rMax = std::max(rMax, materials[pieces[ip].material].radius);
+    if (pc_.surf.sharpAngle != edgeFeatureAngle) pc_.surf.classifyEdges(refPos.data(), edgeFeatureAngle);
     const SurfaceIndex& S = pc_.surf;
+    const bool tetItems = broadPhase != BroadPhase::Triangles;
 
-    // Register the surface elements of active pieces (cell size: seed eq. 6,
-    // with the element's circumradius about its reference point, eq. 7).
-    auto registerItems = [&](bool tets) {
-        pc_.items.clear();
-        pc_.itemPoint.clear();
-        double reach = 0;
-        auto add = [&](int32_t id, const int32_t* nodes, int n) {
-            Vector3d c = Vector3d::Zero();
-            for (int k = 0; k < n; ++k) c += at(pos, nodes[k]);
-            c /= n;
-            for (int k = 0; k < n; ++k) reach = std::max(reach, (at(pos, nodes[k]) - c).squaredNorm());
-            pc_.items.push_back(id);
-            pc_.itemPoint.insert(pc_.itemPoint.end(), {c[0], c[1], c[2]});
-        };
-        if (!tets) {
-            for (std::size_t t = 0; t < S.nTris(); ++t)
-                if (pc_.pieceActive[S.triPiece[t]]) add(static_cast<int32_t>(t), &S.tri[3 * t], 3);
-        } else if (broadPhase == BroadPhase::AllTets) {
-            for (std::size_t e = 0; e < nTets(); ++e)
-                if (pc_.pieceActive[tetPiece[e]]) add(static_cast<int32_t>(e), &tetNodes[4 * e], 4);
-        } else {
-            for (int32_t e : S.surfTets)
-                if (pc_.pieceActive[tetPiece[e]]) add(e, &tetNodes[4 * e], 4);
+    // Register, piece by piece, the surface elements that lie near another
+    // piece's box (the others cannot be touched this step), in cells sized by
+    // the seed's eq. 6: element bounding radius (eq. 7) plus contact reach.
+    pc_.itemStart.assign(np + 1, 0);
+    pc_.items.clear(), pc_.itemPoint.clear(), pc_.itemRadius.clear();
+    pc_.edgeStart.assign(np + 1, 0);
+    pc_.edgeItems.clear(), pc_.edgeLo.clear(), pc_.edgeHi.clear();
+    pc_.triNormal.resize(3 * S.nTris());
+    pc_.itemGrid.resize(np), pc_.edgeGrid.resize(np);
+    double itemR = 0, edgeR = 0;
+    auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
+        Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
+        for (int k = 0; k < n; ++k) {
+            const Vector3d x = at(pos, nodes[k]);
+            c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         }
-        const double cell = std::sqrt(reach) + 2 * rMax;
-        pc_.itemGrid.build(pc_.itemPoint.data(), static_cast<int32_t>(pc_.items.size()), cell);
+        c /= n;
+        lo.array() -= r, hi.array() += r;
+        // Ours filters out elements far from other pieces; the seed's cases
+        // A/B/C register everything of their kind, as the paper measured.
+        if (!tetItems && !pc_.nearOther(piece, lo.data(), hi.data())) return;
+        double R = 0;
+        for (int k = 0; k < n; ++k) R = std::max(R, (at(pos, nodes[k]) - c).squaredNorm());
+        R = std::sqrt(R);
+        itemR = std::max(itemR, R);
+        pc_.items.push_back(id);
+        pc_.itemPoint.insert(pc_.itemPoint.end(), {c[0], c[1], c[2]});
+        pc_.itemRadius.push_back(R);
     };
-    if (pointPolygonOn) registerItems(broadPhase != BroadPhase::Triangles);
-    if (edgeEdgeOn) {
-        pc_.edgeItems.clear();
-        pc_.edgeMid.clear();
-        double half = 0;
-        for (std::size_t e = 0; e < S.nEdges(); ++e) {
-            if (!pc_.pieceActive[S.edgePiece[e]]) continue;
-            const Vector3d a = at(pos, S.edge[2 * e]), b = at(pos, S.edge[2 * e + 1]);
-            const double r = materials[pieces[S.edgePiece[e]].material].radius;
-            const Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
-            if (!pc_.nearOther(S.edgePiece[e], lo.data(), hi.data())) continue;
-            const Vector3d m = 0.5 * (a + b);
-            half = std::max(half, 0.5 * (b - a).norm());
-            pc_.edgeItems.push_back(static_cast<int32_t>(e));
-            pc_.edgeMid.insert(pc_.edgeMid.end(), {m[0], m[1], m[2]});
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        const PieceInfo& p = pieces[ip];
+        const double r = materials[p.material].radius;
+        if (pc_.pieceActive[ip] && pointPolygonOn) {
+            if (!tetItems) {
+                for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
+                    addItem(t, &S.tri[3 * t], 3, r, ip);
+            } else if (broadPhase == BroadPhase::AllTets) {
+                for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) addItem(e, &tetNodes[4 * e], 4, r, ip);
+            } else {
+                for (int32_t q = S.pieceSurfTetStart[ip]; q < S.pieceSurfTetStart[ip + 1]; ++q)
+                    addItem(S.surfTets[q], &tetNodes[4 * S.surfTets[q]], 4, r, ip);
+            }
         }
-        pc_.edgeGrid.build(pc_.edgeMid.data(), static_cast<int32_t>(pc_.edgeItems.size()), 2 * half + 2 * rMax);
+        pc_.itemStart[ip + 1] = static_cast<int32_t>(pc_.items.size());
+        if (pc_.pieceActive[ip] && edgeEdgeOn) {
+            for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
+                if (!S.edgeSharp[e]) continue;
+                const Vector3d a = at(pos, S.edge[2 * e]), b = at(pos, S.edge[2 * e + 1]);
+                // Box grown by r: two edges within reach r_a + r_b share a cell.
+                const Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
+                if (!pc_.nearOther(ip, lo.data(), hi.data())) continue;
+                edgeR = std::max(edgeR, (b - a).norm());
+                pc_.edgeItems.push_back(e);
+                pc_.edgeLo.insert(pc_.edgeLo.end(), {lo[0], lo[1], lo[2]});
+                pc_.edgeHi.insert(pc_.edgeHi.end(), {hi[0], hi[1], hi[2]});
+            }
+        }
+        pc_.edgeStart[ip + 1] = static_cast<int32_t>(pc_.edgeItems.size());
+    }
+    pc_.itemReach = itemR + 2 * rMax;
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        const int32_t i0 = pc_.itemStart[ip], i1 = pc_.itemStart[ip + 1];
+        pc_.itemGrid[ip].build(pc_.itemPoint.data() + 3 * i0, i1 - i0, pc_.itemReach);
+        const int32_t e0 = pc_.edgeStart[ip], e1 = pc_.edgeStart[ip + 1];
+        pc_.edgeGrid[ip].build(pc_.edgeLo.data() + 3 * e0, pc_.edgeHi.data() + 3 * e0, e1 - e0, edgeR + 2 * rMax);
+    }
+    // Unit normals of the surface triangles of active pieces (quick plane test).
+    const auto ntri = static_cast<int32_t>(S.nTris());
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < ntri; ++t) {
+        if (!pc_.pieceActive[S.triPiece[t]]) continue;
+        const int32_t* c = &S.tri[3 * t];
+        const Vector3d n = (at(pos, c[1]) - at(pos, c[0])).cross(at(pos, c[2]) - at(pos, c[0])).normalized();
+        for (int d = 0; d < 3; ++d) pc_.triNormal[3 * t + d] = n[d];
     }
 
     const int nth = omp_get_max_threads();
@@ -223,8 +251,9 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     const bool tets = broadPhase != BroadPhase::Triangles;
     const bool interiorFacesToo = broadPhase == BroadPhase::AllTets || broadPhase == BroadPhase::SurfaceTets;
     constexpr int K = PieceContactState::kPP;
-
+    const long stamp = iter;
     long interiorTests = 0, interiorNear = 0;
+
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
@@ -236,73 +265,109 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             int32_t* key = &pc_.ppKey[K * s];
             int32_t* kpiece = &pc_.ppPiece[K * s];
             double* shear = &pc_.ppShear[3 * K * s];
+            if (pc_.ppStamp[s] != stamp - 1)  // history is only valid from the previous step
+                for (int k = 0; k < K; ++k) key[k] = -1;
+            pc_.ppStamp[s] = stamp;
             if (!pc_.pieceActive[pa]) {
                 for (int k = 0; k < K; ++k) key[k] = -1;
                 continue;
             }
             const Material& ma = materials[pieces[pa].material];
             const Vector3d A = at(pos, node);
-            {  // a node far from every other piece's box has nothing to touch
-                const Vector3d lo = A.array() - ma.radius, hi = A.array() + ma.radius;
-                if (!pc_.nearOther(pa, lo.data(), hi.data())) {
-                    for (int k = 0; k < K; ++k) key[k] = -1;
-                    continue;
-                }
-            }
             int nc = 0;
-            auto consider = [&](int32_t t) {
-                const int32_t pb = S.triPiece[t];
-                if (pb == pa || nc == kCandidates) return;
+            bool anyBehind = false;
+            // Candidate triangles: bounding sphere grown by the reach holds the
+            // node, and the node is within reach in front of its plane (or
+            // behind it: possibly inside that piece).
+            auto consider = [&](int32_t t, double reach) {
+                if (nc == kCandidates) return;
                 const int32_t* c = &S.tri[3 * t];
-                const Vector3d a = at(pos, c[0]), b = at(pos, c[1]), cc = at(pos, c[2]);
-                const TriPoint cp = closestOnTriangle(A, a, b, cc);
-                const Vector3d d = A - cp.point;
-                const double dist = d.norm();
-                // Behind the face (inside the other piece) can only be told
-                // for a face-interior closest point; an edge or corner closest
-                // point means the node is outside, in that feature's region.
-                const bool behind = cp.feature == TriFeature::Face && d.dot((b - a).cross(cc - a)) < 0;
-                const double reach = ma.radius + materials[pieces[pb].material].radius;
-                // In front: within the two radii.  Behind (inside the other
-                // piece): within one cell, so it is pushed back out.
-                // Front-facing points beyond reach are kept as witnesses for
-                // the inside test below, never applied.
-                (void)reach;
-                if (dist < pc_.itemGrid.cellSize()) cand[nc++] = Candidate{t, cp, dist, behind};
+                const Vector3d a = at(pos, c[0]);
+                const double h = (A - a).dot(Eigen::Map<const Vector3d>(&pc_.triNormal[3 * t]));
+                if (h > reach) return;
+                const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                const double dist = (A - cp.point).norm();
+                // Behind the face (inside the other piece) can only be told for
+                // a face-interior closest point; an edge or corner closest point
+                // means the node is outside, in that feature's region.
+                const bool behind = h < 0 && cp.feature == TriFeature::Face;
+                if (!behind && dist >= reach) return;
+                anyBehind = anyBehind || behind;
+                cand[nc++] = Candidate{t, cp, dist, behind};
             };
-            // Broad phase: candidates from the 27 cells around the node.
-            pc_.itemGrid.forNeighbours(A.data(), [&](int32_t it) {
-                const int32_t id = pc_.items[it];
-                if (!tets) {
-                    consider(id);
-                    return;
+            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
+                const int32_t pb = pc_.nbrs[q];
+                const double reach = ma.radius + materials[pieces[pb].material].radius;
+                {
+                    const Vector3d lo = A.array() - reach, hi = A.array() + reach;
+                    bool overlap = true;
+                    for (int d = 0; d < 3 && overlap; ++d)
+                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
+                    if (!overlap) continue;
                 }
-                if (tetPiece[id] == pa) return;
-                for (int k = 0; k < 4; ++k) {
-                    const int32_t t = S.tetFaceTri[4 * id + k];
-                    if (t >= 0) {
-                        consider(t);
-                    } else if (interiorFacesToo) {
-                        // Cases A and B test interior faces too (and find them
-                        // irrelevant): the cost the seed's Figure 6 measures.
-                        int32_t f[3], q = 0;
-                        for (int j = 0; j < 4; ++j)
-                            if (j != k) f[q++] = tetNodes[4 * id + j];
-                        const TriPoint cp = closestOnTriangle(A, at(pos, f[0]), at(pos, f[1]), at(pos, f[2]));
-                        ++interiorTests;
-                        if ((A - cp.point).norm() < ma.radius) ++interiorNear;
+                const int32_t i0 = pc_.itemStart[pb];
+                pc_.itemGrid[pb].forNeighbours(A.data(), [&](int32_t local) {
+                    const int32_t it = i0 + local;
+                    const double R = pc_.itemRadius[it] + reach;
+                    if ((A - Eigen::Map<const Vector3d>(&pc_.itemPoint[3 * it])).squaredNorm() > R * R) return;
+                    const int32_t id = pc_.items[it];
+                    if (!tets) {
+                        consider(id, reach);
+                        return;
                     }
+                    for (int k = 0; k < 4; ++k) {
+                        const int32_t t = S.tetFaceTri[4 * id + k];
+                        if (t >= 0) {
+                            consider(t, reach);
+                        } else if (interiorFacesToo) {
+                            // Cases A and B test interior faces too (and find them
+                            // irrelevant): the cost the seed's Figure 6 measures.
+                            int32_t f[3], n = 0;
+                            for (int j = 0; j < 4; ++j)
+                                if (j != k) f[n++] = tetNodes[4 * id + j];
+                            const TriPoint cp = closestOnTriangle(A, at(pos, f[0]), at(pos, f[1]), at(pos, f[2]));
+                            ++interiorTests;
+                            if ((A - cp.point).norm() < reach) ++interiorNear;
+                        }
+                    }
+                });
+            }
+            // Inside test for behind candidates (rare: deep penetration): the
+            // node is inside a piece only if no front-facing point of that
+            // piece's surface is nearer.  An outside point's nearest surface
+            // point faces it and is strictly nearer than any point of a face
+            // seen from behind.
+            bool keep[kCandidates];
+            for (int i = 0; i < nc; ++i) keep[i] = true;
+            if (anyBehind)
+                for (int i = 0; i < nc; ++i) {
+                    if (!cand[i].behind) continue;
+                    const int32_t pb = S.triPiece[cand[i].tri];
+                    const double db = cand[i].dist;
+                    const int32_t i0 = pc_.itemStart[pb];
+                    pc_.itemGrid[pb].forNeighbours(A.data(), [&](int32_t local) {
+                        if (!keep[i]) return;
+                        const int32_t id = pc_.items[i0 + local];
+                        for (int k = 0; k < (tets ? 4 : 1); ++k) {
+                            const int32_t t = tets ? S.tetFaceTri[4 * id + k] : id;
+                            if (t < 0) continue;
+                            const int32_t* c = &S.tri[3 * t];
+                            const Vector3d a = at(pos, c[0]);
+                            const double h = (A - a).dot(Eigen::Map<const Vector3d>(&pc_.triNormal[3 * t]));
+                            if (h >= db) continue;  // cannot be nearer
+                            const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                            const bool behind = h < 0 && cp.feature == TriFeature::Face;
+                            if (!behind && (A - cp.point).norm() < db) keep[i] = false;
+                        }
+                    });
                 }
-            });
 
-            // Narrow phase.  A face-interior closest point is a contact of its
-            // own.  Edge and corner closest points are shared by the triangles
-            // around them, so per other piece only the nearest one is kept,
-            // and only if no face contact of that piece is nearer (the node is
-            // then in that edge's or corner's region of the surface).  Each
-            // point of a surface is thus reported once, and a node sliding
-            // across edges and corners keeps one continuous contact.
-            auto reachOf = [&](int32_t t) { return ma.radius + materials[pieces[S.triPiece[t]].material].radius; };
+            // Edge and corner closest points are shared by the triangles around
+            // them: per other piece keep only the nearest one, and only if no
+            // face contact of that piece is nearer (the node is then in that
+            // edge's or corner's region of the surface).  Each point of a
+            // surface is thus reported once, and a node sliding across edges
+            // and corners keeps one continuous contact.
             const double tol = 1e-9;
             const double eps = 1e-12 * ma.radius;
             for (int i = 0; i < nc; ++i) {  // snap rounding-level weights
@@ -314,33 +379,18 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 else if (nz == 1) cp.feature = static_cast<TriFeature>(4 + last);
                 else if (cp.feature == TriFeature::Face) cp.feature = TriFeature::Edge0;  // on an edge: not a face
             }
-            bool keep[kCandidates];
             for (int i = 0; i < nc; ++i) {
                 const Candidate& c = cand[i];
-                if (c.behind) {
-                    // Inside the other piece only if no front-facing point of
-                    // its surface is nearer: an outside point's nearest surface
-                    // point faces it, and is strictly nearer than any point of
-                    // a face seen from behind.
-                    keep[i] = true;
-                    for (int j = 0; j < nc && keep[i]; ++j)
-                        if (!cand[j].behind && S.triPiece[cand[j].tri] == S.triPiece[c.tri])
-                            keep[i] = c.dist < cand[j].dist;
-                    continue;
-                }
-                if (c.cp.feature == TriFeature::Face) {
-                    keep[i] = cand[i].dist < reachOf(c.tri);
-                    continue;
-                }
+                if (!keep[i] || c.cp.feature == TriFeature::Face) continue;
                 const int32_t pb = S.triPiece[c.tri];
-                keep[i] = c.dist < reachOf(c.tri);
                 for (int j = 0; j < nc && keep[i]; ++j) {
-                    if (j == i || S.triPiece[cand[j].tri] != pb) continue;
+                    if (j == i || !keep[j] || S.triPiece[cand[j].tri] != pb) continue;
                     const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
                     if (cand[j].cp.feature == TriFeature::Face) keep[i] = c.dist <= dj + eps;
                     else keep[i] = c.dist < cand[j].dist || (c.dist == cand[j].dist && i < j);
                 }
             }
+
             int32_t newKey[K], newPiece[K];
             Vector3d newShear[K];
             bool usedOld[K] = {false, false, false, false, false, false};
@@ -361,15 +411,14 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     vT += c.cp.w[k] * at(vel, tn[k]);
                 }
                 const PairLaw law = pairLaw(ma, mb, mass[node], mT);
+                const Vector3d nT(pc_.triNormal[3 * c.tri], pc_.triNormal[3 * c.tri + 1], pc_.triNormal[3 * c.tri + 2]);
                 Vector3d n;
                 double overlap;
                 if (c.behind) {
-                    const Vector3d nT = (at(pos, tn[1]) - at(pos, tn[0])).cross(at(pos, tn[2]) - at(pos, tn[0]));
-                    n = c.dist > eps ? Vector3d((c.cp.point - A) / c.dist) : nT.normalized();
+                    n = c.dist > eps ? Vector3d((c.cp.point - A) / c.dist) : nT;
                     overlap = law.reach + c.dist;
                 } else {
-                    const Vector3d nT = (at(pos, tn[1]) - at(pos, tn[0])).cross(at(pos, tn[2]) - at(pos, tn[0]));
-                    n = c.dist > eps ? Vector3d((A - c.cp.point) / c.dist) : nT.normalized();
+                    n = c.dist > eps ? Vector3d((A - c.cp.point) / c.dist) : nT;
                     overlap = law.reach - c.dist;
                 }
                 // Tangential history: same surface feature, else inherited from
@@ -384,7 +433,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                         if (key[k] >= 0 && kpiece[k] == pb && !usedOld[k]) {
                             bool matchedLater = false;
                             for (int j = 0; j < nc; ++j)
-                                if (8 * cand[j].tri + static_cast<int>(cand[j].cp.feature) == key[k]) matchedLater = true;
+                                if (keep[j] && 8 * cand[j].tri + static_cast<int>(cand[j].cp.feature) == key[k])
+                                    matchedLater = true;
                             if (!matchedLater) slot = k;
                         }
                 Vector3d sh = Vector3d::Zero();
@@ -434,6 +484,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
     const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
     constexpr int K = PieceContactState::kEE;
     const double sinFade2 = std::pow(std::sin(edgeFadeAngle), 2);
+    const long stamp = iter;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count) reduction(max : maxOv)
     {
@@ -445,97 +496,100 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
             int32_t* other = &pc_.eeOther[K * e];
             int8_t* side = &pc_.eeSide[K * e];
             double* shear = &pc_.eeShear[3 * K * e];
+            if (pc_.eeStamp[e] != stamp - 1)  // history is only valid from the previous step
+                for (int k = 0; k < K; ++k) other[k] = -1;
+            pc_.eeStamp[e] = stamp;
             const Material& ma = materials[pieces[pa].material];
             const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
             const Vector3d p1 = at(pos, a0), q1 = at(pos, a1);
+            const double len1 = (q1 - p1).norm();
             int32_t newOther[K];
             int8_t newSide[K];
             Vector3d newShear[K];
             int nNew = 0;
-            pc_.edgeGrid.forNeighbours(&pc_.edgeMid[3 * ie], [&](int32_t it) {
-                const int32_t e2 = pc_.edgeItems[it];
-                const int32_t pb = S.edgePiece[e2];
-                if (e2 <= e || pb == pa || nNew == K) return;
+            // Each pair of pieces once: edges of the lower piece id query the other.
+            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
+                const int32_t pb = pc_.nbrs[q];
+                if (pb < pa) continue;
                 const Material& mb = materials[pieces[pb].material];
-                const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
-                const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
-                // Quick reject: midpoints farther apart than the half lengths plus reach.
-                const double lim = 0.5 * ((q1 - p1).norm() + (q2 - p2).norm()) + ma.radius + mb.radius;
-                if ((Eigen::Map<const Vector3d>(&pc_.edgeMid[3 * ie]) - Eigen::Map<const Vector3d>(&pc_.edgeMid[3 * it]))
-                        .squaredNorm() > lim * lim)
-                    return;
-                const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
-                constexpr double kEnd = 1e-9;
-                if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;
-                // Fade out towards parallel edges: the seed's formula is
-                // singular there; their end nodes' point-polygon contacts take
-                // over.  (Also keeps the side test below away from the
-                // rounding noise of a near-zero cross product.)
-                const double fade = std::min(1.0, sp.sin2 / sinFade2);
-                // ... and towards the ends of either edge: within one contact
-                // reach of an end node, that node's point-polygon contact
-                // covers the touch, and the hand-over must be continuous.
-                const double reachAB = ma.radius + mb.radius;
-                const double len1 = (q1 - p1).norm(), len2 = (q2 - p2).norm();
-                const double endS = std::min(1.0, std::min(sp.s, 1 - sp.s) * len1 / reachAB);
-                const double endT = std::min(1.0, std::min(sp.t, 1 - sp.t) * len2 / reachAB);
-                const double w = fade * fade * endS * endT;
-                if (w < 1e-6) return;
-                const Vector3d cross = (q1 - p1).cross(q2 - p2);
-                const double cn = cross.norm();
-                const Vector3d d = sp.c1 - sp.c2;
-                const double dist = d.norm();
-                int slot = -1;
-                for (int k = 0; k < K; ++k)
-                    if (other[k] == e2) slot = k;
-                // Which side of edge 2 edge 1 is on, along the common normal;
-                // remembered so that edges pushed through each other are
-                // pushed back, not let through.
-                int sNow = cn > 0 && d.dot(cross) < 0 ? -1 : 1;
-                if (dist <= 1e-12 * ma.radius && slot < 0) {
-                    const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pa]) +
-                                               Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pa]));
-                    const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pb]) +
-                                               Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pb]));
-                    sNow = (ca - cb).dot(cross) < 0 ? -1 : 1;
-                }
-                const int sUse = slot >= 0 && side[slot] != 0 ? side[slot] : sNow;
-                const double reach = reachAB;
-                double overlap;
-                Vector3d n;
-                if (sUse == sNow && dist > 1e-12 * ma.radius) {
-                    n = d / dist;
-                    overlap = reach - dist;
-                } else {
-                    n = double(sUse) * cross / cn;
-                    overlap = reach + dist;
-                }
-                if (overlap <= 0) return;
-                const double m1 = (1 - sp.s) * mass[a0] + sp.s * mass[a1];
-                const double m2 = (1 - sp.t) * mass[b0] + sp.t * mass[b1];
-                const PairLaw law = pairLaw(ma, mb, m1, m2);
-                const Vector3d vRel = ((1 - sp.s) * at(vel, a0) + sp.s * at(vel, a1)) -
-                                      ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
-                Vector3d sh = Vector3d::Zero();
-                if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
-                const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu};
-                const ContactResult r = (Friction && law.mu > 0)
-                                            ? contactForce<true>(cp, n, overlap, vRel, dt, sh)
-                                            : contactForce<false>(cp, n, overlap, vRel, dt, sh);
-                newOther[nNew] = e2;
-                newSide[nNew] = static_cast<int8_t>(sUse);
-                newShear[nNew] = sh;
-                ++nNew;
-                addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force);
-                addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force);
-                addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force);
-                addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force);
-                eEl += r.elastic;
-                eDamp += r.dampPower * dt;
-                eSlip += r.slipWork;
-                ++count;
-                maxOv = std::max(maxOv, overlap);
-            });
+                const double reach = ma.radius + mb.radius;
+                const int32_t j0 = pc_.edgeStart[pb];
+                pc_.edgeGrid[pb].forOverlapping(&pc_.edgeLo[3 * ie], &pc_.edgeHi[3 * ie], [&](int32_t local) {
+                    if (nNew == K) return;
+                    const int32_t je = j0 + local;
+                    const int32_t e2 = pc_.edgeItems[je];
+                    const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
+                    const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
+                    const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
+                    constexpr double kEnd = 1e-9;
+                    if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;
+                    // Fade out towards parallel edges: the seed's formula is
+                    // singular there; their end nodes' point-polygon contacts
+                    // take over.  (Also keeps the side test below away from the
+                    // rounding noise of a near-zero cross product.)  And fade
+                    // towards the ends of either edge: within one contact reach
+                    // of an end node, that node's point-polygon contact covers
+                    // the touch, and the hand-over must be continuous.
+                    const double fade = std::min(1.0, sp.sin2 / sinFade2);
+                    const double endS = std::min(1.0, std::min(sp.s, 1 - sp.s) * len1 / reach);
+                    const double endT = std::min(1.0, std::min(sp.t, 1 - sp.t) * (q2 - p2).norm() / reach);
+                    const double w = fade * fade * endS * endT;
+                    if (w < 1e-6) return;
+                    const Vector3d cross = (q1 - p1).cross(q2 - p2);
+                    const double cn = cross.norm();
+                    const Vector3d d = sp.c1 - sp.c2;
+                    const double dist = d.norm();
+                    int slot = -1;
+                    for (int k = 0; k < K; ++k)
+                        if (other[k] == e2) slot = k;
+                    // Which side of edge 2 edge 1 is on, along the common normal;
+                    // remembered so that edges pushed through each other are
+                    // pushed back, not let through.
+                    int sNow = d.dot(cross) < 0 ? -1 : 1;
+                    if (dist <= 1e-12 * reach && slot < 0) {  // touching at first sight: ask the piece centres
+                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pa]) +
+                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pa]));
+                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pb]) +
+                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pb]));
+                        sNow = (ca - cb).dot(cross) < 0 ? -1 : 1;
+                    }
+                    const int sUse = slot >= 0 && side[slot] != 0 ? side[slot] : sNow;
+                    double overlap;
+                    Vector3d n;
+                    if (sUse == sNow && dist > 1e-12 * reach) {
+                        n = d / dist;
+                        overlap = reach - dist;
+                    } else {
+                        n = double(sUse) * cross / cn;
+                        overlap = reach + dist;
+                    }
+                    if (overlap <= 0) return;
+                    const double m1 = (1 - sp.s) * mass[a0] + sp.s * mass[a1];
+                    const double m2 = (1 - sp.t) * mass[b0] + sp.t * mass[b1];
+                    const PairLaw law = pairLaw(ma, mb, m1, m2);
+                    const Vector3d vRel = ((1 - sp.s) * at(vel, a0) + sp.s * at(vel, a1)) -
+                                          ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
+                    Vector3d sh = Vector3d::Zero();
+                    if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
+                    const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu};
+                    const ContactResult r = (Friction && law.mu > 0)
+                                                ? contactForce<true>(cp, n, overlap, vRel, dt, sh)
+                                                : contactForce<false>(cp, n, overlap, vRel, dt, sh);
+                    newOther[nNew] = e2;
+                    newSide[nNew] = static_cast<int8_t>(sUse);
+                    newShear[nNew] = sh;
+                    ++nNew;
+                    addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force);
+                    addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force);
+                    addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force);
+                    addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force);
+                    eEl += r.elastic;
+                    eDamp += r.dampPower * dt;
+                    eSlip += r.slipWork;
+                    ++count;
+                    maxOv = std::max(maxOv, overlap);
+                });
+            }
             for (int k = 0; k < K; ++k) {
                 other[k] = k < nNew ? newOther[k] : -1;
                 side[k] = k < nNew ? newSide[k] : 0;
