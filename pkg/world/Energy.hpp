@@ -15,9 +15,11 @@ struct Energy {
     double contactDamping = 0;  // accumulated: dashpot dissipation
     double friction = 0;        // accumulated: Coulomb slip dissipation
     double boundaryWork = 0;    // accumulated: -(work of moving obstacles on the nodes)
+    double localDamping = 0;    // accumulated: Cundall's non-viscous damping (when switched on)
 
     double total() const {
-        return kinetic + elastic + gravity + viscous + contactElastic + contactDamping + friction + boundaryWork;
+        return kinetic + elastic + gravity + viscous + contactElastic + contactDamping + friction + boundaryWork +
+               localDamping;
     }
 };
 

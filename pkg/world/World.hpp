@@ -79,6 +79,10 @@ public:
     Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
     bool trackEnergy = false;
     bool viscosityOn = true;  // user switch: the viscous term can be turned off
+    // Cundall's non-viscous local damping, as YADE's NewtonIntegrator.damping:
+    // each force component is reduced by damping*|f| against the motion.  For
+    // quasi-static problems only; 0 (the default) keeps the dynamics exact.
+    double localDamping = 0;
     bool frictionOn = true;   // user switch: tangential forces off
     // Piece-piece surface contacts (seed §3): which kinds, and how the broad
     // phase registers surface elements.
@@ -111,6 +115,9 @@ public:
         long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
     } contactCounts;
     const SurfaceIndex& surfaceIndex() const { return pc_.surf; }
+    // Point-polygon contacts of the last step: kPP slots per surface node
+    // holding 8 * triangle + feature (-1 = empty); for diagnostics.
+    const Column<int32_t>& pointPolygonKeys() const { return pc_.ppKey; }
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap = 0;
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
@@ -253,6 +254,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     constexpr int K = PieceContactState::kPP;
     const long stamp = iter;
     long interiorTests = 0, interiorNear = 0;
+    const bool dbgOneWay = std::getenv("QDEM_ONEWAY") != nullptr;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
@@ -297,6 +299,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             };
             for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
                 const int32_t pb = pc_.nbrs[q];
+                if (dbgOneWay && pb < pa) continue;
                 const double reach = ma.radius + materials[pieces[pb].material].radius;
                 {
                     const Vector3d lo = A.array() - reach, hi = A.array() + reach;
@@ -386,8 +389,32 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 for (int j = 0; j < nc && keep[i]; ++j) {
                     if (j == i || !keep[j] || S.triPiece[cand[j].tri] != pb) continue;
                     const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
-                    if (cand[j].cp.feature == TriFeature::Face) keep[i] = c.dist <= dj + eps;
+                    // A face point at (practically) the same distance is the
+                    // same touch seen from the face: the face keeps it.
+                    if (cand[j].cp.feature == TriFeature::Face) keep[i] = c.dist < dj - eps;
                     else keep[i] = c.dist < cand[j].dist || (c.dist == cand[j].dist && i < j);
+                }
+            }
+
+            // Two contacts with the same piece whose normals differ by less
+            // than the feature angle are one touch of a nearly flat (possibly
+            // slightly folded) surface: keep the nearer.  Without this, a node
+            // over a shallow concave fold would feel both faces at full
+            // strength, and the count would flicker as the fold flexes.
+            // Real corners (a node in a concave corner) keep both contacts.
+            const double cosFeature = std::cos(edgeFeatureAngle);
+            for (int i = 0; i < nc; ++i) {
+                if (!keep[i]) continue;
+                const Vector3d ni = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
+                for (int j = i + 1; j < nc && keep[i]; ++j) {
+                    if (!keep[j] || S.triPiece[cand[j].tri] != S.triPiece[cand[i].tri]) continue;
+                    const Vector3d nj =
+                        (cand[j].behind ? -1.0 : 1.0) * (A - cand[j].cp.point) / std::max(cand[j].dist, eps);
+                    if (ni.dot(nj) < cosFeature) continue;
+                    const double di = cand[i].behind ? -cand[i].dist : cand[i].dist;
+                    const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
+                    if (dj < di) keep[i] = false;
+                    else keep[j] = false;
                 }
             }
 

@@ -238,8 +238,9 @@ void World::integratePhase(double dt) {
     const double* Fc = contactForce_.data();
     const double* M = mass.data();
     const uint8_t* blk = blocked.data();
-    double ek = 0, eg = 0;
-#pragma omp parallel for schedule(static) num_threads(nth) reduction(+ : ek, eg)
+    double ek = 0, eg = 0, ed = 0;
+    const double damp = localDamping;
+#pragma omp parallel for schedule(static) num_threads(nth) reduction(+ : ek, eg, ed)
     for (int32_t n = 0; n < N; ++n) {
         double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
         for (int t = 0; t < nth; ++t)
@@ -255,7 +256,14 @@ void World::integratePhase(double dt) {
         for (int d = 0; d < 3; ++d) {
             Fout[3 * n + d] = f[d];
             const double vOld = V[3 * n + d];
-            const double a = (blk[n] >> d) & 1u ? 0.0 : f[d] * invM;
+            const bool free = !((blk[n] >> d) & 1u);
+            if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
+                const double vm = vOld + 0.5 * dt * f[d] * invM;
+                const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                f[d] -= fd;
+                if (energyOn) ed += fd * vm * dt;
+            }
+            const double a = free ? f[d] * invM : 0.0;
             if (energyOn) {
                 const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
                 ek += 0.5 * M[n] * vMid * vMid;
@@ -268,6 +276,7 @@ void World::integratePhase(double dt) {
     if (energyOn) {
         energy.kinetic = ek;
         energy.gravity += eg;
+        energy.localDamping += ed;
     }
 }
 

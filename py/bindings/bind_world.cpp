@@ -28,6 +28,7 @@ py::dict energyDict(const Energy& e) {
     d["contactDamping"] = e.contactDamping;
     d["friction"] = e.friction;
     d["boundaryWork"] = e.boundaryWork;
+    d["localDamping"] = e.localDamping;
     d["total"] = e.total();
     return d;
 }
@@ -162,6 +163,8 @@ void bindWorld(py::module_& m) {
             [](World& w, const Eigen::Vector3d& g) { w.gravity = g; })
         .def_readwrite("trackEnergy", &World::trackEnergy)
         .def_readwrite("viscosityOn", &World::viscosityOn)
+        .def_readwrite("localDamping", &World::localDamping)
+        .def_readwrite("edgeFeatureAngle", &World::edgeFeatureAngle)
         .def_readwrite("frictionOn", &World::frictionOn)
         .def_readwrite("pointPolygonOn", &World::pointPolygonOn)
         .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
@@ -184,6 +187,26 @@ void bindWorld(py::module_& m) {
                                    return d;
                                })
         .def_readonly("maxPieceOverlap", &World::maxPieceOverlap)
+        .def(
+            "pointPolygonContacts",
+            [](const World& w) {
+                // (node, triangle, feature) of each point-polygon contact of the last step
+                const auto& keys = w.pointPolygonKeys();
+                std::vector<int32_t> out;
+                const int K = PieceContactState::kPP;
+                for (std::size_t s = 0; s < w.surfNodes.size(); ++s)
+                    for (int k = 0; k < K; ++k) {
+                        const int32_t key = keys[K * s + k];
+                        if (key >= 0) out.insert(out.end(), {w.surfNodes[s], key / 8, key % 8});
+                    }
+                return copyOut(out, 3);
+            },
+            "Point-polygon contacts of the last step: rows (node, surface triangle, feature 0 face, 1-3 edge, "
+            "4-6 corner).")
+        .def(
+            "surfaceTriangles",
+            [](const World& w) { return copyOut(w.surfaceIndex().tri, 3); },
+            "All surface triangles (global node ids), indexed as in pointPolygonContacts.")
         .def_readwrite("time", &World::time)
         .def_readwrite("iter", &World::iter)
         .def_property_readonly("nNodes", &World::nNodes)

@@ -25,7 +25,7 @@ BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
                "contactDamping": "qdemContactDamp", "friction": "qdemFrictDissip",
-               "boundaryWork": "qdemBoundaryWork"}
+               "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp"}
 
 
 
@@ -42,6 +42,9 @@ class QdemEngine(PyRunner):
                             "are finite (0 = never).")
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
     viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
+    damping = Attr(0.0, "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping "
+                        "(which QDEM does not inherit): for quasi-static problems; 0 keeps the dynamics exact.",
+                   lambda v: None if 0 <= v < 1 else "must lie in [0, 1)")
     friction = Attr(True, "Apply tangential (friction) contact forces (False switches them off).")
     threads = Attr(0, "OpenMP threads for QDEM (0 = keep the current setting, e.g. from yade -j).")
     pointPolygon = Attr(True, "Point-polygon contacts between pieces (seed paper 3.1).")
@@ -107,6 +110,7 @@ class QdemEngine(PyRunner):
         core.gravity = yadeglue.findGravity(O)
         core.trackEnergy = bool(O.trackEnergy)
         core.viscosityOn = bool(self.viscosity)
+        core.localDamping = float(self.damping)
         core.frictionOn = bool(self.friction)
         core.pointPolygonOn = bool(self.pointPolygon)
         core.edgeEdgeOn = bool(self.edgeEdge)

@@ -198,19 +198,20 @@ def test_sliver_and_coincident_edges_stay_finite():
 
 
 def test_27_cubes_stack_reaches_static_equilibrium(scene):
-    """The seed's Figure 6 scene, coarser: 3x3x3 cubes stacked on a YADE floor."""
+    """The seed's Figure 6 scene, coarser: 3x3x3 cubes stacked on a YADE floor,
+    relaxed with YADE-style local damping as a static analysis would be."""
     from yade import ForceResetter, NewtonIntegrator, utils
     O = scene
-    mat = rubber(radius=2e-3, viscosity=3000.0, restitution=0.3)
+    mat = rubber(radius=2e-3, viscosity=1000.0, restitution=0.3)
     L, reach = 0.1, 2 * 2e-3
     cubes = [qdem.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat,
                            pos=(i * (L + reach), j * (L + reach), L / 2 + mat.radius + k * (L + reach)))
              for i in range(3) for j in range(3) for k in range(3)]
     floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
-    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.engines = [ForceResetter(), qdem.QdemEngine(damping=0.3), NewtonIntegrator(gravity=(0, 0, -9.81))]
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     O.run(int(0.4 / O.dt), True)
     weight = sum(c.totalMass for c in cubes) * 9.81
-    assert max(np.abs(c.vel).max() for c in cubes) < 2e-3
+    assert max(np.abs(c.vel).max() for c in cubes) < 1e-4
     assert -O.forces.f(floor)[2] == pytest.approx(weight, rel=0.005)
     assert qdem.defaultWorld().core.maxPieceOverlap < 0.1 * mat.radius
