@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
@@ -254,7 +253,6 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     constexpr int K = PieceContactState::kPP;
     const long stamp = iter;
     long interiorTests = 0, interiorNear = 0;
-    const bool dbgOneWay = std::getenv("QDEM_ONEWAY") != nullptr;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
@@ -299,7 +297,6 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             };
             for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
                 const int32_t pb = pc_.nbrs[q];
-                if (dbgOneWay && pb < pa) continue;
                 const double reach = ma.radius + materials[pieces[pb].material].radius;
                 {
                     const Vector3d lo = A.array() - reach, hi = A.array() + reach;
@@ -309,7 +306,10 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     if (!overlap) continue;
                 }
                 const int32_t i0 = pc_.itemStart[pb];
-                pc_.itemGrid[pb].forNeighbours(A.data(), [&](int32_t local) {
+                // Items that can reach the node have their reference point within
+                // (largest radius + reach) of it: visit the cells of that box only.
+                const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
+                pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
                     const int32_t it = i0 + local;
                     const double R = pc_.itemRadius[it] + reach;
                     if ((A - Eigen::Map<const Vector3d>(&pc_.itemPoint[3 * it])).squaredNorm() > R * R) return;
@@ -348,7 +348,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     const int32_t pb = S.triPiece[cand[i].tri];
                     const double db = cand[i].dist;
                     const int32_t i0 = pc_.itemStart[pb];
-                    pc_.itemGrid[pb].forNeighbours(A.data(), [&](int32_t local) {
+                    const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
+                    pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
                         if (!keep[i]) return;
                         const int32_t id = pc_.items[i0 + local];
                         for (int k = 0; k < (tets ? 4 : 1); ++k) {
@@ -403,14 +404,14 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             // strength, and the count would flicker as the fold flexes.
             // Real corners (a node in a concave corner) keep both contacts.
             const double cosFeature = std::cos(edgeFeatureAngle);
+            Vector3d cn[kCandidates];
+            for (int i = 0; i < nc; ++i)
+                if (keep[i]) cn[i] = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
             for (int i = 0; i < nc; ++i) {
                 if (!keep[i]) continue;
-                const Vector3d ni = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
                 for (int j = i + 1; j < nc && keep[i]; ++j) {
                     if (!keep[j] || S.triPiece[cand[j].tri] != S.triPiece[cand[i].tri]) continue;
-                    const Vector3d nj =
-                        (cand[j].behind ? -1.0 : 1.0) * (A - cand[j].cp.point) / std::max(cand[j].dist, eps);
-                    if (ni.dot(nj) < cosFeature) continue;
+                    if (cn[i].dot(cn[j]) < cosFeature) continue;
                     const double di = cand[i].behind ? -cand[i].dist : cand[i].dist;
                     const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
                     if (dj < di) keep[i] = false;

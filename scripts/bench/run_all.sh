@@ -11,9 +11,12 @@ echo "bench: QDEM element + integration on the 165,888-tet Figure 6 mesh"
 cat out/bench/elements_qdem.json
 
 echo "bench: YADE's own tetrahedral FEM on the same mesh (2 threads)"
-yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 3 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
+yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 27 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
   || echo "bench: YADE FEM run failed, see out/bench/yade_fem.log"
 
 /usr/bin/python3.11 scripts/bench/merge_elements.py out/bench/elements_qdem.json out/bench/yade_fem.json \
   > out/bench/elements.json
 cat out/bench/elements.json
+
+echo "bench: 27 cubes, seed Figure 6 cases A/B/C and ours, by phase"
+/usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-20}" --out out/bench
