@@ -35,6 +35,20 @@ struct PieceContactState {
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
     std::vector<double> triNormal;
     std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
+
+    // Verlet lists (default broad phase): per surface node, the triangles of
+    // other pieces within reach + skin at the last rebuild.  Valid until some
+    // surface node has moved more than skin/2 since then (two nodes closing
+    // in on each other then still cannot have crossed the skin).
+    static constexpr int kList = 48;
+    std::vector<int32_t> list;       // kList per surface node
+    std::vector<int32_t> listCount;  // per surface node; -1 = overflow, query the cells instead
+    std::vector<double> listPos;     // surface node positions at the rebuild (3 each)
+    std::vector<uint8_t> listActive; // pieces active at the rebuild
+    double listSkin = 0;
+    std::size_t listTris = 0;        // triangle count at the rebuild (pieces added: rebuild)
+    bool listValid = false;
+    long listBuilds = 0;
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's

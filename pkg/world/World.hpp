@@ -96,6 +96,9 @@ public:
     // Edge-edge contacts are sought between feature edges only: those whose
     // two faces meet at more than this angle [rad] in the reference shape.
     double edgeFeatureAngle = 0.5235987755982988;  // 30 degrees
+    // Verlet-list skin of the default broad phase, as a fraction of the
+    // largest particle radius: larger = rarer rebuilds, longer lists.
+    double verletSkin = 0.5;
     double time = 0;
     long iter = 0;
     Energy energy;
@@ -108,6 +111,7 @@ public:
         double obstacles = 0, elements = 0, integrate = 0;
         double broadPhase = 0, pointPolygon = 0, edgeEdge = 0;
     } timings;
+    long verletRebuilds() const { return pc_.listBuilds; }
     // Contacts found in the last step (for tests and diagnostics).
     struct ContactCounts {
         long pointPolygon = 0, edgeEdge = 0;

@@ -122,16 +122,39 @@ void World::pieceContactPhase(double dt) {
     const SurfaceIndex& S = pc_.surf;
     const bool tetItems = broadPhase != BroadPhase::Triangles;
 
+    // Verlet lists (default mode): rebuild only when a surface node has moved
+    // more than half the skin, pieces were added, or a piece became active.
+    const bool verlet = !tetItems;
+    const double skin = verletSkin * rMax;
+    bool rebuild = !verlet || !pc_.listValid || pc_.listTris != S.nTris() || pc_.listSkin != skin ||
+                   pc_.listActive.size() != np;
+    for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = pc_.pieceActive[ip] && !pc_.listActive[ip];
+    if (!rebuild) {
+        const auto ns = static_cast<int32_t>(surfNodes.size());
+        double moved2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved2)
+        for (int32_t i = 0; i < ns; ++i) {
+            const int32_t n = surfNodes[i];
+            if (!pc_.pieceActive[nodePiece[n]]) continue;
+            moved2 = std::max(moved2, (at(pos, n) - Eigen::Map<const Vector3d>(&pc_.listPos[3 * i])).squaredNorm());
+        }
+        rebuild = moved2 > 0.25 * skin * skin;
+    }
+    const double grow = verlet ? skin : 0.0;
+
     // Register, piece by piece, the surface elements that lie near another
     // piece's box (the others cannot be touched this step), in cells sized by
     // the seed's eq. 6: element bounding radius (eq. 7) plus contact reach.
-    pc_.itemStart.assign(np + 1, 0);
-    pc_.items.clear(), pc_.itemPoint.clear(), pc_.itemRadius.clear();
+    if (rebuild) {
+        pc_.itemStart.assign(np + 1, 0);
+        pc_.items.clear(), pc_.itemPoint.clear(), pc_.itemRadius.clear();
+    }
     pc_.edgeStart.assign(np + 1, 0);
     pc_.edgeItems.clear(), pc_.edgeLo.clear(), pc_.edgeHi.clear();
     pc_.triNormal.resize(3 * S.nTris());
     pc_.itemGrid.resize(np), pc_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
+    pc_.itemGrid.resize(np);
     auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
         for (int k = 0; k < n; ++k) {
@@ -139,7 +162,7 @@ void World::pieceContactPhase(double dt) {
             c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         }
         c /= n;
-        lo.array() -= r, hi.array() += r;
+        lo.array() -= r + grow, hi.array() += r + grow;
         // Ours filters out elements far from other pieces; the seed's cases
         // A/B/C register everything of their kind, as the paper measured.
         if (!tetItems && !pc_.nearOther(piece, lo.data(), hi.data())) return;
@@ -154,7 +177,7 @@ void World::pieceContactPhase(double dt) {
     for (std::size_t ip = 0; ip < np; ++ip) {
         const PieceInfo& p = pieces[ip];
         const double r = materials[p.material].radius;
-        if (pc_.pieceActive[ip] && pointPolygonOn) {
+        if (pc_.pieceActive[ip] && pointPolygonOn && rebuild) {
             if (!tetItems) {
                 for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
                     addItem(t, &S.tri[3 * t], 3, r, ip);
@@ -165,7 +188,7 @@ void World::pieceContactPhase(double dt) {
                     addItem(S.surfTets[q], &tetNodes[4 * S.surfTets[q]], 4, r, ip);
             }
         }
-        pc_.itemStart[ip + 1] = static_cast<int32_t>(pc_.items.size());
+        if (rebuild) pc_.itemStart[ip + 1] = static_cast<int32_t>(pc_.items.size());
         if (pc_.pieceActive[ip] && edgeEdgeOn) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
@@ -181,12 +204,12 @@ void World::pieceContactPhase(double dt) {
         }
         pc_.edgeStart[ip + 1] = static_cast<int32_t>(pc_.edgeItems.size());
     }
-    pc_.itemReach = itemR + 2 * rMax;
+    if (rebuild) pc_.itemReach = itemR + 2 * rMax + grow;
     for (std::size_t ip = 0; ip < np; ++ip) {
         const int32_t i0 = pc_.itemStart[ip], i1 = pc_.itemStart[ip + 1];
         // Cells twice the reach: a query box of +-reach then spans 2 cells per
         // axis (8 cells) instead of 3 (27), for a few more items per cell.
-        pc_.itemGrid[ip].build(pc_.itemPoint.data() + 3 * i0, i1 - i0, 2 * pc_.itemReach);
+        if (rebuild) pc_.itemGrid[ip].build(pc_.itemPoint.data() + 3 * i0, i1 - i0, 2 * pc_.itemReach);
         const int32_t e0 = pc_.edgeStart[ip], e1 = pc_.edgeStart[ip + 1];
         pc_.edgeGrid[ip].build(pc_.edgeLo.data() + 3 * e0, pc_.edgeHi.data() + 3 * e0, e1 - e0, edgeR + 2 * rMax);
     }
@@ -199,6 +222,54 @@ void World::pieceContactPhase(double dt) {
         const Vector3d n = (at(pos, c[1]) - at(pos, c[0])).cross(at(pos, c[2]) - at(pos, c[0])).normalized();
         for (int d = 0; d < 3; ++d) pc_.triNormal[3 * t + d] = n[d];
     }
+    if (verlet && rebuild && pointPolygonOn) {
+        // Each surface node's candidate triangles: bounding sphere grown by
+        // reach + skin holds the node.
+        const auto ns = static_cast<int32_t>(surfNodes.size());
+        constexpr int KL = PieceContactState::kList;
+        pc_.list.resize(KL * static_cast<std::size_t>(ns));
+        pc_.listCount.assign(ns, 0);
+        pc_.listPos.resize(3 * static_cast<std::size_t>(ns));
+#pragma omp parallel for schedule(dynamic, 64)
+        for (int32_t i = 0; i < ns; ++i) {
+            const int32_t node = surfNodes[i];
+            const int32_t pa = nodePiece[node];
+            const Vector3d A = at(pos, node);
+            for (int d = 0; d < 3; ++d) pc_.listPos[3 * i + d] = A[d];
+            if (!pc_.pieceActive[pa]) continue;
+            const double ra = materials[pieces[pa].material].radius;
+            int count = 0;
+            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1] && count >= 0; ++q) {
+                const int32_t pb = pc_.nbrs[q];
+                const double reach = ra + materials[pieces[pb].material].radius + skin;
+                bool overlap = true;
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = A[d] - reach <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= A[d] + reach;
+                if (!overlap) continue;
+                const int32_t i0 = pc_.itemStart[pb];
+                const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
+                pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
+                    const int32_t it = i0 + local;
+                    const double R = pc_.itemRadius[it] + reach;
+                    if (count < 0 ||
+                        (A - Eigen::Map<const Vector3d>(&pc_.itemPoint[3 * it])).squaredNorm() > R * R)
+                        return;
+                    if (count == KL) {
+                        count = -1;  // crowded: this node queries the cells each step
+                        return;
+                    }
+                    pc_.list[static_cast<std::size_t>(KL) * i + count++] = pc_.items[it];
+                });
+            }
+            pc_.listCount[i] = count;
+        }
+        pc_.listActive.assign(pc_.pieceActive.begin(), pc_.pieceActive.end());
+        pc_.listSkin = skin;
+        pc_.listTris = S.nTris();
+        pc_.listValid = true;
+        ++pc_.listBuilds;
+    }
+    if (!verlet) pc_.listValid = false;
 
     const int nth = omp_get_max_threads();
     if (static_cast<int>(pc_.threadForce.size()) != nth) pc_.threadForce.assign(nth, {});
@@ -299,7 +370,16 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 anyBehind = anyBehind || behind;
                 cand[nc++] = Candidate{t, cp, dist, behind};
             };
-            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
+            const bool useList = pc_.listValid && pc_.listCount[s] >= 0;
+            if (useList) {
+                const int32_t* L = &pc_.list[static_cast<std::size_t>(PieceContactState::kList) * s];
+                for (int k = 0; k < pc_.listCount[s]; ++k) {
+                    const int32_t t = L[k];
+                    const int32_t pb = S.triPiece[t];
+                    if (pc_.pieceActive[pb]) consider(t, ma.radius + materials[pieces[pb].material].radius);
+                }
+            }
+            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1] && !useList; ++q) {
                 const int32_t pb = pc_.nbrs[q];
                 const double reach = ma.radius + materials[pieces[pb].material].radius;
                 {
@@ -315,7 +395,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
                 pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
                     const int32_t it = i0 + local;
-                    const double R = pc_.itemRadius[it] + reach;
+                    // (grown by the skin: the cells may date from the last list rebuild)
+                    const double R = pc_.itemRadius[it] + reach + (pc_.listValid ? pc_.listSkin : 0.0);
                     if ((A - Eigen::Map<const Vector3d>(&pc_.itemPoint[3 * it])).squaredNorm() > R * R) return;
                     const int32_t id = pc_.items[it];
                     if (!tets) {
@@ -353,9 +434,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     const double db = cand[i].dist;
                     const int32_t i0 = pc_.itemStart[pb];
                     const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
-                    pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
+                    auto witness = [&](int32_t id) {
                         if (!keep[i]) return;
-                        const int32_t id = pc_.items[i0 + local];
                         for (int k = 0; k < (tets ? 4 : 1); ++k) {
                             const int32_t t = tets ? S.tetFaceTri[4 * id + k] : id;
                             if (t < 0) continue;
@@ -367,7 +447,15 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                             const bool behind = h < 0 && cp.feature == TriFeature::Face;
                             if (!behind && (A - cp.point).norm() < db) keep[i] = false;
                         }
-                    });
+                    };
+                    if (useList) {
+                        const int32_t* L = &pc_.list[static_cast<std::size_t>(PieceContactState::kList) * s];
+                        for (int k = 0; k < pc_.listCount[s]; ++k)
+                            if (S.triPiece[L[k]] == pb) witness(L[k]);
+                    } else {
+                        pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(),
+                                                  [&](int32_t local) { witness(pc_.items[i0 + local]); });
+                    }
                 }
 
             // Edge and corner closest points are shared by the triangles around

@@ -165,6 +165,8 @@ void bindWorld(py::module_& m) {
         .def_readwrite("viscosityOn", &World::viscosityOn)
         .def_readwrite("localDamping", &World::localDamping)
         .def_readwrite("edgeFeatureAngle", &World::edgeFeatureAngle)
+        .def_readwrite("verletSkin", &World::verletSkin, "Verlet-list skin as a fraction of the particle radius.")
+        .def_property_readonly("verletRebuilds", &World::verletRebuilds)
         .def_readwrite("frictionOn", &World::frictionOn)
         .def_readwrite("pointPolygonOn", &World::pointPolygonOn)
         .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)

@@ -15,7 +15,7 @@ if [ "$(id -u)" = 0 ]; then
   echo "deps: installing:$missing"
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -q
-  apt-get install -y -q --no-install-recommends $missing
+  apt-get install -y -q $missing
 else
   echo "deps: missing Debian packages. Run as root:"
   echo "  sudo apt-get install -y$missing"
