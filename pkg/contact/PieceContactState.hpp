@@ -49,6 +49,10 @@ struct PieceContactState {
     std::size_t listTris = 0;        // triangle count at the rebuild (pieces added: rebuild)
     bool listValid = false;
     long listBuilds = 0;
+    // The same for feature edges: per registered edge, registered edges of
+    // higher pieces whose (skin-grown) boxes overlapped at the rebuild.
+    static constexpr int kEdgeList = 32;
+    std::vector<int32_t> edgeList, edgeListCount;
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's

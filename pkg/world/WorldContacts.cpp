@@ -149,8 +149,11 @@ void World::pieceContactPhase(double dt) {
         pc_.itemStart.assign(np + 1, 0);
         pc_.items.clear(), pc_.itemPoint.clear(), pc_.itemRadius.clear();
     }
-    pc_.edgeStart.assign(np + 1, 0);
-    pc_.edgeItems.clear(), pc_.edgeLo.clear(), pc_.edgeHi.clear();
+    const bool edgeRebuild = rebuild || !verlet;  // edge lists follow the same rebuilds
+    if (edgeRebuild) {
+        pc_.edgeStart.assign(np + 1, 0);
+        pc_.edgeItems.clear(), pc_.edgeLo.clear(), pc_.edgeHi.clear();
+    }
     pc_.triNormal.resize(3 * S.nTris());
     pc_.itemGrid.resize(np), pc_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
@@ -189,12 +192,14 @@ void World::pieceContactPhase(double dt) {
             }
         }
         if (rebuild) pc_.itemStart[ip + 1] = static_cast<int32_t>(pc_.items.size());
-        if (pc_.pieceActive[ip] && edgeEdgeOn) {
+        if (pc_.pieceActive[ip] && edgeEdgeOn && edgeRebuild) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 const Vector3d a = at(pos, S.edge[2 * e]), b = at(pos, S.edge[2 * e + 1]);
-                // Box grown by r: two edges within reach r_a + r_b share a cell.
-                const Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
+                // Box grown by r (+ half the skin): two edges within reach
+                // r_a + r_b (+ skin) share a cell.
+                const double g = r + 0.5 * grow;
+                const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
                 if (!pc_.nearOther(ip, lo.data(), hi.data())) continue;
                 edgeR = std::max(edgeR, (b - a).norm());
                 pc_.edgeItems.push_back(e);
@@ -202,7 +207,7 @@ void World::pieceContactPhase(double dt) {
                 pc_.edgeHi.insert(pc_.edgeHi.end(), {hi[0], hi[1], hi[2]});
             }
         }
-        pc_.edgeStart[ip + 1] = static_cast<int32_t>(pc_.edgeItems.size());
+        if (edgeRebuild) pc_.edgeStart[ip + 1] = static_cast<int32_t>(pc_.edgeItems.size());
     }
     if (rebuild) pc_.itemReach = itemR + 2 * rMax + grow;
     for (std::size_t ip = 0; ip < np; ++ip) {
@@ -211,7 +216,9 @@ void World::pieceContactPhase(double dt) {
         // axis (8 cells) instead of 3 (27), for a few more items per cell.
         if (rebuild) pc_.itemGrid[ip].build(pc_.itemPoint.data() + 3 * i0, i1 - i0, 2 * pc_.itemReach);
         const int32_t e0 = pc_.edgeStart[ip], e1 = pc_.edgeStart[ip + 1];
-        pc_.edgeGrid[ip].build(pc_.edgeLo.data() + 3 * e0, pc_.edgeHi.data() + 3 * e0, e1 - e0, edgeR + 2 * rMax);
+        if (edgeRebuild)
+            pc_.edgeGrid[ip].build(pc_.edgeLo.data() + 3 * e0, pc_.edgeHi.data() + 3 * e0, e1 - e0,
+                                   edgeR + 2 * rMax + grow);
     }
     // Unit normals of the surface triangles of active pieces (quick plane test).
     const auto ntri = static_cast<int32_t>(S.nTris());
@@ -268,6 +275,32 @@ void World::pieceContactPhase(double dt) {
         pc_.listTris = S.nTris();
         pc_.listValid = true;
         ++pc_.listBuilds;
+    }
+    if (verlet && edgeRebuild && edgeEdgeOn) {
+        // Each registered edge's candidate edges of higher pieces (each pair once).
+        const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
+        constexpr int KE = PieceContactState::kEdgeList;
+        pc_.edgeList.resize(KE * static_cast<std::size_t>(ne));
+        pc_.edgeListCount.assign(ne, 0);
+#pragma omp parallel for schedule(dynamic, 64)
+        for (int32_t ie = 0; ie < ne; ++ie) {
+            const int32_t pa = S.edgePiece[pc_.edgeItems[ie]];
+            int count = 0;
+            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1] && count >= 0; ++q) {
+                const int32_t pb = pc_.nbrs[q];
+                if (pb < pa) continue;
+                const int32_t j0 = pc_.edgeStart[pb];
+                pc_.edgeGrid[pb].forOverlapping(&pc_.edgeLo[3 * ie], &pc_.edgeHi[3 * ie], [&](int32_t local) {
+                    if (count < 0) return;
+                    if (count == KE) {
+                        count = -1;  // crowded: this edge queries the cells each step
+                        return;
+                    }
+                    pc_.edgeList[static_cast<std::size_t>(KE) * ie + count++] = j0 + local;
+                });
+            }
+            pc_.edgeListCount[ie] = count;
+        }
     }
     if (!verlet) pc_.listValid = false;
 
@@ -627,25 +660,14 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
             int8_t newSide[K];
             Vector3d newShear[K];
             int nNew = 0;
-            // Each pair of pieces once: edges of the lower piece id query the other.
-            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
-                const int32_t pb = pc_.nbrs[q];
-                if (pb < pa) continue;
-                {  // the edge's box must reach the other piece's box
-                    const double* lo = &pc_.edgeLo[3 * ie];
-                    const double* hi = &pc_.edgeHi[3 * ie];
-                    bool overlap = true;
-                    for (int d = 0; d < 3 && overlap; ++d)
-                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
-                    if (!overlap) continue;
-                }
-                const Material& mb = materials[pieces[pb].material];
-                const double reach = ma.radius + mb.radius;
-                const int32_t j0 = pc_.edgeStart[pb];
-                pc_.edgeGrid[pb].forOverlapping(&pc_.edgeLo[3 * ie], &pc_.edgeHi[3 * ie], [&](int32_t local) {
+            // One pair of edges: je indexes the registered edges.
+            auto pair = [&](int32_t je) {
                     if (nNew == K) return;
-                    const int32_t je = j0 + local;
                     const int32_t e2 = pc_.edgeItems[je];
+                    const int32_t pb = S.edgePiece[e2];
+                    if (!pc_.pieceActive[pb]) return;
+                    const Material& mb = materials[pieces[pb].material];
+                    const double reach = ma.radius + mb.radius;
                     const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
                     const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
                     const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
@@ -716,7 +738,26 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                     eSlip += r.slipWork;
                     ++count;
                     maxOv = std::max(maxOv, overlap);
-                });
+            };
+            // Each pair of pieces once: edges of the lower piece id meet the
+            // higher piece's edges, from the list made at the last rebuild or
+            // from the cells.
+            if (pc_.listValid && pc_.edgeListCount[ie] >= 0) {
+                const int32_t* L = &pc_.edgeList[static_cast<std::size_t>(PieceContactState::kEdgeList) * ie];
+                for (int k = 0; k < pc_.edgeListCount[ie]; ++k) pair(L[k]);
+            } else {
+                for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
+                    const int32_t pb = pc_.nbrs[q];
+                    if (pb < pa) continue;
+                    const double* lo = &pc_.edgeLo[3 * ie];
+                    const double* hi = &pc_.edgeHi[3 * ie];
+                    bool overlap = true;  // the edge's box must reach the other piece's box
+                    for (int d = 0; d < 3 && overlap; ++d)
+                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
+                    if (!overlap) continue;
+                    const int32_t j0 = pc_.edgeStart[pb];
+                    pc_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
+                }
             }
             for (int k = 0; k < K; ++k) {
                 other[k] = k < nNew ? newOther[k] : -1;
