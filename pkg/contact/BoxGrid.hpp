@@ -11,13 +11,15 @@
 #include <cstdint>
 #include <vector>
 
+#include "CellHash.hpp"
+
 namespace qdem {
 
 class BoxGrid {
 public:
     // n items with boxes lo/hi (3 each).  No allocation once grown.
     void build(const double* lo, const double* hi, int32_t n, double cellSize) {
-        inv_ = 1.0 / cellSize;
+        h_.inv = 1.0 / cellSize;  // cell coordinates are needed to count the entries
         lo_.assign(lo, lo + 3 * n);
         hi_.assign(hi, hi + 3 * n);
         std::size_t entries = 0;
@@ -26,10 +28,7 @@ public:
             for (int d = 0; d < 3; ++d) c *= static_cast<std::size_t>(coord(hi[3 * i + d]) - coord(lo[3 * i + d]) + 1);
             entries += c;
         }
-        std::size_t size = 64;
-        while (size < 2 * entries) size *= 2;
-        mask_ = size - 1;
-        head_.assign(size, -1);
+        head_.assign(h_.reset(cellSize, entries), -1);
         item_.resize(entries), next_.resize(entries), cx_.resize(entries), cy_.resize(entries), cz_.resize(entries);
         int32_t k = 0;
         for (int32_t i = 0; i < n; ++i)
@@ -61,12 +60,8 @@ public:
     }
 
 private:
-    int64_t coord(double v) const { return static_cast<int64_t>(std::floor(v * inv_)); }
-    std::size_t hash(int64_t x, int64_t y, int64_t z) const {
-        const uint64_t h = static_cast<uint64_t>(x) * 73856093u ^ static_cast<uint64_t>(y) * 19349663u ^
-                           static_cast<uint64_t>(z) * 83492791u;
-        return static_cast<std::size_t>(h ^ (h >> 29)) & mask_;
-    }
+    int64_t coord(double v) const { return h_.coord(v); }
+    std::size_t hash(int64_t x, int64_t y, int64_t z) const { return h_(x, y, z); }
     template <class F>
     void forCells(const double* lo, const double* hi, F&& f) const {
         const int64_t x0 = coord(lo[0]), x1 = coord(hi[0]), y0 = coord(lo[1]), y1 = coord(hi[1]);
@@ -76,8 +71,7 @@ private:
                 for (int64_t z = z0; z <= z1; ++z) f(x, y, z);
     }
 
-    double inv_ = 1;
-    std::size_t mask_ = 0;
+    CellHash h_;
     std::vector<double> lo_, hi_;
     std::vector<int32_t> head_, item_, next_;
     std::vector<int64_t> cx_, cy_, cz_;

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "CellHash.hpp"
+
 namespace qdem {
 
 class CellGrid {
@@ -16,11 +18,7 @@ public:
     // once the capacity has grown to the largest n seen.
     void build(const double* points, int32_t n, double cellSize) {
         cell_ = cellSize;
-        inv_ = 1.0 / cellSize;
-        std::size_t size = 64;
-        while (size < 2 * static_cast<std::size_t>(n)) size *= 2;
-        mask_ = size - 1;
-        head_.assign(size, -1);
+        head_.assign(h_.reset(cellSize, static_cast<std::size_t>(n)), -1);
         next_.resize(n);
         cx_.resize(n), cy_.resize(n), cz_.resize(n);
         for (int32_t i = 0; i < n; ++i) {
@@ -59,15 +57,11 @@ public:
     double cellSize() const { return cell_; }
 
 private:
-    int64_t coord(double v) const { return static_cast<int64_t>(std::floor(v * inv_)); }
-    std::size_t hash(int64_t x, int64_t y, int64_t z) const {
-        const uint64_t h = static_cast<uint64_t>(x) * 73856093u ^ static_cast<uint64_t>(y) * 19349663u ^
-                           static_cast<uint64_t>(z) * 83492791u;
-        return static_cast<std::size_t>(h ^ (h >> 29)) & mask_;
-    }
+    int64_t coord(double v) const { return h_.coord(v); }
+    std::size_t hash(int64_t x, int64_t y, int64_t z) const { return h_(x, y, z); }
 
-    double cell_ = 1, inv_ = 1;
-    std::size_t mask_ = 0;
+    double cell_ = 1;
+    CellHash h_;
     std::vector<int32_t> head_, next_;
     std::vector<int64_t> cx_, cy_, cz_;
 };

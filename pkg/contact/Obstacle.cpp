@@ -1,5 +1,7 @@
 #include "Obstacle.hpp"
 
+#include "Geometry.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -27,27 +29,6 @@ void Obstacle::updateDerived() {
             hi = worldVerts[0].cwiseMax(worldVerts[1]).cwiseMax(worldVerts[2]);
             break;
     }
-}
-
-Vector3d closestPointOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-    const Vector3d ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-    if (d1 <= 0 && d2 <= 0) return a;
-    const Vector3d bp = p - b;
-    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-    if (d3 >= 0 && d4 <= d3) return b;
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-    const Vector3d cp = p - c;
-    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-    if (d6 >= 0 && d5 <= d6) return c;
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-        return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-    const double denom = 1.0 / (va + vb + vc);
-    return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
 bool touchObstacle(const Obstacle& o, const Vector3d& x, double r, int prevSide, ObstacleHit& hit) {
@@ -100,7 +81,7 @@ bool touchObstacle(const Obstacle& o, const Vector3d& x, double r, int prevSide,
             return true;
         }
         case ObstacleKind::Facet: {
-            const Vector3d c = closestPointOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
+            const Vector3d c = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]).point;
             const Vector3d nf =
                 (o.worldVerts[1] - o.worldVerts[0]).cross(o.worldVerts[2] - o.worldVerts[0]).normalized();
             const Vector3d d = x - c;

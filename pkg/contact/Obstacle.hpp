@@ -54,9 +54,4 @@ struct ObstacleHit {
 // still pushed back to where it came from, instead of being let through.
 bool touchObstacle(const Obstacle& o, const Eigen::Vector3d& x, double r, int prevSide, ObstacleHit& hit);
 
-// Closest point on triangle abc to p (Voronoi-region walk; Ericson,
-// Real-Time Collision Detection, 5.1.5).
-Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
-
 }  // namespace qdem
