@@ -56,6 +56,7 @@ struct PieceContactState {
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's
+    std::vector<int32_t> pieceOrder, pairs, nbrFill;  // sweep-and-prune work arrays
 
     // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
     bool nearOther(int32_t pa, const double* lo, const double* hi) const {

@@ -91,27 +91,35 @@ void World::pieceContactPhase(double dt) {
     const std::size_t np = pieces.size();
     if (np < 2 || (!pointPolygonOn && !edgeEdgeOn)) return;
 
-    // Which pieces can touch another one at all?  (Sort-free O(P^2) box test:
-    // cheap next to the node loops for the piece counts of real scenes.)
+    // Which pieces can touch another one at all?  Sweep and prune on x:
+    // pieces sorted by the low end of their boxes, each compared only with
+    // those starting before its box ends.  O(P log P + touching pairs).
     const double t0 = omp_get_wtime();
     pc_.pieceActive.assign(np, 0);
-    pc_.nbrStart.assign(np + 1, 0);
-    pc_.nbrs.clear();
-    bool any = false;
-    for (std::size_t a = 0; a < np; ++a) {
-        for (std::size_t b = 0; b < np; ++b) {
-            if (a == b) continue;
-            bool overlap = true;
-            for (int d = 0; d < 3 && overlap; ++d)
-                overlap = pc_.pieceLo[3 * a + d] <= pc_.pieceHi[3 * b + d] &&
-                          pc_.pieceLo[3 * b + d] <= pc_.pieceHi[3 * a + d];
-            if (overlap) {
-                pc_.pieceActive[a] = 1, any = true;
-                pc_.nbrs.push_back(static_cast<int32_t>(b));
-            }
+    pc_.pieceOrder.resize(np);
+    for (std::size_t i = 0; i < np; ++i) pc_.pieceOrder[i] = static_cast<int32_t>(i);
+    std::sort(pc_.pieceOrder.begin(), pc_.pieceOrder.end(),
+              [&](int32_t a, int32_t b) { return pc_.pieceLo[3 * a] < pc_.pieceLo[3 * b]; });
+    pc_.pairs.clear();
+    for (std::size_t i = 0; i < np; ++i) {
+        const int32_t a = pc_.pieceOrder[i];
+        for (std::size_t j = i + 1; j < np; ++j) {
+            const int32_t b = pc_.pieceOrder[j];
+            if (pc_.pieceLo[3 * b] > pc_.pieceHi[3 * a]) break;
+            if (pc_.pieceLo[3 * a + 1] <= pc_.pieceHi[3 * b + 1] && pc_.pieceLo[3 * b + 1] <= pc_.pieceHi[3 * a + 1] &&
+                pc_.pieceLo[3 * a + 2] <= pc_.pieceHi[3 * b + 2] && pc_.pieceLo[3 * b + 2] <= pc_.pieceHi[3 * a + 2])
+                pc_.pairs.insert(pc_.pairs.end(), {a, b, b, a});
         }
-        pc_.nbrStart[a + 1] = static_cast<int32_t>(pc_.nbrs.size());
     }
+    // Neighbour lists (CSR) from the pairs, both directions.
+    pc_.nbrStart.assign(np + 1, 0);
+    for (std::size_t q = 0; q < pc_.pairs.size(); q += 2) ++pc_.nbrStart[pc_.pairs[q] + 1];
+    for (std::size_t i = 0; i < np; ++i) pc_.nbrStart[i + 1] += pc_.nbrStart[i];
+    pc_.nbrs.resize(pc_.pairs.size() / 2);
+    pc_.nbrFill.assign(pc_.nbrStart.begin(), pc_.nbrStart.end() - 1);
+    for (std::size_t q = 0; q < pc_.pairs.size(); q += 2) pc_.nbrs[pc_.nbrFill[pc_.pairs[q]]++] = pc_.pairs[q + 1];
+    for (std::size_t i = 0; i < np; ++i) pc_.pieceActive[i] = pc_.nbrStart[i + 1] > pc_.nbrStart[i];
+    const bool any = !pc_.pairs.empty();
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     beginContactForces();
 
