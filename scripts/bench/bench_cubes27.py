@@ -49,6 +49,7 @@ def measure(w, steps, case, threads):
     dt = min(6.4e-6, w.stableDt()["combined"])   # Table 1's step
     w.core.step(dt, 3)
     acc = dict.fromkeys(PHASES, 0.0)
+    rebuilds0 = w.core.verletRebuilds
     t0 = time.perf_counter()
     for _ in range(steps):
         w.core.step(dt, 1)
@@ -60,7 +61,8 @@ def measure(w, steps, case, threads):
     return dict(ms, contact_ms=contact, step_ms=1e3 * wall, ns_per_tet_step=1e9 * wall / w.core.nTets,
                 pointPolygonContacts=w.core.contactCounts["pointPolygon"],
                 edgeEdgeContacts=w.core.contactCounts["edgeEdge"],
-                interiorFaceTests=w.core.contactCounts["interiorFaceTests"])
+                interiorFaceTests=w.core.contactCounts["interiorFaceTests"],
+                verletRebuilds=w.core.verletRebuilds - rebuilds0)
 
 
 def chart(res, path):
