@@ -260,8 +260,11 @@ TetMesh extract(const C3t3& c3t3) {
 }  // namespace
 
 TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector<int32_t>& triangles,
-                          double cellSize, double facetDistance, unsigned seed) {
+                          double cellSize, double facetDistance, unsigned seed, double surfaceSize) {
     checkArguments(vertices, triangles, cellSize, facetDistance);
+    if (std::isnan(surfaceSize) || std::isinf(surfaceSize))
+        throw InputError(cat("meshClosedSurface: surfaceSize must be finite (<= 0 selects cellSize), got ", surfaceSize));
+    const double skin = surfaceSize > 0 ? surfaceSize : cellSize;
     checkClosedManifold(triangles, vertices.size() / 3);
     Validated soup = buildSoup(vertices, triangles);
 
@@ -277,7 +280,7 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
             throw InputError("meshClosedSurface: the surface encloses no volume");
         // A regular tet of circumradius R has volume 8 R^3 / (9 sqrt 3); four
         // times that density is about twice what Mesh_3 really produces.
-        const double estimate = 4.0 * soup.volume / (0.513 * cellSize * cellSize * cellSize);
+        const double estimate = 4.0 * soup.volume / (0.513 * std::pow(std::min(cellSize, skin), 3));
         if (estimate > kMaxEstimatedTets)
             throw InputError(cat("meshClosedSurface: cellSize ", cellSize, " is too small for a body of volume ",
                                  soup.volume, " (about ", estimate, " tetrahedra; the limit is ",
@@ -286,7 +289,7 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
         const double fd = facetDistance > 0 ? facetDistance : cellSize / 10.0;
         Domain domain(poly, &rng);
         domain.detect_features(kFeatureAngleDeg);
-        Criteria criteria(P::edge_size = cellSize, P::facet_angle = 25.0, P::facet_size = cellSize,
+        Criteria criteria(P::edge_size = skin, P::facet_angle = 25.0, P::facet_size = skin,
                           P::facet_distance = fd, P::cell_radius_edge_ratio = 3.0, P::cell_size = cellSize);
         // Time limits 0 = none: the default limits depend on the wall-clock
         // time of the refinement and would make the result non-deterministic.

@@ -16,6 +16,8 @@ namespace qdem {
 //                  inconsistent orientation is accepted
 //   cellSize       upper bound on the circumradius of the tets and on the
 //                  size of the surface triangles and of sharp-edge segments
+//   surfaceSize    upper bound on surface triangle and feature edge size; <= 0
+//                  means cellSize (a smaller one refines the skin only)
 //   facetDistance  upper bound on the distance between a surface triangle of
 //                  the result and the input surface; <= 0 means cellSize/10
 //   seed           seed of CGAL's random generators: equal inputs and seeds
@@ -28,6 +30,7 @@ namespace qdem {
 // vertices, bad index, NaN, bad cellSize, an open or non-manifold surface, a
 // self-intersecting surface, ...) or when no tet results.
 TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector<int32_t>& triangles,
-                          double cellSize, double facetDistance = -1.0, unsigned seed = 0);
+                          double cellSize, double facetDistance = -1.0, unsigned seed = 0,
+                          double surfaceSize = -1.0);
 
 }  // namespace qdem

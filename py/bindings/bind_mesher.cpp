@@ -20,7 +20,7 @@ constexpr const char* kDoc =
     "Fill a closed, manifold, non-self-intersecting triangle surface with tetrahedra (CGAL Mesh_3).\n"
     "vertices (V,3) float64, triangles (F,3) int32 (any orientation); cellSize bounds the tet\n"
     "circumradius and the surface triangle size; facetDistance bounds the distance to the input\n"
-    "surface (<= 0: cellSize/10).  Sharp edges (< 60 deg) are kept.  Equal inputs and seed give\n"
+    "surface (<= 0: cellSize/10); surfaceSize bounds surface triangles alone (<= 0: cellSize).  Sharp edges (< 60 deg) are kept.  Equal inputs and seed give\n"
     "identical meshes.  Returns (nodes (N,3) float64, tets (T,4) int32), tets positively oriented.\n"
     "Raises ValueError naming the problem for invalid input.";
 
@@ -43,26 +43,26 @@ void bindMesher(py::module_& m) {
     m.def(
         "meshClosedSurface",
         [](const Vertices& vertices, const Triangles& triangles, double cellSize, double facetDistance,
-           unsigned seed) {
+           unsigned seed, double surfaceSize) {
             const std::vector<double> v = qdem::py_::flatten<double>(vertices, 3, "vertices");
             const std::vector<int32_t> t = qdem::py_::flatten<int32_t>(triangles, 3, "triangles");
             qdem::TetMesh mesh;
             {
                 py::gil_scoped_release release;
-                mesh = qdem::meshClosedSurface(v, t, cellSize, facetDistance, seed);
+                mesh = qdem::meshClosedSurface(v, t, cellSize, facetDistance, seed, surfaceSize);
             }
             return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4));
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("cellSize"), py::arg("facetDistance") = -1.0,
-        py::arg("seed") = 0u, kDoc);
+        py::arg("seed") = 0u, py::arg("surfaceSize") = -1.0, kDoc);
 #else
     m.attr("haveCgal") = false;
     m.def(
         "meshClosedSurface",
-        [](const py::object&, const py::object&, double, double, unsigned) -> py::tuple {
+        [](const py::object&, const py::object&, double, double, unsigned, double) -> py::tuple {
             throw std::runtime_error("qdem was built without CGAL: install libcgal-dev and rebuild");
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("cellSize"), py::arg("facetDistance") = -1.0,
-        py::arg("seed") = 0u, kDoc);
+        py::arg("seed") = 0u, py::arg("surfaceSize") = -1.0, kDoc);
 #endif
 }

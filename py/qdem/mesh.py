@@ -124,10 +124,11 @@ def loadSurface(path, scale=1.0):
     return uniq, inverse.reshape(-1)[tris].astype(np.int32)
 
 
-def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0):
+def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfaceSize=None):
     """Tetrahedral mesh of the solid bounded by a closed triangle surface, with
-    CGAL Mesh_3 to a target element size ``cellSize``.  ``surface`` is a file
-    path (OFF/STL/OBJ) or a tuple (vertices, triangles)."""
+    CGAL Mesh_3 to a target element size ``cellSize`` (``surfaceSize``, when
+    given, refines the surface triangles alone).  ``surface`` is a file path
+    (OFF/STL/OBJ) or a tuple (vertices, triangles)."""
     if not getattr(_core, "haveCgal", False):
         raise RuntimeError("qdem was built without CGAL: install libcgal-dev and rebuild (make build)")
     if isinstance(surface, (str, os.PathLike)):
@@ -137,7 +138,8 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0):
         verts = np.asarray(verts, dtype=float) * scale
     nodes, tets = _core.meshClosedSurface(np.ascontiguousarray(verts, dtype=float),
                                           np.ascontiguousarray(tris, dtype=np.int32),
-                                          float(cellSize), float(facetDistance), int(seed))
+                                          float(cellSize), float(facetDistance), int(seed),
+                                          float(surfaceSize) if surfaceSize else -1.0)
     return Mesh(nodes, tets)
 
 
