@@ -113,3 +113,29 @@ def stableScale(material, dt=6.4e-6, kinds=ORDER, margin=1.05):
         for limit, power in ((d["viscous"], 2), (d["elastic"], 1), (d["contact"], 1)):
             need = max(need, (margin * dt / limit) ** (1.0 / power))
     return need
+
+
+# Standing pieces: local x (width) -> world y, local y (height) -> world z,
+# local z (thickness) -> world x, the direction the line topples in.
+STANDING = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+def dominoLine(kinds, material, scale=1.0, spacing=0.5, push=1.0, offsets=None, world=None):
+    """Stand pieces of the given kinds in a line along +x on a floor at z = 0,
+    `spacing` times the tallest height apart (centre to centre), and tip the
+    first one towards the second with angular velocity `push` [rad/s] about
+    its base.  offsets: optional sideways (y) shift of each piece [m], for
+    eccentric hits.  Returns the list of Pieces (meshes are made once per kind)."""
+    from .world import defaultWorld
+    world = world or defaultWorld()
+    meshes = {}
+    hMax = max(KINDS[k][0] for k in kinds) * scale * 1e-3
+    pieces = []
+    for i, k in enumerate(kinds):
+        if k not in meshes:
+            meshes[k] = mesh(k).scaled(scale)
+        y = 0.0 if offsets is None else offsets[i]
+        pos = (i * spacing * hMax, y, material.radius)       # base one particle radius above the floor
+        angVel = (0.0, push, 0.0) if i == 0 else (0.0, 0.0, 0.0)
+        pieces.append(world.addPiece(meshes[k], material, pos=pos, ori=STANDING, angVel=angVel))
+    return pieces
