@@ -250,9 +250,10 @@ void bindWorld(py::module_& m) {
                 d["edges"] = copyOut(s.edges, 2);
                 d["nodes"] = copyOut(s.nodes, 1).reshape({-1});
                 d["tets"] = copyOut(s.tets, 1).reshape({-1});
+                d["triTet"] = copyOut(s.triTet, 1).reshape({-1});
                 return d;
             },
-            py::arg("piece"), "Surface of a piece in global node/tet ids.")
+            py::arg("piece"), "Surface of a piece in global node/tet ids (triTet: owner tet of each triangle).")
         .def(
             "pieceMass", [](const World& w, int i) { return piece(w, i).mass; }, py::arg("piece"))
         .def(

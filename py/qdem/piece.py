@@ -1,6 +1,8 @@
 """Piece: the handle of one deformable body, with NumPy views of its nodes."""
 import numpy as np
 
+from .stress import vonMises
+
 
 class Piece:
     """One QDEM piece in a world.  The array properties are NumPy *views* of the
@@ -67,9 +69,8 @@ class Piece:
         return self.world.core.stress()[self.tetSlice]
 
     def vonMises(self):
-        s = self.stress()
-        return np.sqrt(0.5 * ((s[:, 0] - s[:, 1])**2 + (s[:, 1] - s[:, 2])**2 + (s[:, 2] - s[:, 0])**2)
-                       + 3.0 * (s[:, 3]**2 + s[:, 4]**2 + s[:, 5]**2))
+        """Von Mises stress of each tet [Pa]."""
+        return vonMises(self.stress())
 
     def surface(self):
         """Surface triangles/edges/nodes/tets in piece-local indices."""

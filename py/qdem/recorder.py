@@ -5,15 +5,11 @@ import numpy as np
 from yade import O, PyRunner
 
 from .attrs import Attr, AttrObject
+from .stress import vonMises
 from .vtu import writePvd, writeVtu
 from .world import defaultWorld
 
 _recorders = {}
-
-
-def vonMises(s):
-    return np.sqrt(0.5 * ((s[:, 0] - s[:, 1])**2 + (s[:, 1] - s[:, 2])**2 + (s[:, 2] - s[:, 0])**2)
-                   + 3.0 * (s[:, 3]**2 + s[:, 4]**2 + s[:, 5]**2))
 
 
 def writeFrame(world, path):

@@ -120,12 +120,14 @@ def stableScale(material, dt=6.4e-6, kinds=ORDER, margin=1.05):
 STANDING = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
-def dominoLine(kinds, material, scale=1.0, spacing=0.5, push=1.0, offsets=None, world=None):
+def dominoLine(kinds, material, scale=1.0, spacing=0.5, push=1.0, offsets=None, xs=None, world=None):
     """Stand pieces of the given kinds in a line along +x on a floor at z = 0,
     `spacing` times the tallest height apart (centre to centre), and tip the
     first one towards the second with angular velocity `push` [rad/s] about
     its base.  offsets: optional sideways (y) shift of each piece [m], for
-    eccentric hits.  Returns the list of Pieces (meshes are made once per kind)."""
+    eccentric hits; xs: optional positions along the line, in units of the
+    spacing (default 0, 1, 2, ...).  Returns the list of Pieces (meshes are
+    made once per kind)."""
     from .world import defaultWorld
     world = world or defaultWorld()
     meshes = {}
@@ -135,7 +137,32 @@ def dominoLine(kinds, material, scale=1.0, spacing=0.5, push=1.0, offsets=None, 
         if k not in meshes:
             meshes[k] = mesh(k).scaled(scale)
         y = 0.0 if offsets is None else offsets[i]
-        pos = (i * spacing * hMax, y, material.radius)       # base one particle radius above the floor
+        x = (i if xs is None else xs[i]) * spacing * hMax
+        pos = (x, y, material.radius)                          # base one particle radius above the floor
         angVel = (0.0, push, 0.0) if i == 0 else (0.0, 0.0, 0.0)
         pieces.append(world.addPiece(meshes[k], material, pos=pos, ori=STANDING, angVel=angVel))
     return pieces
+
+
+SCENES = {
+    # seed Figure 7: two rooks
+    "two_rooks": dict(kinds=["rook", "rook"]),
+    # seed Figure 8: a king hitting two pawns side by side, off centre
+    "king_pawns": dict(kinds=["king", "pawn", "pawn"], xs=[0, 1, 1], offsets=[0.0, 0.34, -0.30]),
+    # seed Figures 9 and 10: both players' 20 pieces in one line
+    "forty": dict(kinds=SET + SET),
+}
+
+
+def scene(name, material, scale, spacing=0.6, push=None, world=None):
+    """Build one of the seed's scenes (SCENES) with pieces `scale` times real
+    size.  Sideways offsets are in units of the largest height.  The first
+    piece is tipped with an angular velocity that takes it past its balance
+    point.  Returns the Pieces."""
+    spec = SCENES[name]
+    hMax = max(KINDS[k][0] for k in spec["kinds"]) * scale * 1e-3
+    offsets = [o * hMax for o in spec["offsets"]] if "offsets" in spec else None
+    if push is None:  # ~1.5x the angular velocity that just tips a piece over (energy: 0.38 sqrt(g/H))
+        push = 0.6 * math.sqrt(9.81 / hMax)
+    return dominoLine(spec["kinds"], material, scale=scale, spacing=spacing, push=push, offsets=offsets,
+                      xs=spec.get("xs"), world=world)

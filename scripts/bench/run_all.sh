@@ -20,3 +20,6 @@ cat out/bench/elements.json
 
 echo "bench: 27 cubes, seed Figure 6 cases A/B/C and ours, by phase"
 /usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-20}" --out out/bench
+
+echo "bench: shogi scenes (seed Figures 7-10), Table 1 material and time step"
+/usr/bin/python3.11 scripts/bench/bench_shogi.py --steps "${QDEM_BENCH_SHOGI_STEPS:-200}" --out out/bench

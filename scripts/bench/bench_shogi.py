@@ -1,0 +1,58 @@
+"""Time to solution of the shogi scenes (seed Figures 7-10): a short run of
+each scene with the seed's Table 1 material at the length scale where Table 1's
+time step (6.4e-6 s) is stable, reported as wall seconds per simulated second
+on this machine (2 threads), core stepping only (no YADE engine overhead).
+
+    /usr/bin/python3.11 scripts/bench/bench_shogi.py [--steps 200] [--out out/bench]
+"""
+import argparse
+import json
+import math
+import os
+import time
+
+import numpy as np
+
+import qdem
+from qdem import _core, shogi
+
+
+def run(name, steps, scale):
+    w = qdem.World()
+    mat = qdem.QdemMat()
+    pieces = shogi.scene(name, mat, scale, world=w)
+    floor = _core.Obstacle()
+    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
+    w.core.setObstacles([floor])
+    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
+    w.core.gravity = (0, 0, -9.80665)
+    dt = 6.4e-6
+    w.core.checkDt(dt)
+    w.core.step(dt, 5)
+    t = time.perf_counter()
+    w.core.step(dt, steps)
+    wall = time.perf_counter() - t
+    return {"pieces": len(pieces), "tets": w.core.nTets, "nodes": w.core.nNodes, "scale": scale, "dt": dt,
+            "stable_dt": w.stableDt()["combined"], "steps": steps,
+            "ms_per_step": 1e3 * wall / steps, "wall_s_per_simulated_s": wall / (steps * dt)}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--out", default="out/bench")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    _core.setThreads(2)
+    scale = math.ceil(shogi.stableScale(qdem.QdemMat()))
+    res = {"scenes": {}, "threads": 2, "table1_scale": scale}
+    for name in shogi.SCENES:
+        res["scenes"][name] = run(name, a.steps, scale)
+        r = res["scenes"][name]
+        print("shogi %-10s: %d pieces, %d tets, %.2f ms/step, %.0f s wall per simulated s"
+              % (name, r["pieces"], r["tets"], r["ms_per_step"], r["wall_s_per_simulated_s"]), flush=True)
+    json.dump(res, open(os.path.join(a.out, "shogi.json"), "w"), indent=2)
+
+
+if __name__ == "__main__":
+    main()
