@@ -44,6 +44,8 @@ floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
 H = max(shogi.KINDS[k][0] for k in shogi.SCENES[P.scene]["kinds"]) * scale * 1e-3
 hitSpeed = 0.02 * math.sqrt(9.81 * H)          # a piece counts as hit above this speed
 hits = [0.0] + [None] * (len(pieces) - 1)
+fallen = [None] * len(pieces)                   # centre of mass below 70 % of its height: tipped ~45 deg
+z0 = [p.centroid()[2] for p in pieces]
 frames = []
 
 
@@ -51,6 +53,8 @@ def watch():
     for i, p in enumerate(pieces):
         if hits[i] is None and np.linalg.norm(p.velocity()) > hitSpeed:
             hits[i] = O.time
+        if fallen[i] is None and p.centroid()[2] < 0.7 * z0[i]:
+            fallen[i] = O.time
 
 
 def frame():
@@ -81,12 +85,15 @@ wall = time.time() - start
 xs = [p.centroid()[0] for p in pieces]
 result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
           "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets, "simulated_s": O.time,
-          "wall_s": wall, "wall_s_per_simulated_s": wall / O.time, "firstHit_s": hits,
+          "wall_s": wall, "wall_s_per_simulated_s": wall / O.time, "firstHit_s": hits, "fallen_s": fallen,
           "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
 hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
 if len(hit) >= 3:
     slope = np.polyfit([t for _, t in hit[1:]], [x for x, _ in hit[1:]], 1)[0]
     result["front_speed_m_per_s"] = float(slope)
+fell = [(x, t) for x, t in zip(result["x0_m"], fallen) if t is not None]
+if len(fell) >= 3:
+    result["fall_front_speed_m_per_s"] = float(np.polyfit([t for _, t in fell], [x for x, _ in fell], 1)[0])
 json.dump(result, open(out + "/hits.json", "w"), indent=1)
 
 import matplotlib  # noqa: E402
@@ -100,5 +107,5 @@ ax.grid(alpha=0.3)
 ax.legend()
 fig.tight_layout()
 fig.savefig(out + "/front.png", dpi=110)
-print("shogi: %.3g s simulated in %.1f s (%.3g s wall per simulated s); first hits %s; written to %s"
-      % (O.time, wall, wall / O.time, hits, out))
+print("shogi: %.3g s simulated in %.1f s (%.3g s wall per simulated s); first hits %s; fallen %s; written to %s"
+      % (O.time, wall, wall / O.time, hits, fallen, out))
