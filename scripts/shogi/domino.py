@@ -7,7 +7,7 @@
 #   scene         two_rooks | king_pawns | forty
 #   frictionPiece kinetic friction between pieces (seed: 0.1 and 0.5)
 #   material      table1 (seed Table 1, pieces scaled until Table 1's step is
-#                 stable) | soft (E 2 MPa, no viscosity, real size: a quick look)
+#                 stable) | soft (E 1 MPa, no viscosity, real size: minutes, not hours)
 #   duration      simulated seconds
 #   frames        VTU frames / PNG snapshots over the run
 # Writes out/shogi/<scene>_mu<friction>_<material>/: block VTU series (.pvd),
@@ -24,7 +24,7 @@ from qdem import render, shogi
 from yade import O, ForceResetter, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 
-readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.25, frames=6,
+readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6,
                     noTableOk=True)
 from yade.params import table as P  # noqa: E402
 
@@ -33,7 +33,7 @@ if P.material == "table1":
     scale = math.ceil(shogi.stableScale(mat))                      # see doc/shogi.md
     dt = 6.4e-6
 else:
-    mat = qdem.QdemMat(young=2e6, poisson=0.3, density=700, viscosity=0.3, radius=5e-4,
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4,
                        frictionPiece=P.frictionPiece, frictionWall=0.5)
     scale, dt = 1.0, None
 
