@@ -1,6 +1,6 @@
 // Cell list with linked lists (seed paper §4.2): items are binned by a
-// reference point into cubic cells of side L; a query visits the 27 cells
-// around its own.  Cells live in a hash table sized to the item count, so
+// reference point into cubic cells of side L; a query visits the cells
+// overlapping its box.  Cells live in a hash table sized to the item count, so
 // memory is O(items) however far apart the pieces are.  Items remember their
 // cell, so two cells sharing a bucket never make an item appear twice.
 #pragma once
@@ -17,7 +17,6 @@ public:
     // Rebuilds the grid for n items at points (3 per item).  No allocation
     // once the capacity has grown to the largest n seen.
     void build(const double* points, int32_t n, double cellSize) {
-        cell_ = cellSize;
         head_.assign(h_.reset(cellSize, static_cast<std::size_t>(n)), -1);
         next_.resize(n);
         cx_.resize(n), cy_.resize(n), cz_.resize(n);
@@ -28,17 +27,6 @@ public:
             next_[i] = head_[h];
             head_[h] = i;
         }
-    }
-
-    // Calls f(item) for every item in the 27 cells around point p.
-    template <class F>
-    void forNeighbours(const double* p, F&& f) const {
-        const int64_t x = coord(p[0]), y = coord(p[1]), z = coord(p[2]);
-        for (int64_t i = x - 1; i <= x + 1; ++i)
-            for (int64_t j = y - 1; j <= y + 1; ++j)
-                for (int64_t k = z - 1; k <= z + 1; ++k)
-                    for (int32_t it = head_[hash(i, j, k)]; it >= 0; it = next_[it])
-                        if (cx_[it] == i && cy_[it] == j && cz_[it] == k) f(it);
     }
 
     // Calls f(item) for every item binned in a cell that overlaps the box
@@ -54,13 +42,10 @@ public:
                         if (cx_[it] == i && cy_[it] == j && cz_[it] == k) f(it);
     }
 
-    double cellSize() const { return cell_; }
-
 private:
     int64_t coord(double v) const { return h_.coord(v); }
     std::size_t hash(int64_t x, int64_t y, int64_t z) const { return h_(x, y, z); }
 
-    double cell_ = 1;
     CellHash h_;
     std::vector<int32_t> head_, next_;
     std::vector<int64_t> cx_, cy_, cz_;
