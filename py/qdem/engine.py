@@ -138,9 +138,12 @@ class QdemEngine(PyRunner):
         else:
             rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
         self._lastProgress = (core.iter, now)
-        e = core.energy
-        print("qdem: step %d  t=%.6g s  %.0f steps/s  E_kin=%.4g J  E_el=%.4g J"
-              % (O.iter, O.time, rate, e["kinetic"], e["elastic"]), flush=True)
+        line = "qdem: step %d  t=%.6g s  %.0f steps/s  %d contacts" % (
+            O.iter, O.time, rate, core.contactCounts["pointPolygon"] + core.contactCounts["edgeEdge"])
+        if core.trackEnergy:  # energies are only summed when O.trackEnergy is on
+            e = core.energy
+            line += "  E_kin=%.4g J  E_el=%.4g J" % (e["kinetic"], e["elastic"])
+        print(line, flush=True)
 
 
 def _step(key):
