@@ -1,0 +1,53 @@
+// Shared pieces of the piece-piece contact phases (internal to pkg/world).
+#pragma once
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+
+#include "../contact/Geometry.hpp"
+#include "../core/Column.hpp"
+#include "../material/Material.hpp"
+
+namespace qdem::contact_detail {
+
+using Eigen::Vector3d;
+
+struct PairLaw {
+    double kn, cn, kt, ct, mu, reach;
+};
+
+// Contact parameters of two particles of radii ra, rb (YADE's FrictPhys rule
+// for the stiffness), reduced mass for the dashpots.
+inline PairLaw pairLaw(const Material& a, const Material& b, double ma, double mb) {
+    PairLaw p;
+    const double ea = a.young * a.radius, eb = b.young * b.radius;
+    p.kn = 2 * ea * eb / (ea + eb);
+    const double nu = 0.5 * (a.poisson + b.poisson);
+    p.kt = p.kn * 2 * (1 - nu) / (2 - nu);
+    const double m = ma * mb / (ma + mb);
+    const double xi = dampingRatioFromRestitution(std::sqrt(a.restitution * b.restitution));
+    p.cn = 2 * xi * std::sqrt(p.kn * m);
+    p.ct = 2 * xi * std::sqrt(p.kt * m);
+    p.mu = std::min(a.frictionPiece, b.frictionPiece);
+    p.reach = a.radius + b.radius;
+    return p;
+}
+
+inline Vector3d at(const Column<double>& c, int32_t i) { return Vector3d(c[3 * i], c[3 * i + 1], c[3 * i + 2]); }
+
+inline void addTo(double* buf, int32_t s, const Vector3d& f) {
+    buf[3 * s] += f[0];
+    buf[3 * s + 1] += f[1];
+    buf[3 * s + 2] += f[2];
+}
+
+struct Candidate {
+    int32_t tri;
+    TriPoint cp;
+    double dist;
+    bool behind;
+};
+
+constexpr int kCandidates = 32;
+
+}  // namespace qdem::contact_detail

@@ -1,0 +1,163 @@
+// Edge-edge contacts between feature edges of different pieces (seed §3.2),
+// with the fades and side memory of doc/contacts.md §4.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../contact/ContactLaw.hpp"
+#include "../contact/Geometry.hpp"
+#include "ContactDetail.hpp"
+#include "World.hpp"
+
+namespace qdem {
+
+using Eigen::Vector3d;
+using namespace contact_detail;
+// ---------------------------------------------------------------------------
+// Edge-edge: surface edges of different pieces whose closest points are
+// inside both edges (ends are point-polygon's business).  One thread per
+// edge; each pair is handled by its lower edge id.
+
+template <bool Friction>
+void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv) {
+    const SurfaceIndex& S = pc_.surf;
+    const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
+    constexpr int K = PieceContactState::kEE;
+    const double sinFade2 = std::pow(std::sin(edgeFadeAngle), 2);
+    const long stamp = iter;
+
+#pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count) reduction(max : maxOv)
+    {
+        double* buf = pc_.threadForce[omp_get_thread_num()].data();
+#pragma omp for schedule(dynamic, 64)
+        for (int32_t ie = 0; ie < ne; ++ie) {
+            const int32_t e = pc_.edgeItems[ie];
+            const int32_t pa = S.edgePiece[e];
+            int32_t* other = &pc_.eeOther[K * e];
+            int8_t* side = &pc_.eeSide[K * e];
+            double* shear = &pc_.eeShear[3 * K * e];
+            if (pc_.eeStamp[e] != stamp - 1)  // history is only valid from the previous step
+                for (int k = 0; k < K; ++k) other[k] = -1;
+            pc_.eeStamp[e] = stamp;
+            const Material& ma = materials[pieces[pa].material];
+            const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
+            const Vector3d p1 = at(pos, a0), q1 = at(pos, a1);
+            const double len1 = (q1 - p1).norm();
+            int32_t newOther[K];
+            int8_t newSide[K];
+            Vector3d newShear[K];
+            int nNew = 0;
+            // One pair of edges: je indexes the registered edges.
+            auto pair = [&](int32_t je) {
+                    if (nNew == K) return;
+                    const int32_t e2 = pc_.edgeItems[je];
+                    const int32_t pb = S.edgePiece[e2];
+                    if (!pc_.pieceActive[pb]) return;
+                    const Material& mb = materials[pieces[pb].material];
+                    const double reach = ma.radius + mb.radius;
+                    const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
+                    const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
+                    const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
+                    constexpr double kEnd = 1e-9;
+                    if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;
+                    // Fade out towards parallel edges: the seed's formula is
+                    // singular there; their end nodes' point-polygon contacts
+                    // take over.  (Also keeps the side test below away from the
+                    // rounding noise of a near-zero cross product.)  And fade
+                    // towards the ends of either edge: within one contact reach
+                    // of an end node, that node's point-polygon contact covers
+                    // the touch, and the hand-over must be continuous.
+                    const double fade = std::min(1.0, sp.sin2 / sinFade2);
+                    const double endS = std::min(1.0, std::min(sp.s, 1 - sp.s) * len1 / reach);
+                    const double endT = std::min(1.0, std::min(sp.t, 1 - sp.t) * (q2 - p2).norm() / reach);
+                    const double w = fade * fade * endS * endT;
+                    if (w < 1e-6) return;
+                    const Vector3d cross = (q1 - p1).cross(q2 - p2);
+                    const double cn = cross.norm();
+                    const Vector3d d = sp.c1 - sp.c2;
+                    const double dist = d.norm();
+                    int slot = -1;
+                    for (int k = 0; k < K; ++k)
+                        if (other[k] == e2) slot = k;
+                    // Which side of edge 2 edge 1 is on, along the common normal;
+                    // remembered so that edges pushed through each other are
+                    // pushed back, not let through.
+                    int sNow = d.dot(cross) < 0 ? -1 : 1;
+                    if (dist <= 1e-12 * reach && slot < 0) {  // touching at first sight: ask the piece centres
+                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pa]) +
+                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pa]));
+                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pb]) +
+                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pb]));
+                        sNow = (ca - cb).dot(cross) < 0 ? -1 : 1;
+                    }
+                    const int sUse = slot >= 0 && side[slot] != 0 ? side[slot] : sNow;
+                    double overlap;
+                    Vector3d n;
+                    if (sUse == sNow && dist > 1e-12 * reach) {
+                        n = d / dist;
+                        overlap = reach - dist;
+                    } else {
+                        n = double(sUse) * cross / cn;
+                        overlap = reach + dist;
+                    }
+                    if (overlap <= 0) return;
+                    const double m1 = (1 - sp.s) * mass[a0] + sp.s * mass[a1];
+                    const double m2 = (1 - sp.t) * mass[b0] + sp.t * mass[b1];
+                    const PairLaw law = pairLaw(ma, mb, m1, m2);
+                    const Vector3d vRel = ((1 - sp.s) * at(vel, a0) + sp.s * at(vel, a1)) -
+                                          ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
+                    Vector3d sh = Vector3d::Zero();
+                    if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
+                    const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu};
+                    const ContactResult r = (Friction && law.mu > 0)
+                                                ? contactForce<true>(cp, n, overlap, vRel, dt, sh)
+                                                : contactForce<false>(cp, n, overlap, vRel, dt, sh);
+                    newOther[nNew] = e2;
+                    newSide[nNew] = static_cast<int8_t>(sUse);
+                    newShear[nNew] = sh;
+                    ++nNew;
+                    addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force);
+                    addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force);
+                    addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force);
+                    addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force);
+                    eEl += r.elastic;
+                    eDamp += r.dampPower * dt;
+                    eSlip += r.slipWork;
+                    ++count;
+                    maxOv = std::max(maxOv, overlap);
+            };
+            // Each pair of pieces once: edges of the lower piece id meet the
+            // higher piece's edges, from the list made at the last rebuild or
+            // from the cells.
+            if (pc_.listValid && pc_.edgeListCount[ie] >= 0) {
+                const int32_t* L = &pc_.edgeList[static_cast<std::size_t>(PieceContactState::kEdgeList) * ie];
+                for (int k = 0; k < pc_.edgeListCount[ie]; ++k) pair(L[k]);
+            } else {
+                for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
+                    const int32_t pb = pc_.nbrs[q];
+                    if (pb < pa) continue;
+                    const double* lo = &pc_.edgeLo[3 * ie];
+                    const double* hi = &pc_.edgeHi[3 * ie];
+                    bool overlap = true;  // the edge's box must reach the other piece's box
+                    for (int d = 0; d < 3 && overlap; ++d)
+                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
+                    if (!overlap) continue;
+                    const int32_t j0 = pc_.edgeStart[pb];
+                    pc_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
+                }
+            }
+            for (int k = 0; k < K; ++k) {
+                other[k] = k < nNew ? newOther[k] : -1;
+                side[k] = k < nNew ? newSide[k] : 0;
+                if (k < nNew)
+                    for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
+            }
+        }
+    }
+}
+
+template void World::edgeEdge<true>(double, double&, double&, double&, long&, double&);
+template void World::edgeEdge<false>(double, double&, double&, double&, long&, double&);
+
+}  // namespace qdem
