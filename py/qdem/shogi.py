@@ -148,7 +148,7 @@ SCENES = {
     # seed Figure 7: two rooks
     "two_rooks": dict(kinds=["rook", "rook"]),
     # seed Figure 8: a king hitting two pawns side by side, off centre
-    "king_pawns": dict(kinds=["king", "pawn", "pawn"], xs=[0, 1, 1], offsets=[0.0, 0.34, -0.30]),
+    "king_pawns": dict(kinds=["king", "pawn", "pawn"], xs=[0, 1, 1], offsets=[0.0, 0.47, -0.42]),
     # seed Figures 9 and 10: both players' 20 pieces in one line
     "forty": dict(kinds=SET + SET),
 }

@@ -83,3 +83,14 @@ def test_two_pieces_topple_and_momentum_balances_with_the_floor(scene):
     assert b.velocity()[0] > 0.01                            # ... and the second one was pushed
     scale = np.abs(impulse).max()
     assert np.abs((p1 - p0) - impulse).max() < 1e-6 * scale
+
+
+@pytest.mark.parametrize("name", ["two_rooks", "king_pawns"])   # forty: a plain line
+def test_scenes_start_with_pieces_apart(name):
+    """No two pieces of a scene overlap (nor touch) at the start."""
+    w = qdem.World()
+    mat = qdem.QdemMat(young=2e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4)
+    pieces = shogi.scene(name, mat, 1.0, world=w)
+    w.core.step(1e-9, 1)
+    assert w.core.contactCounts["pointPolygon"] + w.core.contactCounts["edgeEdge"] == 0
+    assert len(pieces) == len(shogi.SCENES[name]["kinds"])
