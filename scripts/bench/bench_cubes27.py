@@ -21,12 +21,12 @@ CASES = [("A", 1), ("B", 2), ("C", 3), ("ours", 0)]
 PHASES = ["broadPhase", "pointPolygon", "edgeEdge", "elements", "integrate", "obstacles"]
 
 
-def scene(L=4.0):
+def scene(L=4.0, mat=None):
     """27 cubes of edge L, Table 1 material, in contact with each other and a
     floor wall.  L = 4 m is the smallest round size at which Table 1's time
     step (6.4e-6 s) is stable for 8x8x8-cell cubes (the viscous limit grows as
     the element size squared; see doc/formulation.md)."""
-    mat = qdem.QdemMat()          # seed Table 1: E 5e8, nu 0.4, rho 700, eta 2.5e5, r 0.04
+    mat = mat or qdem.QdemMat()   # seed Table 1: E 5e8, nu 0.4, rho 700, eta 2.5e5, r 0.04
     r = mat.radius
     w = qdem.World()
     cube = qdem.boxMesh((L, L, L), (8, 8, 8), tetsPerCell=12)

@@ -1,0 +1,82 @@
+"""Only the effects a scene calls for (issue 6, part 3): the cost of each effect
+switched on, switched off, and present with a zero value, on the 27-cube
+Figure 6 scene (165,888 tets, every face in contact), 2 threads.
+
+    /usr/bin/python3.11 scripts/bench/bench_effects.py [--steps 20] [--out out/bench]
+"""
+import argparse
+import json
+import os
+import time
+
+import qdem
+from qdem import _core
+
+import bench_cubes27
+
+
+def msPerStep(w, steps, dt=6.4e-6):
+    w.core.step(dt, 3)
+    t = time.perf_counter()
+    w.core.step(dt, steps)
+    return 1e3 * (time.perf_counter() - t) / steps
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--steps", type=int, default=20)
+    ap.add_argument("--out", default="out/bench")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    _core.setThreads(2)
+    base = bench_cubes27.scene()
+    base.core.step(6.4e-6, 20)                      # contacts formed
+    n = a.steps
+    res = {}
+
+    def switch(name, attr, onValue, offValue, zeroWorld=None):
+        setattr(base.core, attr, onValue)
+        on = msPerStep(base, n)
+        setattr(base.core, attr, offValue)
+        off = msPerStep(base, n)
+        setattr(base.core, attr, onValue)
+        zero = msPerStep(zeroWorld, n) if zeroWorld is not None else off
+        res[name] = {"on_ms": on, "off_ms": off, "zero_valued_ms": zero}
+        print("effect %-12s on %.2f ms, off %.2f ms, zero-valued %.2f ms" % (name, on, off, zero), flush=True)
+
+    noVisc = bench_cubes27.scene(mat=qdem.QdemMat(viscosity=0.0))
+    noVisc.core.step(6.4e-6, 20)
+    switch("viscosity", "viscosityOn", True, False, noVisc)
+    noFric = bench_cubes27.scene(mat=qdem.QdemMat(frictionPiece=0.0, frictionWall=0.0))
+    noFric.core.step(6.4e-6, 20)
+    switch("friction", "frictionOn", True, False, noFric)
+    noEdges = bench_cubes27.scene()
+    noEdges.core.edgeFeatureAngle = 3.2                 # no edge is a feature edge: nothing to test
+    noEdges.core.step(6.4e-6, 20)
+    switch("edgeEdge", "edgeEdgeOn", True, False, noEdges)
+    switch("pointPolygon", "pointPolygonOn", True, False)
+    switch("energy", "trackEnergy", True, False)
+    flat = bench_cubes27.scene()
+    flat.core.gravity = (0, 0, 0)
+    flat.core.step(6.4e-6, 20)
+    switch("gravity", "gravity", (0, 0, -9.80665), (0, 0, 0), flat)
+    t = time.perf_counter()
+    for _ in range(5):
+        base.core.stress()
+    res["stressOutput"] = {"on_ms": 1e3 * (time.perf_counter() - t) / 5, "off_ms": 0.0, "zero_valued_ms": 0.0,
+                           "note": "computed only when a recorder asks (per frame, not per step)"}
+    print("stress output: %.2f ms per frame" % res["stressOutput"]["on_ms"])
+    # Pieces out of reach: the same cubes spread 1 m apart pay no contact work.
+    apart = qdem.World()
+    for i in range(27):
+        apart.addPiece(qdem.boxMesh((4, 4, 4), (8, 8, 8), tetsPerCell=12), qdem.QdemMat(), pos=(5.0 * i, 0, 10))
+    res["contactsOutOfReach"] = {"on_ms": res["pointPolygon"]["on_ms"], "off_ms": res["pointPolygon"]["off_ms"],
+                                 "zero_valued_ms": msPerStep(apart, n),
+                                 "note": "zero_valued: same 27 cubes far apart (no piece can reach another)"}
+    print("27 cubes apart: %.2f ms" % res["contactsOutOfReach"]["zero_valued_ms"])
+    json.dump({"tets": base.core.nTets, "threads": 2, "steps": n, "effects": res},
+              open(os.path.join(a.out, "effects.json"), "w"), indent=2)
+
+
+if __name__ == "__main__":
+    main()
