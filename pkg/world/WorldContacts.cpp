@@ -126,7 +126,6 @@ void World::pieceContactPhase(double dt) {
     pc_.triNormal.resize(3 * S.nTris());
     pc_.itemGrid.resize(np), pc_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
-    pc_.itemGrid.resize(np);
     auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
         for (int k = 0; k < n; ++k) {

@@ -17,6 +17,8 @@ import numpy as np
 import qdem
 from qdem import _core
 
+from benchutil import floorAndGravity
+
 CASES = [("A", 1), ("B", 2), ("C", 3), ("ours", 0)]
 PHASES = ["broadPhase", "pointPolygon", "edgeEdge", "elements", "integrate", "obstacles"]
 
@@ -35,11 +37,7 @@ def scene(L=4.0, mat=None):
         for j in range(3):
             for k in range(3):
                 w.addPiece(cube, mat, pos=(i * (L + gap), j * (L + gap), L / 2 + r - 0.001 + k * (L + gap)))
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
-    w.core.gravity = (0, 0, -9.80665)
+    floorAndGravity(w)
     return w
 
 

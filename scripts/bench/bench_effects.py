@@ -13,13 +13,7 @@ import qdem
 from qdem import _core
 
 import bench_cubes27
-
-
-def msPerStep(w, steps, dt=6.4e-6):
-    w.core.step(dt, 3)
-    t = time.perf_counter()
-    w.core.step(dt, steps)
-    return 1e3 * (time.perf_counter() - t) / steps
+from benchutil import msPerStep
 
 
 def main():

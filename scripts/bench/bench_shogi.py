@@ -9,29 +9,21 @@ import argparse
 import json
 import math
 import os
-import time
-
-import numpy as np
 
 import qdem
 from qdem import _core, shogi
+
+from benchutil import floorAndGravity, msPerStep
 
 
 def run(name, steps, scale):
     w = qdem.World()
     mat = qdem.QdemMat()
     pieces = shogi.scene(name, mat, scale, world=w)
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
-    w.core.gravity = (0, 0, -9.80665)
+    floorAndGravity(w)
     dt = 6.4e-6
     w.core.checkDt(dt)
-    w.core.step(dt, 5)
-    t = time.perf_counter()
-    w.core.step(dt, steps)
-    wall = time.perf_counter() - t
+    wall = 1e-3 * msPerStep(w, steps, dt, warmup=5) * steps
     return {"pieces": len(pieces), "tets": w.core.nTets, "nodes": w.core.nNodes, "scale": scale, "dt": dt,
             "stable_dt": w.stableDt()["combined"], "steps": steps,
             "ms_per_step": 1e3 * wall / steps, "wall_s_per_simulated_s": wall / (steps * dt)}
