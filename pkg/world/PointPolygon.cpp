@@ -8,6 +8,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "ContactDetail.hpp"
+#include "TouchSelection.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -157,58 +158,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     }
                 }
 
-            // Edge and corner closest points are shared by the triangles around
-            // them: per other piece keep only the nearest one, and only if no
-            // face contact of that piece is nearer (the node is then in that
-            // edge's or corner's region of the surface).  Each point of a
-            // surface is thus reported once, and a node sliding across edges
-            // and corners keeps one continuous contact.
-            const double tol = 1e-9;
             const double eps = 1e-12 * ma.radius;
-            for (int i = 0; i < nc; ++i) {  // snap rounding-level weights
-                TriPoint& cp = cand[i].cp;
-                int nz = 0, last = 0;
-                for (int k = 0; k < 3; ++k)
-                    if (cp.w[k] > tol) ++nz, last = k;
-                if (nz == 3) cp.feature = TriFeature::Face;
-                else if (nz == 1) cp.feature = static_cast<TriFeature>(4 + last);
-                else if (cp.feature == TriFeature::Face) cp.feature = TriFeature::Edge0;  // on an edge: not a face
-            }
-            for (int i = 0; i < nc; ++i) {
-                const Candidate& c = cand[i];
-                if (!keep[i] || c.cp.feature == TriFeature::Face) continue;
-                const int32_t pb = S.triPiece[c.tri];
-                for (int j = 0; j < nc && keep[i]; ++j) {
-                    if (j == i || !keep[j] || S.triPiece[cand[j].tri] != pb) continue;
-                    const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
-                    // A face point at (practically) the same distance is the
-                    // same touch seen from the face: the face keeps it.
-                    if (cand[j].cp.feature == TriFeature::Face) keep[i] = c.dist < dj - eps;
-                    else keep[i] = c.dist < cand[j].dist || (c.dist == cand[j].dist && i < j);
-                }
-            }
-
-            // Two contacts with the same piece whose normals differ by less
-            // than the feature angle are one touch of a nearly flat (possibly
-            // slightly folded) surface: keep the nearer.  Without this, a node
-            // over a shallow concave fold would feel both faces at full
-            // strength, and the count would flicker as the fold flexes.
-            // Real corners (a node in a concave corner) keep both contacts.
-            const double cosFeature = std::cos(edgeFeatureAngle);
-            Vector3d cn[kCandidates];
-            for (int i = 0; i < nc; ++i)
-                if (keep[i]) cn[i] = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
-            for (int i = 0; i < nc; ++i) {
-                if (!keep[i]) continue;
-                for (int j = i + 1; j < nc && keep[i]; ++j) {
-                    if (!keep[j] || S.triPiece[cand[j].tri] != S.triPiece[cand[i].tri]) continue;
-                    if (cn[i].dot(cn[j]) < cosFeature) continue;
-                    const double di = cand[i].behind ? -cand[i].dist : cand[i].dist;
-                    const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
-                    if (dj < di) keep[i] = false;
-                    else keep[j] = false;
-                }
-            }
+            selectTouches(A, cand, nc, keep, S.triPiece.data(), eps, std::cos(edgeFeatureAngle));
 
             int32_t newKey[K], newPiece[K];
             Vector3d newShear[K];
@@ -244,18 +195,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 // a contact with the same piece that ended this step (a node
                 // sliding onto the next triangle keeps its spring).
                 const int32_t kk = 8 * c.tri + f;
-                int slot = -1;
-                for (int k = 0; k < K; ++k)
-                    if (key[k] == kk && !usedOld[k]) slot = k;
-                if (slot < 0)
-                    for (int k = 0; k < K && slot < 0; ++k)
-                        if (key[k] >= 0 && kpiece[k] == pb && !usedOld[k]) {
-                            bool matchedLater = false;
-                            for (int j = 0; j < nc; ++j)
-                                if (keep[j] && 8 * cand[j].tri + static_cast<int>(cand[j].cp.feature) == key[k])
-                                    matchedLater = true;
-                            if (!matchedLater) slot = k;
-                        }
+                const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc);
                 Vector3d sh = Vector3d::Zero();
                 if (slot >= 0) {
                     usedOld[slot] = true;

@@ -113,11 +113,26 @@ StableDt World::stableDt() const {
             xic = dampingRatioFromRestitution(m.restitution);
             r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
         }
+        if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {
+            // YADE spheres near the piece: their springs on its lightest node.
+            const double ws = std::sqrt(spheres.pieceKnMax[i] / p.minSurfaceNodeMass);
+            if (ws > wc) {
+                wc = ws;
+                xic = dampingRatioFromRestitution(m.restitution);
+                r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
+            }
+        }
         // Element and contact springs on the same node: frequencies add in
         // quadrature, damping rates (c/m) add.
         const double w = std::sqrt(we * we + wc * wc);
         const double c = beta * we * we + 2 * xic * wc;
         r.combined = std::min(r.combined, leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0));
+    }
+    if (spheres.omegaMax > 0) {
+        // The same springs on the sphere side (undamped: the conservative bound).
+        const double ds = leapfrogLimit(spheres.omegaMax, 0.0);
+        r.contact = std::min(r.contact, ds);
+        r.combined = std::min(r.combined, ds);
     }
     const double lim = std::min({r.elastic, r.viscous, r.contact});
     if (std::isfinite(lim)) {

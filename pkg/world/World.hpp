@@ -13,6 +13,7 @@
 
 #include "../contact/Obstacle.hpp"
 #include "../contact/PieceContactState.hpp"
+#include "../contact/SphereSet.hpp"
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../mesh/Surface.hpp"
@@ -51,6 +52,12 @@ public:
     // Copies one obstacle's state (from YADE) for the coming step.
     void setObstacleState(int i, const Eigen::Vector3d& pos, const Eigen::Quaterniond& ori,
                           const Eigen::Vector3d& vel, const Eigen::Vector3d& angVel);
+    // The YADE spheres that may touch pieces (n of them; per-sphere arrays of
+    // n, pairStart of n+1 and pairPiece of pairStart[n]: see SphereSet).
+    // Contact history is carried over for (sphere id, piece) pairs kept.
+    void setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
+                    const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
+                    const int32_t* pairPiece);
 
     // ---- stepping ---------------------------------------------------------
     void step(double dt);
@@ -74,6 +81,7 @@ public:
     std::vector<PieceInfo> pieces;
     std::vector<Material> materials;
     std::vector<Obstacle> obstacles;
+    SphereSet spheres;  // YADE spheres near pieces: states in, forceTorque out
 
     // ---- settings -----------------------------------------------------------
     Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
@@ -110,11 +118,13 @@ public:
     struct Timings {
         double obstacles = 0, elements = 0, integrate = 0;
         double broadPhase = 0, pointPolygon = 0, edgeEdge = 0;
+        double spheres = 0;  // sphere-triangle contacts (grids included)
     } timings;
     long verletRebuilds() const { return pc_.listBuilds; }
     // Contacts found in the last step (for tests and diagnostics).
     struct ContactCounts {
         long pointPolygon = 0, edgeEdge = 0;
+        long sphere = 0;  // YADE sphere - QDEM surface contacts
         long interiorFaceTests = 0;  // cases A/B: interior faces tested for nothing
         long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
     } contactCounts;
@@ -133,6 +143,10 @@ private:
     void obstaclePhase(double dt);
     void integratePhase(double dt);
     void pieceContactPhase(double dt);
+    void sphereContactPhase(double dt);
+    template <bool Friction>
+    void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
+    void buildSphereGrids();
     void updatePieceBounds();
     void beginContactForces();
     template <bool Friction>

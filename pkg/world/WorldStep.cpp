@@ -20,6 +20,7 @@ void World::step(double dt) {
     obstaclePhase(dt);
     const double tObs = omp_get_wtime();
     pieceContactPhase(dt);
+    sphereContactPhase(dt);
     double t1 = omp_get_wtime();
     elementPhase(dt);
     double t2 = omp_get_wtime();

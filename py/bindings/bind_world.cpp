@@ -156,6 +156,7 @@ void bindWorld(py::module_& m) {
                                    d["broadPhase"] = w.timings.broadPhase;
                                    d["pointPolygon"] = w.timings.pointPolygon;
                                    d["edgeEdge"] = w.timings.edgeEdge;
+                                   d["spheres"] = w.timings.spheres;
                                    return d;
                                })
         .def_property(
@@ -184,6 +185,7 @@ void bindWorld(py::module_& m) {
                                    py::dict d;
                                    d["pointPolygon"] = w.contactCounts.pointPolygon;
                                    d["edgeEdge"] = w.contactCounts.edgeEdge;
+                                   d["sphere"] = w.contactCounts.sphere;
                                    d["interiorFaceTests"] = w.contactCounts.interiorFaceTests;
                                    d["interiorFaceNear"] = w.contactCounts.interiorFaceNear;
                                    return d;

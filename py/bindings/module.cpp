@@ -9,6 +9,7 @@ namespace py = pybind11;
 void bindMesh(py::module_& m);
 void bindWorld(py::module_& m);
 void bindMesher(py::module_& m);
+void bindSpheres(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
     m.doc() = "yade-qdem compiled core: QDEM world, meshes, contacts";
@@ -27,5 +28,6 @@ PYBIND11_MODULE(_core, m) {
     m.def("getThreads", []() { return omp_get_max_threads(); });
     bindMesh(m);
     bindWorld(m);
+    bindSpheres(m);
     bindMesher(m);
 }

@@ -16,10 +16,12 @@ import numpy as np
 from yade import O, PyRunner
 
 from . import _core, yadeglue
+from .spheres import SphereCoupling
 from .attrs import Attr, AttrObject
 from .world import defaultWorld
 
 _engines = {}
+_NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
 
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
@@ -49,6 +51,13 @@ class QdemEngine(PyRunner):
     threads = Attr(0, "OpenMP threads for QDEM (0 = keep the current setting, e.g. from yade -j).")
     pointPolygon = Attr(True, "Point-polygon contacts between pieces (seed paper 3.1).")
     edgeEdge = Attr(True, "Edge-edge contacts between pieces (seed paper 3.2, with friction).")
+    spheres = Attr(True, "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): "
+                         "needs an InsertionSortCollider in O.engines, before this engine.")
+    sphereMask = Attr(-1, "groupMask of the proxy bodies that find spheres near pieces: only spheres "
+                          "whose mask shares a bit with it touch QDEM pieces (-1 = all).")
+    sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
+                             "larger = fewer proxy moves (each forces a collider run), more spheres read.",
+                        lambda v: None if 0.01 <= v <= 10 else "must lie in [0.01, 10]")
     broadPhase = Attr("triangles", "How surface elements are registered in the cell list: 'triangles' "
                                    "(default), or the seed's Figure 6 cases 'A' (all tets), 'B' (surface "
                                    "tets), 'C' (surface tets, interior faces skipped).",
@@ -73,12 +82,16 @@ class QdemEngine(PyRunner):
         self._ids, self._states = [], None
         self._dtChecked = None
         self._lastProgress = None
+        self._spheres = None  # SphereCoupling, once a sphere is seen
+        self._sphereVersion = None
 
     # -- public helpers --------------------------------------------------------
     def stableDt(self):
         """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
         current YADE obstacles included."""
         self._syncObstacles()
+        if self._spheres is not None and self.spheres:
+            self._spheres.listAll(O)  # any sphere may come near: bound them all
         return self.world.core.stableDt()
 
     def stepOnce(self):
@@ -95,6 +108,10 @@ class QdemEngine(PyRunner):
             return
         if len(O.bodies) != self._nBodies:
             obstacles, self._ids = yadeglue.scanObstacles(O)
+            if self.spheres and self._spheres is None and yadeglue.hasSpheres(O):
+                self._spheres = SphereCoupling(self.world, int(self.sphereMask), float(self.sphereMargin))
+            if self._spheres is not None:
+                self._spheres.bodiesChanged()
             core.setObstacles(obstacles)
             self._states = np.zeros((len(self._ids), 13))
             self._nBodies = len(O.bodies)
@@ -115,13 +132,22 @@ class QdemEngine(PyRunner):
         core.pointPolygonOn = bool(self.pointPolygon)
         core.edgeEdgeOn = bool(self.edgeEdge)
         core.broadPhase = BROAD_PHASES[self.broadPhase]
+        coupling = self._spheres if self.spheres and core.nPieces else None
+        if coupling is not None:
+            coupling.margin = float(self.sphereMargin)
+            coupling.beforeStep(O)
+        elif core.nSpheres:
+            core.setSpheres(*_NO_SPHERES)
         dt = O.dt
-        if self.checkDt and self._dtChecked != (dt, core.nPieces, self.viscosity):
+        key = (dt, core.nPieces, self.viscosity, coupling.version if coupling else None)
+        if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
-            self._dtChecked = (dt, core.nPieces, self.viscosity)
+            self._dtChecked = key
         core.step(dt)
         if self._ids:
             yadeglue.applyReactions(O, self._ids, core.obstacleReactions())
+        if coupling is not None:
+            coupling.afterStep(O)
         if core.trackEnergy:
             for k, v in core.energy.items():
                 if k in ENERGY_KEYS:
@@ -138,8 +164,9 @@ class QdemEngine(PyRunner):
         else:
             rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
         self._lastProgress = (core.iter, now)
+        c = core.contactCounts
         line = "qdem: step %d  t=%.6g s  %.0f steps/s  %d contacts" % (
-            O.iter, O.time, rate, core.contactCounts["pointPolygon"] + core.contactCounts["edgeEdge"])
+            O.iter, O.time, rate, c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
         if core.trackEnergy:  # energies are only summed when O.trackEnergy is on
             e = core.energy
             line += "  E_kin=%.4g J  E_el=%.4g J" % (e["kinetic"], e["elastic"])

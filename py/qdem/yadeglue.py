@@ -43,6 +43,11 @@ def scanObstacles(O):
     return obstacles, ids
 
 
+def hasSpheres(O):
+    """Is there any Sphere body (standalone or clump member) in the scene?"""
+    return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)
+
+
 def obstacleStates(O, ids, out):
     """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies."""
     for i, bid in enumerate(ids):

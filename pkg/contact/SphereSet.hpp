@@ -1,0 +1,49 @@
+// YADE spheres (standalone or clump members) that may touch QDEM pieces.  The
+// Python glue fills the properties when YADE's collider refreshes its
+// candidate lists and the states every step; the sphere-contact phase fills
+// forceTorque.  Struct of arrays, sized on set-up only.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "CellGrid.hpp"
+
+namespace qdem {
+
+struct SphereSet {
+    // ---- per sphere, set when the candidate lists change ----------------------
+    std::vector<int32_t> id;            // YADE body id
+    std::vector<double> radius;         // [m]
+    std::vector<double> young;          // Young's modulus of its material [Pa]
+    std::vector<double> ktRatio;        // its material's ks/kn (FrictMat.poisson); < 0: none
+    std::vector<double> friction;       // tan(frictionAngle)
+    std::vector<double> restitution;    // its material's normal restitution; <= 0: none (FrictMat)
+    std::vector<double> mass;           // mass that moves with it (the clump's for a member) [kg]
+    std::vector<int32_t> pairStart;     // CSR over spheres: the pieces each sphere may touch
+    std::vector<int32_t> pairPiece;
+    // ---- per sphere, every step ------------------------------------------------
+    std::vector<double> pos, vel, angVel;  // 3 each, at the time level of the QDEM nodes
+    std::vector<double> forceTorque;       // 6 each: force and torque on the sphere this step
+
+    // ---- contact history: kSlots per (sphere, piece) pair -----------------------
+    static constexpr int kSlots = 4;
+    std::vector<int32_t> slotKey;  // 8 * triangle + feature; -1 = empty
+    std::vector<double> slotShear; // tangential spring, 3 per slot
+    std::vector<long> pairStamp;   // step at which the pair's slots were last written
+
+    // ---- derived on set-up ------------------------------------------------------
+    double radiusMax = 0;
+    std::vector<double> pieceKnMax;  // per piece: stiffest sphere contact spring [N/m]
+    double omegaMax = 0;             // stiffest sphere contact on the sphere's side [rad/s]
+
+    // ---- working data of the phase (reused: no allocation per step) -------------
+    std::vector<CellGrid> triGrid;       // per piece: its surface triangles by centroid
+    std::vector<double> triPoint, triRadius, triNormal;  // per surface triangle (3, 1, 3)
+    std::vector<double> pieceTriRadius;  // per piece: largest triangle bounding radius
+    std::vector<uint8_t> pieceUsed;      // per piece: some sphere may touch it
+    std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
+
+    int32_t size() const { return static_cast<int32_t>(id.size()); }
+};
+
+}  // namespace qdem

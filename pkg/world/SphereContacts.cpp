@@ -1,0 +1,354 @@
+// Contacts between YADE spheres (standalone or clump members) and the surface
+// triangles of QDEM pieces: the sphere's centre is a query point with reach
+// R + r (sphere radius plus the pieces' particle radius), handled with the
+// same closest-point, inside-test and one-contact-per-touch rules as a node
+// (TouchSelection.hpp), so the force is continuous across triangle edges and
+// corners.  Rules and sources: doc/spheres.md.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "../contact/ContactLaw.hpp"
+#include "../contact/Geometry.hpp"
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "ContactDetail.hpp"
+#include "TouchSelection.hpp"
+#include "World.hpp"
+
+namespace qdem {
+
+using Eigen::Vector3d;
+using namespace contact_detail;
+
+namespace {
+
+// Contact parameters of a YADE sphere against a QDEM material (doc/spheres.md):
+// stiffness by YADE's FrictPhys rule, ks/kn the mean of the two materials'
+// ratios, friction the smaller coefficient, restitution QDEM's unless the
+// sphere's material has one (ViscElMat), then the geometric mean.
+PairLaw sphereLaw(const SphereSet& S, int32_t i, const Material& b, double mT) {
+    PairLaw p;
+    const double ea = S.young[i] * S.radius[i], eb = b.young * b.radius;
+    p.kn = 2 * ea * eb / (ea + eb);
+    const double ratioQ = 2 * (1 - b.poisson) / (2 - b.poisson);
+    p.kt = p.kn * (S.ktRatio[i] >= 0 ? 0.5 * (S.ktRatio[i] + ratioQ) : ratioQ);
+    const double m = S.mass[i] * mT / (S.mass[i] + mT);
+    const double e = S.restitution[i] > 0 ? std::sqrt(S.restitution[i] * b.restitution) : b.restitution;
+    const double xi = dampingRatioFromRestitution(e);
+    p.cn = 2 * xi * std::sqrt(p.kn * m);
+    p.ct = 2 * xi * std::sqrt(p.kt * m);
+    p.mu = std::min(S.friction[i], b.frictionPiece);
+    p.reach = S.radius[i] + b.radius;
+    return p;
+}
+
+}  // namespace
+
+void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
+                       const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
+                       const int32_t* pairPiece) {
+    const auto np = static_cast<int32_t>(pieces.size());
+    if (n < 0 || pairStart[0] != 0) throw InputError("setSpheres: bad sphere count or pair offsets");
+    for (int32_t i = 0; i < n; ++i) {
+        if (!(radius[i] > 0) || !std::isfinite(radius[i]))
+            throw InputError(cat("sphere ", id[i], ": radius must be positive and finite, got ", radius[i]));
+        if (!(young[i] > 0) || !std::isfinite(young[i]))
+            throw InputError(cat("sphere ", id[i], ": material young must be positive and finite, got ", young[i]));
+        if (!(mass[i] > 0) || !std::isfinite(mass[i]))
+            throw InputError(cat("sphere ", id[i], ": mass must be positive and finite, got ", mass[i],
+                                 " (a non-dynamic sphere needs a mass for the contact dashpot)"));
+        if (!(friction[i] >= 0) || !std::isfinite(friction[i]))
+            throw InputError(cat("sphere ", id[i], ": friction must be >= 0, got ", friction[i]));
+        if (!(restitution[i] <= 1) || std::isnan(restitution[i]))
+            throw InputError(cat("sphere ", id[i], ": restitution must be <= 1, got ", restitution[i]));
+        if (pairStart[i + 1] < pairStart[i]) throw InputError("setSpheres: pair offsets must not decrease");
+        for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q)
+            if (pairPiece[q] < 0 || pairPiece[q] >= np)
+                throw InputError(cat("sphere ", id[i], ": unknown piece ", pairPiece[q]));
+    }
+    SphereSet& S = spheres;
+    // Carry the contact history of (id, piece) pairs over to the new order.
+    std::unordered_map<int64_t, int32_t> oldPair;
+    for (int32_t i = 0; i < S.size(); ++i)
+        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q)
+            oldPair[(static_cast<int64_t>(S.id[i]) << 20) ^ S.pairPiece[q]] = q;
+    const std::vector<int32_t> oldKey = std::move(S.slotKey);
+    const std::vector<double> oldShear = std::move(S.slotShear);
+    const std::vector<long> oldStamp = std::move(S.pairStamp);
+
+    S.id.assign(id, id + n);
+    S.radius.assign(radius, radius + n);
+    S.young.assign(young, young + n);
+    S.ktRatio.assign(ktRatio, ktRatio + n);
+    S.friction.assign(friction, friction + n);
+    S.restitution.assign(restitution, restitution + n);
+    S.mass.assign(mass, mass + n);
+    S.pairStart.assign(pairStart, pairStart + n + 1);
+    S.pairPiece.assign(pairPiece, pairPiece + pairStart[n]);
+    S.pos.assign(3 * n, 0.0);
+    S.vel.assign(3 * n, 0.0);
+    S.angVel.assign(3 * n, 0.0);
+    S.forceTorque.assign(6 * n, 0.0);
+    const int32_t nPairs = pairStart[n];
+    constexpr int K = SphereSet::kSlots;
+    S.slotKey.assign(K * static_cast<std::size_t>(nPairs), -1);
+    S.slotShear.assign(3 * K * static_cast<std::size_t>(nPairs), 0.0);
+    S.pairStamp.assign(nPairs, -2);
+    for (int32_t i = 0; i < n; ++i)
+        for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
+            const auto it = oldPair.find((static_cast<int64_t>(id[i]) << 20) ^ pairPiece[q]);
+            if (it == oldPair.end()) continue;
+            const int32_t o = it->second;
+            S.pairStamp[q] = oldStamp[o];
+            std::copy_n(&oldKey[K * static_cast<std::size_t>(o)], K, &S.slotKey[K * static_cast<std::size_t>(q)]);
+            std::copy_n(&oldShear[3 * K * static_cast<std::size_t>(o)], 3 * K,
+                        &S.slotShear[3 * K * static_cast<std::size_t>(q)]);
+        }
+    // Stiffest springs, for the stable time step.
+    S.radiusMax = 0;
+    S.omegaMax = 0;
+    S.pieceKnMax.assign(np, 0.0);
+    for (int32_t i = 0; i < n; ++i) {
+        S.radiusMax = std::max(S.radiusMax, radius[i]);
+        for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
+            const Material& b = materials[pieces[pairPiece[q]].material];
+            const double kn = sphereLaw(S, i, b, 1.0).kn;
+            S.pieceKnMax[pairPiece[q]] = std::max(S.pieceKnMax[pairPiece[q]], kn);
+            S.omegaMax = std::max(S.omegaMax, std::sqrt(kn / mass[i]));
+        }
+    }
+}
+
+// Per piece that a sphere may touch: its surface triangles binned by
+// centroid, with bounding radii and unit normals of the current shape.
+void World::buildSphereGrids() {
+    SphereSet& S = spheres;
+    const SurfaceIndex& surf = pc_.surf;
+    const auto np = static_cast<int32_t>(pieces.size());
+    S.pieceUsed.assign(np, 0);
+    for (int32_t p : S.pairPiece) S.pieceUsed[p] = 1;
+    S.triGrid.resize(np);
+    S.pieceTriRadius.assign(np, 0.0);
+    S.triPoint.resize(3 * surf.nTris());
+    S.triRadius.resize(surf.nTris());
+    S.triNormal.resize(3 * surf.nTris());
+    for (int32_t p = 0; p < np; ++p) {
+        if (!S.pieceUsed[p]) continue;
+        const int32_t t0 = surf.pieceTriStart[p], t1 = surf.pieceTriStart[p + 1];
+        double rMax = 0;
+#pragma omp parallel for schedule(static) reduction(max : rMax)
+        for (int32_t t = t0; t < t1; ++t) {
+            const int32_t* c = &surf.tri[3 * t];
+            const Vector3d a = at(pos, c[0]), b = at(pos, c[1]), d = at(pos, c[2]);
+            const Vector3d m = (a + b + d) / 3.0;
+            const Vector3d n = (b - a).cross(d - a).normalized();
+            const double r = std::sqrt(std::max({(a - m).squaredNorm(), (b - m).squaredNorm(), (d - m).squaredNorm()}));
+            for (int k = 0; k < 3; ++k) S.triPoint[3 * t + k] = m[k], S.triNormal[3 * t + k] = n[k];
+            S.triRadius[t] = r;
+            rMax = std::max(rMax, r);
+        }
+        S.pieceTriRadius[p] = rMax;
+        // Cells twice the largest reach: a query then spans 2 cells per axis.
+        const double reach = rMax + S.radiusMax + materials[pieces[p].material].radius;
+        S.triGrid[p].build(&S.triPoint[3 * t0], t1 - t0, 2 * reach);
+    }
+}
+
+void World::sphereContactPhase(double dt) {
+    timings.spheres = 0;
+    contactCounts.sphere = 0;
+    SphereSet& S = spheres;
+    std::fill(S.forceTorque.begin(), S.forceTorque.end(), 0.0);
+    if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
+    const double t0 = omp_get_wtime();
+    buildSphereGrids();
+    beginContactForces();
+    const int nth = omp_get_max_threads();
+    if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
+    double eEl = 0, eDamp = 0, eSlip = 0;
+    long count = 0;
+    if (frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
+    else sphereContacts<false>(dt, eEl, eDamp, eSlip, count);
+    // Sum the thread buffers into the node contact forces (surface nodes of
+    // the pieces spheres may touch).
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+        if (!S.pieceUsed[p]) continue;
+        const int32_t s0 = pieces[p].surfBegin, s1 = pieces[p].surfEnd;
+#pragma omp parallel for schedule(static) num_threads(nth)
+        for (int32_t s = s0; s < s1; ++s)
+            for (int th = 0; th < nth; ++th)
+                for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+    }
+    contactCounts.sphere = count;
+    if (trackEnergy) {
+        energy.contactElastic += eEl;
+        energy.contactDamping += eDamp;
+        energy.friction += eSlip;
+    }
+    timings.spheres = omp_get_wtime() - t0;
+}
+
+template <bool Friction>
+void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
+    SphereSet& S = spheres;
+    const SurfaceIndex& surf = pc_.surf;
+    const int32_t n = S.size();
+    constexpr int K = SphereSet::kSlots;
+    const long stamp = iter;
+    const double cosFeature = std::cos(edgeFeatureAngle);
+    const std::size_t nSurf = surfNodes.size();
+
+#pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
+    {
+        std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
+        bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
+        double* buf = bufv.data();
+        Candidate cand[kCandidates];
+        bool keep[kCandidates];
+#pragma omp for schedule(dynamic, 16)
+        for (int32_t i = 0; i < n; ++i) {
+            const Vector3d C(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]);
+            const Vector3d v(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]);
+            const Vector3d w(S.angVel[3 * i], S.angVel[3 * i + 1], S.angVel[3 * i + 2]);
+            const double R = S.radius[i];
+            Vector3d F = Vector3d::Zero(), T = Vector3d::Zero();
+            for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
+                const int32_t pb = S.pairPiece[q];
+                int32_t* key = &S.slotKey[K * static_cast<std::size_t>(q)];
+                double* shear = &S.slotShear[3 * K * static_cast<std::size_t>(q)];
+                if (S.pairStamp[q] != stamp - 1)  // history is only valid from the previous step
+                    for (int k = 0; k < K; ++k) key[k] = -1;
+                S.pairStamp[q] = stamp;
+                const Material& mb = materials[pieces[pb].material];
+                const double reach = R + mb.radius;
+                bool overlap = true;  // piece box (grown by r) against the sphere's
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = C[d] - R <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= C[d] + R;
+                int nc = 0;
+                bool anyBehind = false;
+                const int32_t t0 = surf.pieceTriStart[pb];
+                const double qr = S.pieceTriRadius[pb] + reach;
+                if (overlap) {
+                    const Vector3d lo = C.array() - qr, hi = C.array() + qr;
+                    S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+                        const int32_t t = t0 + local;
+                        const double Rt = S.triRadius[t] + reach;
+                        if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
+                        const int32_t* c = &surf.tri[3 * t];
+                        const Vector3d a = at(pos, c[0]);
+                        const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
+                        if (h > reach) return;
+                        const TriPoint cp = closestOnTriangle(C, a, at(pos, c[1]), at(pos, c[2]));
+                        const double dist = (C - cp.point).norm();
+                        const bool behind = h < 0 && cp.feature == TriFeature::Face;
+                        if (!behind && dist >= reach) return;
+                        // A sphere larger than the triangles sees many: keep the nearest.
+                        int slot = nc;
+                        if (nc == kCandidates) {
+                            slot = 0;
+                            for (int k = 1; k < nc; ++k)
+                                if (cand[k].dist > cand[slot].dist) slot = k;
+                            if (dist >= cand[slot].dist) return;
+                        } else {
+                            ++nc;
+                        }
+                        cand[slot] = Candidate{t, cp, dist, behind};
+                    });
+                }
+                for (int k = 0; k < nc; ++k) keep[k] = true;
+                for (int k = 0; k < nc; ++k) anyBehind = anyBehind || cand[k].behind;
+                // Centre behind a face: inside the piece only if no front-facing
+                // surface point is nearer (as for nodes, PointPolygon.cpp).
+                if (anyBehind)
+                    for (int k = 0; k < nc; ++k) {
+                        if (!cand[k].behind) continue;
+                        const double db = cand[k].dist;
+                        const Vector3d lo = C.array() - (S.pieceTriRadius[pb] + db);
+                        const Vector3d hi = C.array() + (S.pieceTriRadius[pb] + db);
+                        S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+                            if (!keep[k]) return;
+                            const int32_t t = t0 + local;
+                            const int32_t* c = &surf.tri[3 * t];
+                            const Vector3d a = at(pos, c[0]);
+                            const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
+                            if (h >= db) return;  // cannot be nearer
+                            const TriPoint cp = closestOnTriangle(C, a, at(pos, c[1]), at(pos, c[2]));
+                            const bool behind = h < 0 && cp.feature == TriFeature::Face;
+                            if (!behind && (C - cp.point).norm() < db) keep[k] = false;
+                        });
+                    }
+                const double eps = 1e-12 * reach;
+                selectTouches(C, cand, nc, keep, surf.triPiece.data(), eps, cosFeature);
+
+                int32_t newKey[K];
+                Vector3d newShear[K];
+                bool usedOld[K] = {false, false, false, false};
+                int32_t kpiece[K];
+                for (int k = 0; k < K; ++k) kpiece[k] = key[k] >= 0 ? pb : -1;
+                int nNew = 0;
+                for (int k = 0; k < nc; ++k) {
+                    if (!keep[k] || nNew == K) continue;
+                    const Candidate& c = cand[k];
+                    const int32_t* tn = &surf.tri[3 * c.tri];
+                    double mT = 0;
+                    Vector3d vT = Vector3d::Zero();
+                    for (int j = 0; j < 3; ++j) {
+                        mT += c.cp.w[j] * mass[tn[j]];
+                        vT += c.cp.w[j] * at(vel, tn[j]);
+                    }
+                    const PairLaw law = sphereLaw(S, i, mb, mT);
+                    const Vector3d nT(S.triNormal[3 * c.tri], S.triNormal[3 * c.tri + 1], S.triNormal[3 * c.tri + 2]);
+                    Vector3d nrm;
+                    double ov;
+                    if (c.behind) {
+                        nrm = c.dist > eps ? Vector3d((c.cp.point - C) / c.dist) : nT;
+                        ov = law.reach + c.dist;
+                    } else {
+                        nrm = c.dist > eps ? Vector3d((C - c.cp.point) / c.dist) : nT;
+                        ov = law.reach - c.dist;
+                    }
+                    // Contact point on the sphere, half the overlap inside it
+                    // (YADE's convention): the lever arm of friction.
+                    const Vector3d arm = -std::max(R - 0.5 * ov, 0.0) * nrm;
+                    const int32_t kk = 8 * c.tri + static_cast<int>(c.cp.feature);
+                    const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc);
+                    Vector3d sh = Vector3d::Zero();
+                    if (slot >= 0) {
+                        usedOld[slot] = true;
+                        sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
+                    }
+                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu};
+                    const Vector3d vRel = v + w.cross(arm) - vT;
+                    const ContactResult r = (Friction && law.mu > 0)
+                                                ? contactForce<true>(prm, nrm, ov, vRel, dt, sh)
+                                                : contactForce<false>(prm, nrm, ov, vRel, dt, sh);
+                    newKey[nNew] = kk;
+                    newShear[nNew] = sh;
+                    ++nNew;
+                    F += r.force;
+                    T += arm.cross(r.force);
+                    for (int j = 0; j < 3; ++j)
+                        if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
+                    eEl += r.elastic;
+                    eDamp += r.dampPower * dt;
+                    eSlip += r.slipWork;
+                    ++count;
+                }
+                for (int k = 0; k < K; ++k) {
+                    key[k] = k < nNew ? newKey[k] : -1;
+                    if (k < nNew)
+                        for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
+                }
+            }
+            for (int d = 0; d < 3; ++d) S.forceTorque[6 * i + d] = F[d], S.forceTorque[6 * i + 3 + d] = T[d];
+        }
+    }
+}
+
+template void World::sphereContacts<true>(double, double&, double&, double&, long&);
+template void World::sphereContacts<false>(double, double&, double&, double&, long&);
+
+}  // namespace qdem

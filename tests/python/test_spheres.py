@@ -1,0 +1,189 @@
+"""YADE spheres and clumps against QDEM pieces (issue 5): restitution, momentum
+through the floor, rolling by friction torque, a clump at rest, a packing."""
+import math
+
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+
+def _engines(gravity=(0, 0, -9.81), damping=0.0, **kw):
+    from yade import (Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGeom,
+                      Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
+                      Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
+    return [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]),
+            InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+                            [Ip2_FrictMat_FrictMat_FrictPhys()], [Law2_ScGeom_FrictPhys_CundallStrack()]),
+            qdem.QdemEngine(**kw), NewtonIntegrator(gravity=gravity, damping=damping)]
+
+
+def _lawRebound(kn, mS, mT, e):
+    """Rebound/impact speed ratio of the law for a sphere of mass mS on a
+    (much heavier, stiff) surface whose contact node has mass mT: spring kn,
+    dashpot from the reduced mass, no tension.  Integrated finely in 1D."""
+    le = math.log(e)
+    xi = -le / math.sqrt(math.pi**2 + le**2)
+    c = 2 * xi * math.sqrt(kn * mS * mT / (mS + mT))
+    x, v, h = 0.0, -1.0, math.pi * math.sqrt(mS / kn) / 20000
+    while not (x > 0 and v > 0):
+        f = max(0.0, -kn * x - c * v) if x < 0 else 0.0
+        v += h * f / mS
+        x += h * v
+    return v
+
+
+def _slab(O, young=1e9, size=(0.2, 0.2, 0.04), cells=(10, 10, 2), **kw):
+    from yade import utils
+    mat = qdem.QdemMat(**dict(dict(young=young, poisson=0.3, density=2000.0, viscosity=0.0, radius=0.002,
+                                   restitution=0.5), **kw))
+    slab = qdem.addPiece(qdem.boxMesh(size, cells), mat, pos=(0, 0, size[2] / 2 + mat.radius))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    return mat, slab, floor
+
+
+def test_sphere_rebounds_from_a_slab_with_the_law_restitution(scene):
+    from yade import FrictMat, Vector3, utils
+    O = scene
+    mat, slab, _ = _slab(O)
+    fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=100))
+    R = 0.005
+    # Straight above a top-face node: the contact node is that node.
+    top = np.isclose(slab.refPos[:, 2], slab.refPos[:, 2].max())
+    node = np.flatnonzero(top & np.isclose(slab.refPos[:, 0], 0.02) & np.isclose(slab.refPos[:, 1], 0.04))[0]
+    x = slab.pos[node]
+    sid = O.bodies.append(utils.sphere((x[0], x[1], x[2] + mat.radius + R + 1e-4), R, material=fm))
+    O.bodies[sid].state.vel = Vector3(0, 0, -1.0)
+    O.engines = _engines(gravity=(0, 0, 0))
+    O.dt = 0.25 * O.engines[3].stableDt()["combined"]
+    touched = False
+    for _ in range(4000):
+        O.step()
+        n = O.engines[3].world.core.contactCounts["sphere"]
+        touched = touched or n > 0
+        if touched and n == 0:
+            break
+    assert touched and n == 0
+    b = O.bodies[sid]
+    kn = 2 * (1e6 * R) * (mat.young * mat.radius) / (1e6 * R + mat.young * mat.radius)
+    predicted = _lawRebound(kn, b.state.mass, slab.mass[node], 0.5)
+    assert b.state.vel[2] == pytest.approx(predicted, rel=0.05)
+    assert abs(b.state.vel[0]) + abs(b.state.vel[1]) < 1e-3  # head-on: no sideways kick
+
+
+def test_sphere_and_slab_momentum_balances_against_the_floor(scene):
+    from yade import FrictMat, Vector3, utils
+    O = scene
+    g = np.array([0, 0, -9.81])
+    mat, slab, floor = _slab(O, young=1e8, viscosity=50.0)
+    fm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.5, density=2000))
+    sid = O.bodies.append(utils.sphere((0.013, 0.007, 0.055), 0.005, material=fm))
+    O.bodies[sid].state.vel = Vector3(0.3, 0, -1.0)
+    O.engines = _engines()
+    O.dt = 0.5 * O.engines[3].stableDt()["combined"]
+    b = O.bodies[sid]
+    m = b.state.mass
+
+    def momentum():
+        return m * np.array(b.state.vel) + slab.momentum()
+
+    p0 = momentum()
+    impulse = np.zeros(3)
+    touched = 0
+    for _ in range(3000):
+        O.step()
+        impulse -= np.array(O.forces.f(floor)) * O.dt  # the floor gets the reaction
+        touched += O.engines[3].world.core.contactCounts["sphere"] > 0
+    gravityImpulse = (m + slab.totalMass) * g * O.time
+    scale = m * 1.0 + slab.totalMass * 9.81 * O.time
+    assert touched > 10
+    assert np.abs(momentum() - p0 - impulse - gravityImpulse).max() < 1e-9 * scale
+
+
+def test_sliding_sphere_ends_up_rolling_at_five_sevenths(scene):
+    """A sphere launched without spin slides, friction spins it up, and it rolls
+    at 5/7 of its speed (solid sphere: v = v0 - mu g t, w R = 5/2 mu g t)."""
+    from yade import FrictMat, Vector3, utils
+    O = scene
+    mat, slab, _ = _slab(O, size=(0.4, 0.1, 0.04), cells=(20, 5, 2), frictionPiece=1.0)
+    fm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=math.atan(0.3), density=2000))
+    R = 0.005
+    top = slab.pos[:, 2].max()
+    sid = O.bodies.append(utils.sphere((-0.15, 0.003, top + mat.radius + R - 2e-6), R, material=fm))
+    v0 = 0.5
+    O.bodies[sid].state.vel = Vector3(v0, 0, 0)
+    O.engines = _engines()
+    O.dt = 0.5 * O.engines[3].stableDt()["combined"]
+    tSlide = 2 * v0 / (7 * 0.3 * 9.81)
+    O.run(int(2.5 * tSlide / O.dt), True)
+    s = O.bodies[sid].state
+    assert s.vel[0] == pytest.approx(5 / 7 * v0, rel=0.03)
+    assert s.angVel[1] * R == pytest.approx(s.vel[0], rel=0.03)  # rolling: no slip at the contact
+
+
+def test_clump_resting_on_a_block_loads_the_floor_with_both_weights(scene):
+    from yade import FrictMat, utils
+    O = scene
+    mat = rubber(young=1e6, viscosity=500.0, radius=0.002)
+    block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (4, 4, 4)), mat, pos=(0, 0, 0.05 + 0.002))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=2000))
+    z = 0.1 + 2 * 0.002 + 0.008
+    clump, members = O.bodies.appendClumped([utils.sphere((x, y, z), 0.008, material=fm)
+                                             for x, y in [(-0.012, -0.01), (0.014, -0.006), (0.0, 0.015)]])
+    O.engines = _engines(damping=0.3)
+    O.dt = 0.5 * O.engines[3].stableDt()["combined"]
+    O.run(int(0.6 / O.dt), True)
+    weight = (block.totalMass + O.bodies[clump].state.mass) * 9.81
+    assert O.forces.f(floor)[2] == pytest.approx(-weight, rel=0.005)
+    assert np.linalg.norm(O.bodies[clump].state.vel) < 1e-3
+    assert O.engines[3].world.core.contactCounts["sphere"] >= 3
+
+
+def test_settled_packing_stays_on_the_block_and_compresses_it_by_its_weight(scene):
+    """A few thousand spheres settle on a soft block in a box of frictionless
+    walls: none gets into the block, the spheres' weight reaches the block,
+    and the block shortens as a uniaxially loaded bar (own weight included)."""
+    from yade import FrictMat, pack, utils
+    O = scene
+    L, H, E, rho = 0.1, 0.08, 2e5, 1000.0
+    # r = 2 mm and 10 x 10 cells: the node-floor springs and the mesh shorten
+    # the block under its own weight within 2 % of the bar formula.
+    mat = qdem.QdemMat(young=E, poisson=0.3, density=rho, viscosity=20.0, radius=0.002, frictionWall=0.0,
+                       frictionPiece=0.5)
+    block = qdem.addPiece(qdem.boxMesh((L, L, H), (10, 10, 6)), mat, pos=(0, 0, H / 2 + mat.radius))
+    wm = O.materials.append(FrictMat(young=1e7, frictionAngle=0.0, density=1000))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1, material=wm))
+    gap = mat.radius + 0.0005  # QDEM nodes feel walls within r: keep clear of them
+    for ax in (0, 1):
+        O.bodies.append(utils.wall(-L / 2 - gap, axis=ax, sense=1, material=wm))
+        O.bodies.append(utils.wall(L / 2 + gap, axis=ax, sense=-1, material=wm))
+    sm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.3, density=2500))
+    sp = pack.SpherePack()
+    zb = H + 2 * mat.radius
+    sp.makeCloud((-L / 2 + 0.001, -L / 2 + 0.001, zb + 0.002), (L / 2 - 0.001, L / 2 - 0.001, zb + 0.06),
+                 rMean=0.0025, rRelFuzz=0.2, seed=3)
+    ids = sp.toSimulation(material=sm)
+    assert len(ids) >= 1500
+    O.engines = _engines(damping=0.4, checkPeriod=100)
+    O.engines[3].damping = 0.3  # quasi-static: local damping on the block too
+    O.dt = min(0.5 * utils.PWaveTimeStep(), 0.5 * O.engines[3].stableDt()["combined"])
+    O.run(int(0.5 / O.dt), True)
+    xyz = np.array([O.bodies[i].state.pos for i in ids])
+    rs = np.array([O.bodies[i].shape.radius for i in ids])
+    # Nobody inside or under the block, and every overlap with its surface
+    # (which carries a skin of r) smaller than r.
+    top = np.isclose(block.refPos[:, 2], block.refPos[:, 2].max())
+    bot = np.isclose(block.refPos[:, 2], block.refPos[:, 2].min())
+    over = (np.abs(xyz[:, 0]) < L / 2) & (np.abs(xyz[:, 1]) < L / 2)
+    assert np.all(xyz[:, 2] > block.pos[:, 2].max())
+    assert np.all(xyz[over, 2] - rs[over] > block.pos[top, 2].min())
+    W = sum(O.bodies[i].state.mass for i in ids) * 9.81
+    onBlock = O.engines[3].world.core.sphereForceTorque()[:, 2].sum()
+    assert onBlock == pytest.approx(W, rel=0.05)
+    # Shortening: mean top height drop vs (load/A + own weight/2) * H / E.
+    shortening = (block.refPos[top, 2].mean() - block.refPos[bot, 2].mean()) - \
+        (block.pos[top, 2].mean() - block.pos[bot, 2].mean())
+    expected = (W / (L * L) + 0.5 * rho * 9.81 * H) * H / E
+    assert shortening == pytest.approx(expected, rel=0.05)
