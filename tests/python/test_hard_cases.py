@@ -183,3 +183,83 @@ def test_current_shape_check_is_quiet_in_violent_but_stable_scenes():
     for _ in range(20):
         w.core.step(dt, 100)
         w.core.checkCurrentDt(dt)
+
+
+@pytest.mark.parametrize("layout", ["coincident", "on_edges", "ridges_parallel", "ridges_parallel_offset"])
+def test_exactly_coincident_and_parallel_edges_nodes_on_edges_and_vertices(layout):
+    """Degenerate contact geometry, exact in floating point, with energy
+    watched every step:
+    coincident: a cube dropped exactly onto another (coincident ridges, every
+    contact node exactly on a vertex of the other piece);
+    on_edges: shifted by half a cell, its bottom nodes exactly over the other
+    cube's face edges (closest points exactly on triangle edges);
+    ridges_parallel(_offset): both cubes turned 45 degrees about x, ridge on
+    ridge: exactly parallel edge-edge pairs (full and partial overlap).
+    (test_surface_contacts.py also has a resting version of the first and a
+    node dragged exactly along edges and over vertices.)"""
+    L, r = 0.1, 2e-3
+    mat = rubber(radius=r, viscosity=100.0)
+    w = qdem.World()
+    if layout.startswith("ridges"):
+        ori = ((1, 0, 0), np.pi / 4)
+        h = L / np.sqrt(2)
+        a = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(0, 0, 0), ori=ori)
+        a.blocked[:] = 7
+        dx = 0.3 * L if layout.endswith("offset") else 0.0
+        b = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(dx, 0, 2 * h + 2 * r), ori=ori,
+                       vel=(0, 0, -0.5))
+    else:
+        a = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(0, 0, L / 2 + r))
+        dx = L / 4 if layout == "on_edges" else 0.0
+        b = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(dx, 0, 1.5 * L + 3 * r), vel=(0, 0, -0.5))
+        _floor(w)
+    w.core.gravity = (0, 0, -9.81)
+    w.core.trackEnergy = True
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 1)
+    e0 = _mech(w.core.energy)
+    scale = abs(e0) + (a.totalMass + b.totalMass) * 9.81 * L
+    worst, touched = -np.inf, 0
+    for _ in range(2000):
+        w.core.step(dt, 1)
+        worst = max(worst, _mech(w.core.energy) - e0)
+        touched = max(touched, w.core.contactCounts["pointPolygon"])
+    w.core.checkFinite()
+    assert np.isfinite(w.core.force).all()
+    assert touched > 0
+    assert worst <= 1e-9 * scale
+    assert np.abs(b.vel).max() < 1.0                    # nothing launched
+
+
+def test_resting_stack_for_a_million_steps():
+    """Two one-cell cubes (8 nodes, 5 tets each) stacked off-centre on a floor,
+    resting on two node and two crossing-edge contacts, for 10^6 steps at 0.99
+    of the stable step: finite, mechanical energy never grows beyond
+    rounding, the floor carries exactly the weight, and nothing creeps."""
+    L, r = 0.02, 1e-3
+    mat = rubber(radius=r, viscosity=20.0)
+    w = qdem.World()
+    a = w.addPiece(qdem.boxMesh((L, L, L), (1, 1, 1), 5), mat, pos=(0, 0, L / 2 + r))
+    b = w.addPiece(qdem.boxMesh((L, L, L), (1, 1, 1), 5), mat, pos=(0.003, 0.001, 1.5 * L + 3 * r))
+    _floor(w)
+    w.core.gravity = (0, 0, -9.81)
+    w.core.trackEnergy = True
+    weight = (a.totalMass + b.totalMass) * 9.81
+    dt = 0.99 * w.stableDt()["combined"]
+    threads = qdem._core.getThreads()
+    qdem._core.setThreads(1)                            # 16 nodes: threads would only cost
+    try:
+        w.core.step(dt, 100000)                         # settle (6.8 s of simulated time)
+        e, ca, cb = _mech(w.core.energy), a.centroid(), b.centroid()
+        for _ in range(9):
+            w.core.step(dt, 100000)
+            w.core.checkFinite()
+            now = _mech(w.core.energy)
+            assert now - e <= 1e-12 * weight * L
+            e = now
+            assert -np.asarray(w.core.obstacleReactions())[0][2] == pytest.approx(weight, rel=1e-12)
+    finally:
+        qdem._core.setThreads(threads)
+    assert w.core.iter == 10 ** 6
+    assert np.abs(a.centroid() - ca).max() < 1e-12 and np.abs(b.centroid() - cb).max() < 1e-12
+    assert w.core.contactCounts["pointPolygon"] > 0
