@@ -75,11 +75,13 @@ struct PieceContactState {
     static constexpr int kPP = 6;
     Column<int32_t> ppKey, ppPiece;   // key = 8 * triangle + feature; -1 = empty
     Column<double> ppShear;
+    Column<double> ppRef;             // reference overlap of a contact born deep (0: none), doc/contacts.md §5
     // Edge-edge history: kEE slots per surface edge (owned by the lower edge id).
     static constexpr int kEE = 4;
     Column<int32_t> eeOther;
     Column<int8_t> eeSide;
     Column<double> eeShear;
+    Column<double> eeRef;
 
     void resizeHistory(std::size_t nSurfNodes, std::size_t nEdges) {
         ppStamp.resize(nSurfNodes, -2);
@@ -87,9 +89,11 @@ struct PieceContactState {
         ppKey.resize(kPP * nSurfNodes, -1);
         ppPiece.resize(kPP * nSurfNodes, -1);
         ppShear.resize(3 * kPP * nSurfNodes, 0.0);
+        ppRef.resize(kPP * nSurfNodes, 0.0);
         eeOther.resize(kEE * nEdges, -1);
         eeSide.resize(kEE * nEdges, 0);
         eeShear.resize(3 * kEE * nEdges, 0.0);
+        eeRef.resize(kEE * nEdges, 0.0);
     }
 };
 

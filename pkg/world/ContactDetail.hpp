@@ -1,6 +1,7 @@
 // Shared pieces of the piece-piece contact phases (internal to pkg/world).
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -39,6 +40,22 @@ inline void addTo(double* buf, int32_t s, const Vector3d& f) {
     buf[3 * s] += f[0];
     buf[3 * s + 1] += f[1];
     buf[3 * s + 2] += f[2];
+}
+
+// Reference overlap of a contact (doc/contacts.md §5, "Contacts born deep").
+// A contact carried from the previous step keeps its reference, lowered to
+// the current overlap when the node has moved out past it (so it never pulls
+// and never stores energy it was not given).  A new contact on a node that
+// was already watched on the previous step, deeper than the reach plus what
+// this step's approach can explain, was missed by the detection (a node
+// beyond the search range), not made by a touch: it starts from its present
+// overlap as reference, with no stored energy.  Normal contacts have 0 and
+// get bit-for-bit the plain law.
+inline double bornDeepRef(bool carried, double oldRef, bool watched, double overlap, double reach,
+                          double vn, double dt) {
+    if (carried) return std::min(oldRef, overlap);
+    const double approach = vn < 0 ? -vn * dt : 0.0;
+    return watched && overlap > reach + approach ? overlap - approach : 0.0;
 }
 
 struct Candidate {

@@ -37,7 +37,9 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
             int32_t* other = &pc_.eeOther[K * e];
             int8_t* side = &pc_.eeSide[K * e];
             double* shear = &pc_.eeShear[3 * K * e];
-            if (pc_.eeStamp[e] != stamp - 1)  // history is only valid from the previous step
+            double* ref = &pc_.eeRef[K * e];
+            const bool watched = pc_.eeStamp[e] == stamp - 1;
+            if (!watched)  // history is only valid from the previous step
                 for (int k = 0; k < K; ++k) other[k] = -1;
             pc_.eeStamp[e] = stamp;
             const Material& ma = materials[pieces[pa].material];
@@ -47,6 +49,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
             int32_t newOther[K];
             int8_t newSide[K];
             Vector3d newShear[K];
+            double newRef[K];
             int nNew = 0;
             // One pair of edges: je indexes the registered edges.
             auto pair = [&](int32_t je) {
@@ -110,12 +113,15 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu};
+                    const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
+                                                  reach, vRel.dot(n), dt);
                     const ContactResult r = (Friction && law.mu > 0)
-                                                ? contactForce<true>(cp, n, overlap, vRel, dt, sh)
-                                                : contactForce<false>(cp, n, overlap, vRel, dt, sh);
+                                                ? contactForce<true>(cp, n, overlap - r0, vRel, dt, sh)
+                                                : contactForce<false>(cp, n, overlap - r0, vRel, dt, sh);
                     newOther[nNew] = e2;
                     newSide[nNew] = static_cast<int8_t>(sUse);
                     newShear[nNew] = sh;
+                    newRef[nNew] = r0;
                     ++nNew;
                     addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force);
                     addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force);
@@ -150,6 +156,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
             for (int k = 0; k < K; ++k) {
                 other[k] = k < nNew ? newOther[k] : -1;
                 side[k] = k < nNew ? newSide[k] : 0;
+                ref[k] = k < nNew ? newRef[k] : 0.0;
                 if (k < nNew)
                     for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
             }

@@ -40,7 +40,9 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             int32_t* key = &pc_.ppKey[K * s];
             int32_t* kpiece = &pc_.ppPiece[K * s];
             double* shear = &pc_.ppShear[3 * K * s];
-            if (pc_.ppStamp[s] != stamp - 1)  // history is only valid from the previous step
+            double* ref = &pc_.ppRef[K * s];
+            const bool watched = pc_.ppStamp[s] == stamp - 1;
+            if (!watched)  // history is only valid from the previous step
                 for (int k = 0; k < K; ++k) key[k] = -1;
             pc_.ppStamp[s] = stamp;
             if (!pc_.pieceActive[pa]) {
@@ -163,6 +165,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
 
             int32_t newKey[K], newPiece[K];
             Vector3d newShear[K];
+            double newRef[K];
             bool usedOld[K] = {false, false, false, false, false, false};
             int nNew = 0;
             Vector3d fA = Vector3d::Zero();
@@ -203,12 +206,15 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 }
                 const ContactParams cp{law.kn, law.cn, law.kt, law.ct, law.mu};
                 const Vector3d vRel = at(vel, node) - vT;
+                const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
+                                              vRel.dot(n), dt);
                 const ContactResult r = (Friction && law.mu > 0)
-                                            ? contactForce<true>(cp, n, overlap, vRel, dt, sh)
-                                            : contactForce<false>(cp, n, overlap, vRel, dt, sh);
+                                            ? contactForce<true>(cp, n, overlap - r0, vRel, dt, sh)
+                                            : contactForce<false>(cp, n, overlap - r0, vRel, dt, sh);
                 newKey[nNew] = kk;
                 newPiece[nNew] = pb;
                 newShear[nNew] = sh;
+                newRef[nNew] = r0;
                 ++nNew;
                 fA += r.force;
                 for (int k = 0; k < 3; ++k)
@@ -223,6 +229,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             for (int k = 0; k < K; ++k) {
                 key[k] = k < nNew ? newKey[k] : -1;
                 kpiece[k] = k < nNew ? newPiece[k] : -1;
+                ref[k] = k < nNew ? newRef[k] : 0.0;
                 if (k < nNew)
                     for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
             }

@@ -48,6 +48,22 @@ Mat12 elementStiffness(const Mat3& B, double V, double lambda, double mu) {
     return K;
 }
 
+// Largest eigenvalue of an element matrix.  GCC 12 (bug 105593, see
+// CMakeLists.txt) reports the deliberately undefined pass-through operand of
+// _mm512_max_pd in avx512fintrin.h as "used uninitialized" once Eigen's
+// solver is inlined here: a false positive, silenced for this function only.
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ < 13
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#endif
+__attribute__((noinline)) double largestEigenvalue(const Mat12& K) {
+    Eigen::SelfAdjointEigenSolver<Mat12> es(K, Eigen::EigenvaluesOnly);
+    return es.eigenvalues().maxCoeff();
+}
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ < 13
+#pragma GCC diagnostic pop
+#endif
+
 }  // namespace
 
 double World::elementOmegaMax(const PieceInfo& p) const {
@@ -61,6 +77,8 @@ double World::elementOmegaMax(const PieceInfo& p) const {
         // omega^2 = lambda_max(K) / (rho V / 4); V cancels.
         bound[e] = 4.0 * (std::max(lam, 0.0) + 2 * mu) * sumG2 / m.density;
     }
+    if (omega2Tet_.size() < nTets()) omega2Tet_.resize(nTets(), 0.0);
+    for (int32_t e = 0; e < n; ++e) omega2Tet_[p.tetBegin + e] = bound[e];
     std::vector<int32_t> order(n);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return bound[a] > bound[b]; });
@@ -72,15 +90,112 @@ double World::elementOmegaMax(const PieceInfo& p) const {
         const int32_t e = p.tetBegin + order[k];
         std::array<double, 9> key;
         std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
-        if (solved.count(key)) continue;
+        if (solved.count(key)) {
+            omega2Tet_[e] = solved[key];
+            continue;
+        }
         const Mat3 B = loadRowMajor(&tetB[9 * e]);
         const Mat12 K = elementStiffness(B, tetVol0[e], lam, mu);
-        Eigen::SelfAdjointEigenSolver<Mat12> es(K, Eigen::EigenvaluesOnly);
-        const double w2 = es.eigenvalues().maxCoeff() / (m.density * tetVol0[e] / 4.0);
+        const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
         solved[key] = w2;
+        omega2Tet_[e] = w2;
         best = std::max(best, w2);
     }
     return std::sqrt(best);
+}
+
+// Tangent stiffness of a Saint-Venant-Kirchhoff element at deformation F
+// (reference gradients G, 2nd Piola stress S): the reference stiffness with
+// the current F, plus the geometric (initial-stress) part.
+static Mat12 currentStiffness(const Mat3& B, const Mat3& F, const Mat3& S, double V, double lambda, double mu) {
+    Eigen::Matrix<double, 4, 3> G;
+    G.row(1) = B.row(0);
+    G.row(2) = B.row(1);
+    G.row(3) = B.row(2);
+    G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
+    const Eigen::Matrix<double, 3, 4> FG = F * G.transpose();  // columns: F g_a
+    const Mat3 FFt = F * F.transpose();
+    Mat12 K;
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+            const double gg = G.row(a).dot(G.row(b));
+            const double gSg = G.row(a) * S * G.row(b).transpose();
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j)
+                    K(3 * a + i, 3 * b + j) = V * (lambda * FG(i, a) * FG(j, b) + mu * FFt(i, j) * gg +
+                                                   mu * FG(i, b) * FG(j, a) + (i == j ? gSg : 0.0));
+        }
+    return K;
+}
+
+void World::checkCurrentDt(double dt) const {
+    if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+    stableDt();  // fills the reference frequencies
+    bool rigid = false;
+    double stiffestObstacle = 0;
+    for (const auto& o : obstacles) {
+        if (o.young <= 0) rigid = true;
+        stiffestObstacle = std::max(stiffestObstacle, o.young);
+    }
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const PieceInfo& p = pieces[i];
+        const Material& m = materials[p.material];
+        const double lam = m.lambda(), mu = m.mu();
+        const double beta = viscosityOn ? m.beta() : 0.0;
+        double wc = 0, xic = 0;
+        if (!obstacles.empty() || pieces.size() > 1) {  // as in stableDt()
+            const double kn = (rigid || pieces.size() > 1)
+                                  ? 2 * m.young * m.radius
+                                  : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
+            wc = std::sqrt(kn / p.minSurfaceNodeMass);
+            xic = dampingRatioFromRestitution(m.restitution);
+        }
+        auto limitAt = [&](double we) {
+            const double w = std::sqrt(we * we + wc * wc);
+            const double c = beta * we * we + 2 * xic * wc;
+            return leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0);
+        };
+        if (limitAt(0) < dt) continue;  // the contact limit alone: checkDt's business
+        // Largest element frequency this dt allows (limitAt decreases with it).
+        double lo = 0, hi = std::max(omegaCache_[i], 1e-300);
+        for (int k = 0; k < 2000 && limitAt(hi) >= dt; ++k) hi *= 2;
+        for (int k = 0; k < 100; ++k) {
+            const double mid = 0.5 * (lo + hi);
+            (limitAt(mid) >= dt ? lo : hi) = mid;
+        }
+        const double allow2 = lo * lo;
+        for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
+            const int32_t* c = &tetNodes[4 * e];
+            const Mat3 B = loadRowMajor(&tetB[9 * e]);
+            const Mat3 F = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]) * B;
+            const Mat3 C = F.transpose() * F;
+            Eigen::SelfAdjointEigenSolver<Mat3> ec;
+            ec.computeDirect(C, Eigen::EigenvaluesOnly);
+            const double s2 = ec.eigenvalues()(2);  // largest principal stretch, squared
+            // S = lambda tr(E) I + 2 mu E shares E's axes: its largest value.
+            const double trE = 0.5 * (C.trace() - 3);
+            const double sMax = lam * trE + mu * (s2 - 1);
+            // Estimate of the stiffening: exact for uniaxial strain
+            // ((3 s^2 - 1)/2), 1 for a rigid motion; the exact eigenvalue
+            // decides below.
+            const double grow = s2 + std::max(sMax, 0.0) / (lam + 2 * mu);
+            if (!(omega2Tet_[e] * grow * 1.1 > allow2)) continue;  // (NaN: checkFinite's business)
+            const Mat3 E = 0.5 * (C - Mat3::Identity());
+            Mat3 S = 2 * mu * E;
+            S.diagonal().array() += lam * trE;
+            const Mat12 K = currentStiffness(B, F, S, tetVol0[e], lam, mu);
+            const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
+            if (w2 > allow2) {
+                const double now = limitAt(std::sqrt(w2));
+                throw StabilityError(cat(
+                    "QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i,
+                    " is strained (largest stretch ", std::sqrt(s2), ", volume ratio ", F.determinant(),
+                    ") and has stiffened: the stable time step on the current shape is ", now, " s, below dt=", dt,
+                    " s by a factor ", dt / now, " (reference shape: ", limitAt(omegaCache_[i]),
+                    " s). Lower O.dt, or use a mesh without slivers."));
+            }
+        }
+    }
 }
 
 StableDt World::stableDt() const {

@@ -64,6 +64,12 @@ public:
     // Throws StabilityError (naming the limit) when dt exceeds the stable step.
     void checkDt(double dt) const;
     StableDt stableDt() const;
+    // The same limit on the current shape: stretched elements of a Saint-
+    // Venant-Kirchhoff material stiffen beyond the reference step.  Throws
+    // StabilityError naming the element, its stretch and the current limit
+    // when dt exceeds it (doc/hard_cases.md).  Cheap: exact eigenvalues only
+    // for elements whose estimate comes near the limit.
+    void checkCurrentDt(double dt) const;
     // Throws StabilityError when a position or velocity became NaN/infinite.
     void checkFinite() const;
 
@@ -168,6 +174,7 @@ private:
     std::vector<int> pieceObstacles_;       // per piece: candidate obstacle list (flattened)
     std::vector<int> pieceObstacleBegin_;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
+    mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };
 
 }  // namespace qdem

@@ -127,6 +127,8 @@ void bindWorld(py::module_& m) {
             py::arg("dt"), py::arg("n") = 1)
         .def("checkDt", &World::checkDt, py::arg("dt"))
         .def("checkFinite", &World::checkFinite)
+        .def("checkCurrentDt", &World::checkCurrentDt, py::arg("dt"),
+             "Raise StabilityError when dt exceeds the stable step of the current (strained) shape.")
         .def("stableDt",
              [](const World& w) {
                  const StableDt s = w.stableDt();

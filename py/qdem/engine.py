@@ -41,7 +41,8 @@ class QdemEngine(PyRunner):
     checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
                          "(raises qdem.StabilityError naming the limit).")
     checkPeriod = Attr(100, "Every this many steps, check that all node positions and velocities "
-                            "are finite (0 = never).")
+                            "are finite, and (with checkDt) that O.dt is below the stable step of the "
+                            "current, strained shape (0 = never).")
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
     viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
     damping = Attr(0.0, "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping "
@@ -153,6 +154,8 @@ class QdemEngine(PyRunner):
                 if k in ENERGY_KEYS:
                     O.energy[ENERGY_KEYS[k]] = v
         if self.checkPeriod and core.iter % self.checkPeriod == 0:
+            if self.checkDt:  # first: a strained, stiffened element is named before it blows up
+                core.checkCurrentDt(dt)
             core.checkFinite()
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
             self._progress(core)

@@ -8,6 +8,25 @@ import numpy as np
 from . import _core
 
 
+def _meshioRead(path, who):
+    """meshio.read, with every failure turned into a ValueError naming the
+    file.  meshio answers some broken files (a truncated .vtu) by printing the
+    reason and calling sys.exit(1), which would end YADE: that is caught too,
+    and the printed reason goes into the message."""
+    import contextlib
+    import io
+
+    import meshio
+    out, err = io.StringIO(), io.StringIO()
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            return meshio.read(path)
+    except (Exception, SystemExit) as e:  # meshio raises many types for broken files
+        said = " ".join((out.getvalue() + " " + err.getvalue()).split())
+        reason = "; ".join(x for x in (str(e) if not isinstance(e, SystemExit) else "", said) if x)
+        raise ValueError("%s: cannot read %s: %s" % (who, path, reason or type(e).__name__)) from None
+
+
 class Mesh:
     """Nodes (N,3) and tetrahedra (T,4) of one piece, in the piece's own frame.
     Checked on construction: NaN, bad indices, inverted or zero-volume tets and
@@ -76,13 +95,9 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
     Only tetra cells are used.  fixOrientation=True flips tets written with the
     opposite orientation convention instead of rejecting them."""
-    import meshio
     if not os.path.exists(path):
         raise ValueError("loadMesh: no such file: %s" % path)
-    try:
-        m = meshio.read(path)
-    except Exception as e:  # meshio raises many types for broken files
-        raise ValueError("loadMesh: cannot read %s: %s" % (path, e)) from None
+    m = _meshioRead(path, "loadMesh")
     blocks = [c.data for c in m.cells if c.type == "tetra"]
     if not blocks:
         raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s)"
@@ -107,13 +122,9 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
 def loadSurface(path, scale=1.0):
     """Read a closed triangle surface (OFF, STL, OBJ, PLY, ...) with meshio:
     returns (vertices (V,3), triangles (F,3)), duplicate STL vertices merged."""
-    import meshio
     if not os.path.exists(path):
         raise ValueError("loadSurface: no such file: %s" % path)
-    try:
-        m = meshio.read(path)
-    except Exception as e:
-        raise ValueError("loadSurface: cannot read %s: %s" % (path, e)) from None
+    m = _meshioRead(path, "loadSurface")
     tris = [c.data for c in m.cells if c.type == "triangle"]
     if not tris:
         raise ValueError("loadSurface: %s contains no triangles" % path)

@@ -58,6 +58,9 @@ class World:
             raise ValueError("addPiece: material must be a qdem.QdemMat, got %r" % type(material).__name__)
         R = rotationMatrix(ori)
         pos = np.asarray(pos, dtype=float).reshape(3)
+        for name, val in (("vel", vel), ("angVel", angVel)):
+            if not np.all(np.isfinite(np.asarray(val, dtype=float))):
+                raise ValueError("addPiece: %s=%s is not finite" % (name, tuple(np.ravel(val))))
         nodes, tets = mesh.nodes, mesh.tets
         oldOf = np.arange(len(nodes), dtype=np.int32)
         if reorder:

@@ -45,7 +45,15 @@ def test_index_out_of_range_and_bad_shapes():
 @pytest.mark.parametrize("kw, word", [({"young": 0}, "young"), ({"young": -1e6}, "young"),
                                       ({"poisson": 0.5}, "poisson"), ({"poisson": -1.0}, "poisson"),
                                       ({"density": 0}, "density"), ({"viscosity": -1}, "viscosity"),
-                                      ({"young": float("nan")}, "young"), ({"restitution": 0}, "restitution")])
+                                      ({"young": float("nan")}, "young"), ({"restitution": 0}, "restitution"),
+                                      ({"young": float("inf")}, "young"), ({"poisson": float("nan")}, "poisson"),
+                                      ({"density": -5}, "density"), ({"density": float("nan")}, "density"),
+                                      ({"viscosity": float("nan")}, "viscosity"), ({"radius": 0}, "radius"),
+                                      ({"radius": -1e-3}, "radius"), ({"radius": float("nan")}, "radius"),
+                                      ({"frictionPiece": -0.1}, "frictionPiece"),
+                                      ({"frictionWall": float("nan")}, "frictionWall"),
+                                      ({"restitution": 1.5}, "restitution"),
+                                      ({"restitution": float("nan")}, "restitution")])
 def test_bad_material_parameters(kw, word):
     with pytest.raises(ValueError, match=word):
         qdem.QdemMat(**kw)
@@ -96,3 +104,101 @@ def test_mesh_with_unused_node_is_rejected():
     w = qdem.World()
     with pytest.raises(ValueError, match="belongs to no tetrahedron"):
         w.addPiece((nodes, tets), reorder=False)
+
+
+# --- issue 6, second set ----------------------------------------------------
+
+def _goodFile(tmp_path, ext):
+    import meshio
+    m = qdem.boxMesh((1, 1, 1), (2, 2, 2))
+    kw = {"file_format": "gmsh22", "binary": False} if ext == "msh" else {}
+    path = tmp_path / ("good." + ext)
+    meshio.write(str(path), meshio.Mesh(np.asarray(m.nodes), [("tetra", np.asarray(m.tets))]), **kw)
+    return path
+
+
+@pytest.mark.parametrize("ext", ["msh", "vtu", "mesh"])
+@pytest.mark.parametrize("keep", [0.0, 0.5, 0.9])
+def test_truncated_mesh_files(tmp_path, ext, keep):
+    """Cut short at 0, 50 and 90 %.  A truncated .vtu used to end YADE itself:
+    meshio prints the reason and calls sys.exit(1)."""
+    data = _goodFile(tmp_path, ext).read_bytes()
+    bad = tmp_path / ("cut." + ext)
+    bad.write_bytes(data[:int(keep * len(data))])
+    with pytest.raises(ValueError, match="loadMesh: cannot read .*cut." + ext):
+        qdem.loadMesh(str(bad))
+
+
+def test_nan_coordinate_in_a_mesh_file(tmp_path):
+    import meshio
+    m = qdem.boxMesh((1, 1, 1), (2, 2, 2))
+    nodes = np.asarray(m.nodes).copy()
+    nodes[3, 1] = np.nan
+    path = tmp_path / "nan.vtu"
+    meshio.write(str(path), meshio.Mesh(nodes, [("tetra", np.asarray(m.tets))]))
+    with pytest.raises(ValueError, match="node 3 has a NaN"):
+        qdem.loadMesh(str(path))
+
+
+def test_tetrahedra_meeting_at_one_node_or_one_edge_are_non_manifold():
+    """Two tetrahedra sharing only a node (a pinched vertex: accepted before)
+    or only an edge."""
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1.0]])
+    with pytest.raises(ValueError, match="non-manifold surface: node 0"):
+        qdem.World().addPiece((nodes, [[0, 1, 2, 3], [0, 4, 6, 5]]), reorder=False)
+    nodes = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0.0]])
+    tets = np.array([[0, 1, 2, 3], [0, 1, 4, 5]])
+    tets = np.where(qdem._core.tetVolumes(nodes, tets)[:, None] < 0, tets[:, [0, 2, 1, 3]], tets)
+    with pytest.raises(ValueError, match="non-manifold surface: edge"):
+        qdem.World().addPiece((nodes, tets), reorder=False)
+
+
+_CUBE_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1.0]])
+_CUBE_F = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5],
+                    [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+
+
+def _off(path, v, f, keep=1.0):
+    text = "OFF\n%d %d 0\n" % (len(v), len(f)) + "".join("%r %r %r\n" % tuple(x) for x in v) + \
+        "".join("3 %d %d %d\n" % tuple(x) for x in f)
+    path.write_text(text[:int(keep * len(text))])
+    return str(path)
+
+
+def test_broken_and_non_manifold_surfaces(tmp_path):
+    """Surfaces for CGAL meshing: truncated and empty OFF files, NaN vertices,
+    two cubes sharing an edge, a fin face, bad cell sizes."""
+    with pytest.raises(ValueError, match="loadSurface: cannot read"):
+        qdem.meshSurface(_off(tmp_path / "cut.off", _CUBE_V, _CUBE_F, keep=0.6), 0.3)
+    with pytest.raises(ValueError, match="loadSurface: cannot read"):
+        qdem.meshSurface(_off(tmp_path / "empty.off", _CUBE_V, _CUBE_F, keep=0.0), 0.3)
+    v = _CUBE_V.copy()
+    v[2, 0] = np.nan
+    with pytest.raises(ValueError, match="vertex 2 has a NaN"):
+        qdem.meshSurface((v, _CUBE_F), 0.3)
+    two = np.vstack([_CUBE_V, _CUBE_V + (1, 1, 0)])
+    uniq, inv = np.unique(two, axis=0, return_inverse=True)
+    with pytest.raises(ValueError, match="not manifold: edge .* belongs to 4 triangles"):
+        qdem.meshSurface(_off(tmp_path / "two.off", uniq, inv.ravel()[np.vstack([_CUBE_F, _CUBE_F + 8])]), 0.3)
+    with pytest.raises(ValueError, match="not manifold: edge .* belongs to 3 triangles"):
+        qdem.meshSurface((_CUBE_V, np.vstack([_CUBE_F, [[0, 6, 2]]])), 0.3)
+    for cell in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="cellSize must be finite and > 0"):
+            qdem.meshSurface((_CUBE_V, _CUBE_F), cell)
+
+
+def test_non_finite_initial_velocity_and_time_step():
+    w = qdem.World()
+    with pytest.raises(ValueError, match="vel=.* is not finite"):
+        w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (1, 1, 1)), vel=(0, np.nan, 0))
+    with pytest.raises(ValueError, match="angVel=.* is not finite"):
+        w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (1, 1, 1)), angVel=(0, np.inf, 0))
+    assert w.core.nPieces == 0
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (1, 1, 1)))
+    for dt in (float("nan"), -1e-6, 0.0, float("inf")):
+        with pytest.raises(qdem.StabilityError, match="positive"):
+            w.core.step(dt, 1)
+        with pytest.raises(qdem.StabilityError, match="positive"):
+            w.core.checkDt(dt)
+        with pytest.raises(qdem.StabilityError, match="positive"):
+            w.core.checkCurrentDt(dt)

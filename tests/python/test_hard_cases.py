@@ -87,3 +87,179 @@ def test_needle_and_sliver_tetrahedra_in_one_piece():
     # velocity of the fastest mode): check the motion stays bounded instead.
     assert max(amp) < 20 * 1e-8
     assert max(amp[10:]) < 2 * max(amp[:10])
+
+
+# --- issue 6, second set ----------------------------------------------------
+
+def _pieceMomentum(pieces):
+    return sum(p.momentum() for p in pieces)
+
+
+@pytest.mark.parametrize("cells, tpc, ori", [(3, 5, None), (3, 12, ((1, 2, 3), 0.4))])
+def test_pieces_started_deeply_interpenetrated_separate_without_gaining_energy(cells, tpc, ori):
+    """Two cubes started 30 % interpenetrated: the detected overlaps push them
+    apart; nodes deeper than the search range enter it as they come out, and
+    must not add energy (doc/contacts.md §5, contacts born deep).  Checked
+    every step; before the fix the energy rose by 27 % of the start."""
+    L, frac = 0.1, 0.3
+    w = qdem.World()
+    mat = rubber(radius=2e-3, viscosity=100.0, young=1e7)
+    a = w.addPiece(qdem.boxMesh((L, L, L), (cells,) * 3, tpc), mat, pos=(-(1 - frac) * L / 2, 0, 0))
+    b = w.addPiece(qdem.boxMesh((L, L, L), (cells,) * 3, tpc), mat, pos=((1 - frac) * L / 2, 0.013, 0.007),
+                   ori=ori)
+    w.core.trackEnergy = True
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 1)
+    e0 = _mech(w.core.energy)
+    gain = []
+    for _ in range(1500):
+        w.core.step(dt, 1)
+        gain.append(_mech(w.core.energy) - e0)
+    w.core.checkFinite()
+    assert max(gain) <= 1e-9 * e0
+    assert np.abs(_pieceMomentum((a, b))).max() < 1e-9 * a.totalMass * 5.0
+    # apart: no contact left, and the boxes no longer overlap
+    assert w.core.contactCounts["pointPolygon"] + w.core.contactCounts["edgeEdge"] == 0
+    assert b.pos[:, 0].min() > a.pos[:, 0].max()
+
+
+def _sliver():
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.34, 0.34, 0.34]]) * 0.01
+    tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
+    vol = qdem._core.tetVolumes(nodes, tets)
+    return nodes, np.where(vol[:, None] < 0, tets[:, [0, 2, 1, 3]], tets)
+
+
+def test_strained_sliver_stops_with_a_clear_message_before_any_nan():
+    """A sliver (apex 1.2e-4 m off its 1 cm face) at 0.99 of the reference
+    stable step, its base held and its apex pulled off by a slowly growing
+    force: stretched, it stiffens (Saint-Venant-Kirchhoff) beyond that step.
+    Checked as QdemEngine does every checkPeriod steps, the current-shape
+    check stops the run naming the element and the numbers while the state is
+    still finite; without it the same run ends in NaN."""
+    nodes, tets = _sliver()
+    pull = np.array([1, 1, 1]) / np.sqrt(3)
+
+    worlds = []
+
+    def run(check):
+        w = qdem.World()
+        worlds.append(w)
+        p = w.addPiece((nodes, tets), rubber(viscosity=0.0), reorder=False)
+        dt = 0.99 * w.stableDt()["combined"]
+        p.blocked[[1, 2, 3]] = 7                           # the sliver's base face held
+        for k in range(1, 1001):
+            p.extForce[4] = 0.05 * k * pull                # +0.05 N every 100 steps
+            if check:
+                w.core.checkCurrentDt(dt)
+            w.core.checkFinite()
+            w.core.step(dt, 100)
+        return w, p
+
+    with pytest.raises(qdem.StabilityError, match=r"tetrahedron 1 of piece 0 is strained \(largest stretch") as err:
+        run(True)
+    assert "stable time step on the current shape" in str(err.value)
+    worlds[0].core.checkFinite()                           # stopped in time
+    with pytest.raises(qdem.StabilityError, match="not finite"):
+        run(False)
+
+
+def test_current_shape_check_is_quiet_in_violent_but_stable_scenes():
+    """The check must not cry wolf: a 50 m/s impact at 0.8 and a Poisson 0.49
+    bounce at 0.99 of the stable step never trip it."""
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), rubber(radius=2e-3, viscosity=100.0), pos=(0, 0, 0.06),
+               vel=(0, 0, -50.0))
+    _floor(w)
+    dt = 0.8 * w.stableDt()["combined"]
+    for _ in range(20):
+        w.core.step(dt, 100)
+        w.core.checkCurrentDt(dt)
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), rubber(radius=2e-3, poisson=0.49), pos=(0, 0, 0.0505),
+               vel=(0.3, 0, -1.0), angVel=(2, 0, 1))
+    _floor(w)
+    dt = 0.99 * w.stableDt()["combined"]
+    for _ in range(20):
+        w.core.step(dt, 100)
+        w.core.checkCurrentDt(dt)
+
+
+@pytest.mark.parametrize("layout", ["coincident", "on_edges", "ridges_parallel", "ridges_parallel_offset"])
+def test_exactly_coincident_and_parallel_edges_nodes_on_edges_and_vertices(layout):
+    """Degenerate contact geometry, exact in floating point, with energy
+    watched every step:
+    coincident: a cube dropped exactly onto another (coincident ridges, every
+    contact node exactly on a vertex of the other piece);
+    on_edges: shifted by half a cell, its bottom nodes exactly over the other
+    cube's face edges (closest points exactly on triangle edges);
+    ridges_parallel(_offset): both cubes turned 45 degrees about x, ridge on
+    ridge: exactly parallel edge-edge pairs (full and partial overlap).
+    (test_surface_contacts.py also has a resting version of the first and a
+    node dragged exactly along edges and over vertices.)"""
+    L, r = 0.1, 2e-3
+    mat = rubber(radius=r, viscosity=100.0)
+    w = qdem.World()
+    if layout.startswith("ridges"):
+        ori = ((1, 0, 0), np.pi / 4)
+        h = L / np.sqrt(2)
+        a = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(0, 0, 0), ori=ori)
+        a.blocked[:] = 7
+        dx = 0.3 * L if layout.endswith("offset") else 0.0
+        b = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(dx, 0, 2 * h + 2 * r), ori=ori,
+                       vel=(0, 0, -0.5))
+    else:
+        a = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(0, 0, L / 2 + r))
+        dx = L / 4 if layout == "on_edges" else 0.0
+        b = w.addPiece(qdem.boxMesh((L, L, L), (2, 2, 2)), mat, pos=(dx, 0, 1.5 * L + 3 * r), vel=(0, 0, -0.5))
+        _floor(w)
+    w.core.gravity = (0, 0, -9.81)
+    w.core.trackEnergy = True
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 1)
+    e0 = _mech(w.core.energy)
+    scale = abs(e0) + (a.totalMass + b.totalMass) * 9.81 * L
+    worst, touched = -np.inf, 0
+    for _ in range(2000):
+        w.core.step(dt, 1)
+        worst = max(worst, _mech(w.core.energy) - e0)
+        touched = max(touched, w.core.contactCounts["pointPolygon"])
+    w.core.checkFinite()
+    assert np.isfinite(w.core.force).all()
+    assert touched > 0
+    assert worst <= 1e-9 * scale
+    assert np.abs(b.vel).max() < 1.0                    # nothing launched
+
+
+def test_resting_stack_for_a_million_steps():
+    """Two one-cell cubes (8 nodes, 5 tets each) stacked off-centre on a floor,
+    resting on two node and two crossing-edge contacts, for 10^6 steps at 0.99
+    of the stable step: finite, mechanical energy never grows beyond
+    rounding, the floor carries exactly the weight, and nothing creeps."""
+    L, r = 0.02, 1e-3
+    mat = rubber(radius=r, viscosity=20.0)
+    w = qdem.World()
+    a = w.addPiece(qdem.boxMesh((L, L, L), (1, 1, 1), 5), mat, pos=(0, 0, L / 2 + r))
+    b = w.addPiece(qdem.boxMesh((L, L, L), (1, 1, 1), 5), mat, pos=(0.003, 0.001, 1.5 * L + 3 * r))
+    _floor(w)
+    w.core.gravity = (0, 0, -9.81)
+    w.core.trackEnergy = True
+    weight = (a.totalMass + b.totalMass) * 9.81
+    dt = 0.99 * w.stableDt()["combined"]
+    threads = qdem._core.getThreads()
+    qdem._core.setThreads(1)                            # 16 nodes: threads would only cost
+    try:
+        w.core.step(dt, 100000)                         # settle (6.8 s of simulated time)
+        e, ca, cb = _mech(w.core.energy), a.centroid(), b.centroid()
+        for _ in range(9):
+            w.core.step(dt, 100000)
+            w.core.checkFinite()
+            now = _mech(w.core.energy)
+            assert now - e <= 1e-12 * weight * L
+            e = now
+            assert -np.asarray(w.core.obstacleReactions())[0][2] == pytest.approx(weight, rel=1e-12)
+    finally:
+        qdem._core.setThreads(threads)
+    assert w.core.iter == 10 ** 6
+    assert np.abs(a.centroid() - ca).max() < 1e-12 and np.abs(b.centroid() - cb).max() < 1e-12
+    assert w.core.contactCounts["pointPolygon"] > 0
