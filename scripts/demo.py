@@ -59,5 +59,5 @@ reaction = O.forces.f(floor)[2]
 print("demo: %.2f s simulated in %.1f s wall (%d steps, %.0f steps/s)" % (O.time, wall, O.iter, O.iter / wall))
 print("demo: floor reaction %.4g N, block weight %.4g N (ratio %.4f); centre at z = %.4f m"
       % (reaction, weight, reaction / weight, block.centroid()[2]))
-print("demo: wrote %s/block-*.vtu (%d frames, block-.pvd for ParaView) and %s/energy.png"
+print("demo: wrote %s/block-*.vtu (%d frames, block.pvd for ParaView) and %s/energy.png"
       % (OUT, len(O.engines[2].frames), OUT))

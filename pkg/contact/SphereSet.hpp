@@ -29,6 +29,7 @@ struct SphereSet {
     static constexpr int kSlots = 4;
     std::vector<int32_t> slotKey;  // 8 * triangle + feature; -1 = empty
     std::vector<double> slotShear; // tangential spring, 3 per slot
+    std::vector<double> slotRef;   // reference overlap of a contact born deep (doc/contacts.md §5)
     std::vector<long> pairStamp;   // step at which the pair's slots were last written
 
     // ---- derived on set-up ------------------------------------------------------

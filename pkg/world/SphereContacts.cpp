@@ -77,6 +77,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
             oldPair[(static_cast<int64_t>(S.id[i]) << 20) ^ S.pairPiece[q]] = q;
     const std::vector<int32_t> oldKey = std::move(S.slotKey);
     const std::vector<double> oldShear = std::move(S.slotShear);
+    const std::vector<double> oldRef = std::move(S.slotRef);
     const std::vector<long> oldStamp = std::move(S.pairStamp);
 
     S.id.assign(id, id + n);
@@ -96,6 +97,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
     constexpr int K = SphereSet::kSlots;
     S.slotKey.assign(K * static_cast<std::size_t>(nPairs), -1);
     S.slotShear.assign(3 * K * static_cast<std::size_t>(nPairs), 0.0);
+    S.slotRef.assign(K * static_cast<std::size_t>(nPairs), 0.0);
     S.pairStamp.assign(nPairs, -2);
     for (int32_t i = 0; i < n; ++i)
         for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
@@ -104,6 +106,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
             const int32_t o = it->second;
             S.pairStamp[q] = oldStamp[o];
             std::copy_n(&oldKey[K * static_cast<std::size_t>(o)], K, &S.slotKey[K * static_cast<std::size_t>(q)]);
+            std::copy_n(&oldRef[K * static_cast<std::size_t>(o)], K, &S.slotRef[K * static_cast<std::size_t>(q)]);
             std::copy_n(&oldShear[3 * K * static_cast<std::size_t>(o)], 3 * K,
                         &S.slotShear[3 * K * static_cast<std::size_t>(q)]);
         }
@@ -219,7 +222,9 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                 const int32_t pb = S.pairPiece[q];
                 int32_t* key = &S.slotKey[K * static_cast<std::size_t>(q)];
                 double* shear = &S.slotShear[3 * K * static_cast<std::size_t>(q)];
-                if (S.pairStamp[q] != stamp - 1)  // history is only valid from the previous step
+                double* ref = &S.slotRef[K * static_cast<std::size_t>(q)];
+                const bool watched = S.pairStamp[q] == stamp - 1;
+                if (!watched)  // history is only valid from the previous step
                     for (int k = 0; k < K; ++k) key[k] = -1;
                 S.pairStamp[q] = stamp;
                 const Material& mb = materials[pieces[pb].material];
@@ -284,6 +289,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                 selectTouches(C, cand, nc, keep, surf.triPiece.data(), eps, cosFeature);
 
                 int32_t newKey[K];
+                double newRef[K];
                 Vector3d newShear[K];
                 bool usedOld[K] = {false, false, false, false};
                 int32_t kpiece[K];
@@ -322,10 +328,15 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     }
                     const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu};
                     const Vector3d vRel = v + w.cross(arm) - vT;
+                    // A contact found deep on a sphere already watched was missed,
+                    // not made: it stores no energy it was not given (ContactDetail.hpp).
+                    const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
+                                                  vRel.dot(nrm), dt);
                     const ContactResult r = (Friction && law.mu > 0)
-                                                ? contactForce<true>(prm, nrm, ov, vRel, dt, sh)
-                                                : contactForce<false>(prm, nrm, ov, vRel, dt, sh);
+                                                ? contactForce<true>(prm, nrm, ov - r0, vRel, dt, sh)
+                                                : contactForce<false>(prm, nrm, ov - r0, vRel, dt, sh);
                     newKey[nNew] = kk;
+                    newRef[nNew] = r0;
                     newShear[nNew] = sh;
                     ++nNew;
                     F += r.force;
@@ -339,6 +350,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                 }
                 for (int k = 0; k < K; ++k) {
                     key[k] = k < nNew ? newKey[k] : -1;
+                    ref[k] = k < nNew ? newRef[k] : 0.0;
                     if (k < nNew)
                         for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
                 }

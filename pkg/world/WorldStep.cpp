@@ -6,6 +6,7 @@
 
 #include "../contact/ContactLaw.hpp"
 #include "../core/Errors.hpp"
+#include "../core/Threads.hpp"
 #include "../element/SvkBatch.hpp"
 #include "World.hpp"
 
@@ -13,6 +14,7 @@ namespace qdem {
 
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
+    const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
     double t0 = omp_get_wtime();
     contactsActive_ = false;
     if (trackEnergy) energy.contactElastic = 0;  // a state: summed afresh by the contact phases

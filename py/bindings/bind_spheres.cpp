@@ -126,6 +126,23 @@ void bindSpheres(py::module_& m) {
                 return out;
             },
             py::arg("interactions"), py::arg("self"))
+        .def(
+            "piecesInside",
+            [](const World& w, const Reals& lo, const Reals& hi) {
+                // Are all pieces' boxes inside the given (pieces, 3) boxes?  The
+                // per-step test of the sphere coupling, without temporaries.
+                const std::size_t np = w.pieces.size();
+                if (lo.size() != static_cast<py::ssize_t>(3 * np) || hi.size() != static_cast<py::ssize_t>(3 * np))
+                    return false;
+                const std::vector<double> b = pieceBoxes(w);
+                for (std::size_t p = 0; p < np; ++p)
+                    for (int d = 0; d < 3; ++d)
+                        if (b[6 * p + d] < lo.data()[3 * p + d] || b[6 * p + 3 + d] > hi.data()[3 * p + d]) return false;
+                return true;
+            },
+            py::arg("lo"), py::arg("hi"))
+        .def_property_readonly("sphereSeconds", [](const World& w) { return w.timings.spheres; },
+                               "Wall time of the sphere-contact phase of the last step [s].")
         .def_property_readonly("nSpheres", [](const World& w) { return w.spheres.size(); })
         .def(
             "pieceBounds",

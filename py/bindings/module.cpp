@@ -3,6 +3,7 @@
 #include <pybind11/pybind11.h>
 
 #include "core/Errors.hpp"
+#include "core/Threads.hpp"
 
 namespace py = pybind11;
 
@@ -23,9 +24,11 @@ PYBIND11_MODULE(_core, m) {
             stability(e.what());
         }
     });
-    m.def("setThreads", [](int n) { omp_set_num_threads(n > 0 ? n : 1); }, py::arg("n"),
-          "Number of OpenMP threads QDEM uses.");
-    m.def("getThreads", []() { return omp_get_max_threads(); });
+    m.def("setThreads", [](int n) { qdem::qdemThreads() = n > 0 ? n : 0; }, py::arg("n"),
+          "Number of OpenMP threads QDEM uses (0 = YADE's own, from yade -j).  YADE's setting is left "
+          "alone: its force buffers are sized for its own thread count.");
+    m.def("getThreads", []() { return qdem::effectiveThreads(); },
+          "Number of OpenMP threads QDEM uses now.");
     bindMesh(m);
     bindWorld(m);
     bindSpheres(m);

@@ -49,7 +49,8 @@ class QdemEngine(PyRunner):
                         "(which QDEM does not inherit): for quasi-static problems; 0 keeps the dynamics exact.",
                    lambda v: None if 0 <= v < 1 else "must lie in [0, 1)")
     friction = Attr(True, "Apply tangential (friction) contact forces (False switches them off).")
-    threads = Attr(0, "OpenMP threads for QDEM (0 = keep the current setting, e.g. from yade -j).")
+    threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
+                      "own count either way.")
     pointPolygon = Attr(True, "Point-polygon contacts between pieces (seed paper 3.1).")
     edgeEdge = Attr(True, "Edge-edge contacts between pieces (seed paper 3.2, with friction).")
     spheres = Attr(True, "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): "
@@ -95,6 +96,16 @@ class QdemEngine(PyRunner):
             self._spheres.listAll(O)  # any sphere may come near: bound them all
         return self.world.core.stableDt()
 
+    def bodiesChanged(self):
+        """Call after erasing bodies and appending others in the same step (YADE may
+        reuse the ids): the engine scans O.bodies again at its next step."""
+        self._nBodies = -1
+
+    def sphereCouplingTime(self):
+        """Wall time [s] spent so far on coupling with YADE spheres: lists, states,
+        sphere-surface contacts, forces back to O.forces (for benchmarks)."""
+        return self._spheres.seconds if self._spheres is not None else 0.0
+
     def stepOnce(self):
         """One QDEM step at O.dt without YADE's loop (for tests and debugging)."""
         self._run()
@@ -118,7 +129,11 @@ class QdemEngine(PyRunner):
             self._nBodies = len(O.bodies)
             self._dtChecked = None
         if self._ids:
-            core.setObstacleStates(yadeglue.obstacleStates(O, self._ids, self._states))
+            states = yadeglue.obstacleStates(O, self._ids, self._states)
+            if states is None:  # a body was erased (O.bodies keeps its length): scan again
+                self._nBodies = -1
+                return self._syncObstacles()
+            core.setObstacleStates(states)
 
     def _run(self):
         core = self.world.core
@@ -135,8 +150,10 @@ class QdemEngine(PyRunner):
         core.broadPhase = BROAD_PHASES[self.broadPhase]
         coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
+            t0 = time.perf_counter()
             coupling.margin = float(self.sphereMargin)
             coupling.beforeStep(O)
+            coupling.seconds += time.perf_counter() - t0
         elif core.nSpheres:
             core.setSpheres(*_NO_SPHERES)
         dt = O.dt
@@ -148,7 +165,9 @@ class QdemEngine(PyRunner):
         if self._ids:
             yadeglue.applyReactions(O, self._ids, core.obstacleReactions())
         if coupling is not None:
+            t0 = time.perf_counter()
             coupling.afterStep(O)
+            coupling.seconds += time.perf_counter() - t0 + core.sphereSeconds
         if core.trackEnergy:
             for k, v in core.energy.items():
                 if k in ENERGY_KEYS:

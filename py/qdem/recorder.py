@@ -26,7 +26,8 @@ class VtkRecorder(PyRunner):
     """Writes ``<fileBase>NNNNNN.vtu`` every ``iterPeriod`` steps and keeps
     ``<fileBase>.pvd`` (open it in ParaView) up to date."""
 
-    fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + 'pvd'.")
+    fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + '.pvd', "
+                                 "a trailing '-', '_' or '.' dropped (out/qdem-000100.vtu, out/qdem.pvd).")
 
     def __init__(self, world=None, **kw):
         PyRunner.__init__(self)
@@ -53,8 +54,12 @@ class VtkRecorder(PyRunner):
         path = "%s%06d.vtu" % (self.fileBase, O.iter)
         writeFrame(self.world, path)
         self.frames.append((O.time, os.path.basename(path)))
-        writePvd(self.fileBase + "pvd" if self.fileBase.endswith((".", "-", "_")) else self.fileBase + ".pvd",
-                 self.frames)
+        writePvd(self.pvdPath(), self.frames)
+
+    def pvdPath(self):
+        """The ParaView collection: fileBase + '.pvd' (trailing '-', '_' or '.' dropped)."""
+        base = self.fileBase[:-1] if self.fileBase.endswith((".", "-", "_")) else self.fileBase
+        return base + ".pvd"
 
 
 def _record(key):

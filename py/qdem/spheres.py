@@ -61,8 +61,10 @@ class SphereCoupling:
         self.collider = None
         self._numAction = None
         self._dirty = True
+        self._safeLo = self._safeHi = np.zeros((0, 3))
         self.refreshes = 0
         self.version = 0         # bumped whenever the sphere set changes (stable dt)
+        self.seconds = 0.0       # wall time spent coupling (QdemEngine adds it up)
 
     # -- proxies -----------------------------------------------------------------
     def _findCollider(self, O):
@@ -112,8 +114,24 @@ class SphereCoupling:
     def beforeStep(self, O):
         """Refreshes proxies and lists when needed, then reads the listed spheres' states."""
         core = self.world.core
-        self._ensureCollider(O)
-        bounds = core.pieceBounds()
+        if self.collider is None:
+            self._ensureCollider(O)
+        if not core.piecesInside(self._safeLo, self._safeHi):
+            self._moveProxies(O, core.pieceBounds())
+        # The collider ran (new lists) or interactions were erased with their
+        # bodies (O.bodies.erase keeps the body count): list again.
+        n = (self.collider.numAction, len(O.interactions))
+        if self._dirty or n != self._numAction:
+            self._refresh(O)
+            self._numAction = n
+            self._dirty = False
+        if self.states:
+            core.readSphereStates(self.states)
+
+    def _moveProxies(self, O, bounds):
+        """Places new proxies, and moves those whose piece came within half the
+        margin of the proxy box: the collider only sees a moved proxy at its
+        next run, and the piece may not outrun the other half meanwhile."""
         for i in range(len(bounds)):
             lo, hi = bounds[i, :3], bounds[i, 3:]
             if i >= len(self.proxies):
@@ -121,17 +139,14 @@ class SphereCoupling:
                 continue
             plo, phi = self.proxyBox[i]
             m = self.margin * max(float(np.max(hi - lo)), 1e-300)
-            # Keep half the margin in hand: the collider only sees a moved proxy
-            # at its next run, and the piece may not outrun the rest meanwhile.
             if np.any(lo < plo + 0.5 * m) or np.any(hi > phi - 0.5 * m):
                 self._placeProxy(O, i, lo, hi)
-        n = self.collider.numAction
-        if self._dirty or n != self._numAction:
-            self._refresh(O)
-            self._numAction = n
-            self._dirty = False
-        if self.states:
-            core.readSphereStates(self.states)
+        safeLo, safeHi = [], []
+        for (plo, phi), b in zip(self.proxyBox, bounds):
+            m = self.margin * max(float(np.max(b[3:] - b[:3])), 1e-300)
+            safeLo.append(plo + 0.5 * m)
+            safeHi.append(phi - 0.5 * m)
+        self._safeLo, self._safeHi = np.array(safeLo), np.array(safeHi)
 
     def _refresh(self, O):
         """Spheres listed by the collider against each proxy, to the core."""
@@ -191,6 +206,7 @@ class SphereCoupling:
         """Bodies were added or erased: forget cached properties and re-list."""
         self.props.clear()
         self._dirty = True
+        self.collider = None  # engines may have changed too: look again
 
     def afterStep(self, O):
         if self.states:

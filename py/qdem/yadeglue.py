@@ -49,9 +49,13 @@ def hasSpheres(O):
 
 
 def obstacleStates(O, ids, out):
-    """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies."""
+    """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies;
+    None when one of them was erased (scan again)."""
     for i, bid in enumerate(ids):
-        s = O.bodies[bid].state
+        b = O.bodies[bid]
+        if b is None:  # erased since the last scan
+            return None
+        s = b.state
         p, q, v, w = s.pos, s.ori, s.vel, s.angVel
         axis, angle = q.toAxisAngle()
         h = 0.5 * angle

@@ -26,3 +26,8 @@ echo "bench: shogi scenes (seed Figures 7-10), Table 1 material and time step"
 
 echo "bench: cost of each effect on, off and zero-valued"
 (cd scripts/bench && /usr/bin/python3.11 bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-20}" --out ../../out/bench)
+
+echo "bench: 20,000 YADE spheres around one QDEM block: coupling cost, near and far"
+yade -j 2 -n -x scripts/bench/bench_spheres.py --steps "${QDEM_BENCH_SPHERE_STEPS:-500}" --out out/bench \
+  > out/bench/spheres.log 2>&1 || echo "bench: sphere coupling run failed, see out/bench/spheres.log"
+grep "^bench spheres" out/bench/spheres.log || true

@@ -187,3 +187,80 @@ def test_settled_packing_stays_on_the_block_and_compresses_it_by_its_weight(scen
         (block.pos[top, 2].mean() - block.pos[bot, 2].mean())
     expected = (W / (L * L) + 0.5 * rho * 9.81 * H) * H / E
     assert shortening == pytest.approx(expected, rel=0.05)
+
+
+def test_only_near_spheres_are_listed_and_an_erased_one_lets_go(scene):
+    from yade import FrictMat, utils
+    O = scene
+    mat = rubber(young=1e6, viscosity=500.0, radius=0.002)
+    block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.05 + 0.002))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=2000))
+    onTop = O.bodies.append(utils.sphere((0.01, 0.0, 0.1 + 0.004 + 0.01), 0.01, material=fm))
+    far = [O.bodies.append(utils.sphere((1.0 + 0.05 * k, 0.5, 0.01), 0.01, material=fm))
+           for k in range(10)]  # far away, resting on the floor
+    O.engines = _engines(damping=0.3)
+    qe = O.engines[3]
+    qe.damping = 0.3  # quasi-static
+    O.dt = 0.5 * qe.stableDt()["combined"]
+    O.run(int(0.4 / O.dt), True)
+    assert qe.world.core.nSpheres == 1
+    assert qe.world.core.contactCounts["sphere"] >= 1
+    farWeight = sum(O.bodies[i].state.mass for i in far) * 9.81  # they load the floor too
+    load = (block.totalMass + O.bodies[onTop].state.mass) * 9.81 + farWeight
+    assert O.forces.f(floor)[2] == pytest.approx(-load, rel=0.01)
+    O.bodies.erase(onTop)
+    O.step()
+    assert qe.world.core.contactCounts["sphere"] == 0 and qe.world.core.nSpheres == 0
+    O.run(int(0.2 / O.dt), True)
+    assert O.forces.f(floor)[2] == pytest.approx(-block.totalMass * 9.81 - farWeight, rel=0.01)
+
+
+def test_block_dropped_onto_a_sphere_bed_comes_to_rest_on_it(scene):
+    """The block falls far more than its proxy's margin: the proxy follows it
+    and the collider lists the bed in time."""
+    from yade import FrictMat, utils
+    O = scene
+    mat = rubber(young=1e6, viscosity=500.0, radius=0.002)
+    block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.05), (4, 4, 2)), mat, pos=(0, 0, 0.3))
+    fm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.5, density=2000))
+    R = 0.01
+    bed = [O.bodies.append(utils.sphere((x, y, R), R, material=fm, fixed=True))
+           for x in np.arange(-0.2, 0.201, 2 * R) for y in np.arange(-0.2, 0.201, 2 * R)]
+    O.engines = _engines()
+    qe = O.engines[3]
+    O.dt = 0.5 * qe.stableDt()["combined"]
+    O.run(int(0.3 / O.dt), True)  # falls, hits the bed, bounces
+    qe.damping = 0.3  # then settles quickly
+    O.run(int(0.6 / O.dt), True)
+    bottom = block.pos[:, 2].min()
+    assert bottom > 2 * R  # resting on the bed, not through it
+    assert np.abs(block.velocity()).max() < 0.02
+    assert qe._spheres.refreshes >= 2
+    weight = block.totalMass * 9.81
+    assert qe.world.core.sphereForceTorque()[:, 2].sum() == pytest.approx(-weight, rel=0.02)
+    assert 16 <= qe.world.core.nSpheres < len(bed)  # the spheres under the block, not the whole bed
+
+
+def test_qdem_threads_leave_yade_own_thread_count_alone(scene):
+    """QDEM on 2 threads inside `yade -n` (1 thread): YADE's InteractionLoop must
+    keep its own count (its force buffers are sized for it) — this crashed
+    when QDEM set the process-wide OpenMP count."""
+    import ctypes
+    from yade import FrictMat, utils
+    O = scene
+    qdem._core.setThreads(2)
+    gomp = ctypes.CDLL("libgomp.so.1")
+    before = gomp.omp_get_max_threads()
+    mat = rubber(young=1e6, viscosity=500.0, radius=0.002)
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.05 + 0.002))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=2000))
+    for k in range(40):  # a heap of touching spheres beside the block: real YADE contacts
+        O.bodies.append(utils.sphere((0.1 + 0.019 * (k % 8), 0.019 * (k // 8), 0.01), 0.01, material=fm))
+    O.engines = _engines()
+    O.dt = 0.5 * O.engines[3].stableDt()["combined"]
+    O.run(300, True)
+    assert gomp.omp_get_max_threads() == before
+    assert qdem._core.getThreads() == 2
+    assert len([i for i in O.interactions if i.isReal]) > 20
