@@ -58,7 +58,7 @@ def run(n=2, tetsPerCell=6, dtFraction=0.9):
 
 
 def cases(short):
-    ns = [1, 2, 3] if short else [1, 2, 3, 4, 6]
+    ns = [1, 2, 3] if short else [1, 2, 3, 4, 6, 8]
     out = [("element size", "b/%d" % n, dict(n=n)) for n in ns]
     nt = 2 if short else 4
     out += [("tetsPerCell", "%d (b/%d)" % (t, nt), dict(n=nt, tetsPerCell=t)) for t in (5, 6, 12)]

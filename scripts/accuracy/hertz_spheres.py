@@ -93,7 +93,7 @@ KINDS = [("point-polygon, face only (seed)", dict(regions=False, edgeEdge=False)
 
 
 def cases(short):
-    ns = [4, 6, 8] if short else [4, 6, 8, 12, 16]
+    ns = [4, 6, 8] if short else [4, 6, 8, 12, 16, 20]
     out = [("element size", "R/%d" % n, dict(nh=n)) for n in ns]
     nk = 6 if short else 8
     out += [("contact kinds", k + " (R/%d)" % nk, dict(nh=nk, **kw)) for k, kw in KINDS]

@@ -26,3 +26,6 @@ echo "bench: shogi scenes (seed Figures 7-10), Table 1 material and time step"
 
 echo "bench: cost of each effect on, off and zero-valued"
 (cd scripts/bench && /usr/bin/python3.11 bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-20}" --out ../../out/bench)
+
+echo "bench: accuracy against cost, short form (make accuracy for the full study and doc/accuracy.md)"
+OMP_NUM_THREADS=1 /usr/bin/python3.11 scripts/accuracy/run_accuracy.py --short --out out/accuracy
