@@ -88,7 +88,7 @@ public:
     bool frictionOn = true;   // user switch: tangential forces off
     // Tangential law of every contact: Spring (Cundall-Strack spring with a
     // Coulomb cap, the default) or Regularized (Ft = -mu Fn vt/max(|vt|, vReg),
-    // no history: cheaper, but creeps at vReg tan(theta)/mu on a slope).
+    // no history; it creeps at vReg tan(theta)/mu on a slope: doc/accuracy.md).
     FrictionModel frictionModel = FrictionModel::Spring;
     double frictionRegVelocity = 1e-3;  // vReg [m/s] of the regularised law
     // Piece-piece surface contacts (seed §3): which kinds, and how the broad

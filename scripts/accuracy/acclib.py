@@ -37,12 +37,14 @@ class Stepper:
 
     def __init__(self, world, dt):
         self.world, self.dt, self.wall, self.steps = world, dt, 0.0, 0
+        self.maxEdgeEdge = 0  # most edge-edge contacts seen at the end of a call
 
     def __call__(self, n):
         t = time.perf_counter()
         self.world.core.step(self.dt, int(n))
         self.wall += time.perf_counter() - t
         self.steps += int(n)
+        self.maxEdgeEdge = max(self.maxEdgeEdge, self.world.core.contactCounts["edgeEdge"])
 
     @property
     def time(self):

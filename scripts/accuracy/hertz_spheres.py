@@ -83,7 +83,7 @@ def run(nh=6, radius=1.0, dtFraction=0.9, speed=0.002, **options):
     sel = (d > 0.02 * R) & (d < dmax) & (F > 0)
     exponent = float(np.polyfit(np.log(d[sel]), np.log(F[sel]), 1)[0]) if sel.sum() > 3 else float("nan")
     return dict(error=Fm / hertz(dEval, r) - 1, value=Fm, reference=float(hertz(dEval, r)), h=h,
-                exponent=exponent, wall=s.wall, steps=s.steps, nTets=w.core.nTets,
+                exponent=exponent, wall=s.wall, steps=s.steps, edgeEdge=s.maxEdgeEdge, nTets=w.core.nTets,
                 curve=dict(d=(d / R).tolist(), F=F.tolist(), Fh=hertz(d, r).tolist()))
 
 

@@ -44,10 +44,15 @@ def isDefault(mod, knob, label):
 
 def bestLevel(rows, tol):
     """Cheapest level whose |error| is within 10 % (plus a negligible amount
-    `tol`) of the smallest |error| of its knob sweep."""
+    `tol`) of the smallest |error| of its knob sweep; the default when it
+    qualifies and costs within 15 % (timing noise) of that cheapest level."""
     emin = min(abs(r["error"]) for r in rows)
     ok = [r for r in rows if abs(r["error"]) <= 1.1 * emin + tol]
-    return min(ok, key=lambda r: r["wall"])["label"]
+    cheapest = min(ok, key=lambda r: r["wall"])
+    for r in ok:
+        if r["default"] and r["wall"] <= 1.15 * cheapest["wall"]:
+            return r["label"]
+    return cheapest["label"]
 
 
 def main(argv=None):

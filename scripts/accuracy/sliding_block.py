@@ -49,7 +49,7 @@ def run(cells=3, dtFraction=0.8, **options):
             t.append(s.time)
             v.append(block.velocity()[0])
     a = -np.polyfit(t, v, 1)[0]
-    return dict(error=a / (MU * G) - 1, value=a, reference=MU * G, wall=s.wall, steps=s.steps,
+    return dict(error=a / (MU * G) - 1, value=a, reference=MU * G, wall=s.wall, steps=s.steps, edgeEdge=s.maxEdgeEdge,
                 nTets=w.core.nTets)
 
 
@@ -62,7 +62,7 @@ def runStick(cells=3, dtFraction=0.8, **options):
     x0, t0 = block.centroid()[0], s.time
     s(int(0.2 / dt))
     creep = (block.centroid()[0] - x0) / (s.time - t0)
-    return dict(error=creep, value=creep, reference=0.0, wall=s.wall, steps=s.steps, nTets=w.core.nTets)
+    return dict(error=creep, value=creep, reference=0.0, wall=s.wall, steps=s.steps, edgeEdge=s.maxEdgeEdge, nTets=w.core.nTets)
 
 
 FRICTION = [("spring (default)", dict(friction="spring")),
