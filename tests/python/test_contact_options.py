@@ -110,9 +110,11 @@ def test_friction_models_agree_without_friction():
     assert np.array_equal(out[0], out[1])
 
 
-def test_engine_attributes_reach_the_core(scene):
-    from yade import ForceResetter, NewtonIntegrator
-    O = scene
+def test_engine_attributes_reach_the_core():
+    # not the `scene` fixture: it leaves 2 threads set for the tests after this one
+    from yade import O, ForceResetter, NewtonIntegrator
+    O.reset()
+    qdem.reset()
     qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber())
     e = qdem.QdemEngine(frictionModel="regularized", frictionRegVelocity=0.02, pointPolygonRegions=False)
     O.engines = [ForceResetter(), e, NewtonIntegrator()]
@@ -124,3 +126,5 @@ def test_engine_attributes_reach_the_core(scene):
         qdem.QdemEngine(frictionModel="coulomb")
     with pytest.raises(ValueError):
         core.frictionModel = 2
+    O.reset()
+    qdem.reset()
