@@ -1,8 +1,9 @@
 """A free elastic block bouncing on the floor: energy balance.
 
 A 0.1 m cube (E = 1e7 Pa, nu = 0.3, rho = 1000 kg/m^3, no viscosity, contact
-restitution 1, wall friction 0.5) falls from 2 cm at 1 m/s onto a YADE-style
-floor wall and bounces.  Energy is conserved exactly in the continuum:
+restitution 1, wall friction 0.5) falls from 2 cm at 1 m/s, with 0.2 m/s
+sideways and a 2 rad/s spin so that friction works, onto a YADE-style floor
+wall and bounces.  Energy is conserved exactly in the continuum:
 
     E_kin + E_strain + E_contact springs - W_gravity + D_friction = const
 

@@ -18,7 +18,7 @@ Mechanics, eq. 4.22):
     F = 4/3 E* sqrt(R*) d^{3/2},  1/E* = 2 (1 - nu^2) / E,  R* = (R + r) / 2
 
 error = F / F_Hertz - 1 at d = 0.06 R (interpolated), where the contact
-radius sqrt(R* d) is 0.17 R.  Two biases do not vanish with h: the centres'
+radius sqrt(R* d) is about 0.18 R.  Two biases do not vanish with h: the centres'
 approach includes the compliance of the spheres' bodies (Hertz assumes
 half-spaces), and the contact layer of penalty springs (kn = E r per node
 pair) adds its own compliance."""

@@ -180,8 +180,8 @@ repeated at the end of this page.
   {e('sliding', 'friction model', 'regularized, vReg = 1e-3', digits=3)} with the regularised law, at the same
   cost; but on a slope at half the friction angle the regularised law creeps
   at {e('stick', 'friction model', 'regularized, vReg = 1e-3', False)} m/s (vReg 1e-3 m/s) and
-  {e('stick', 'friction model', 'regularized, vReg = 1e-2', False)} m/s (vReg 1e-2 m/s) — exactly
-  `vReg tan(theta)/mu` — where the spring holds the block
+  {e('stick', 'friction model', 'regularized, vReg = 1e-2', False)} m/s (vReg 1e-2 m/s), as
+  `vReg tan(theta)/mu` predicts, where the spring holds the block
   ({e('stick', 'friction model', 'spring', False)} m/s).
 * **Time step: 0.8 of the stable step.** Errors barely depend on it: the
   P-wave front is slightly *more* accurate near the limit
@@ -206,12 +206,14 @@ repeated at the end of this page.
   will not vanish with h (the centres' approach includes the spheres' own
   compliance, which Hertz's half-spaces do not have, and the penalty layer
   of contact springs adds its own).
-  Cost grows as h^-4 (h^-3 elements, h^-1 steps).  For bending-dominated
+  Cost grows at least as h^-4 (h^-3 elements, h^-1 steps).  For bending-dominated
   pieces use at least 4 elements through the thickness, or accept ~20 %.
 * **tetsPerCell of `qdem.boxMesh`: 5 where bending matters.** At equal cells, 5
-  tetrahedra per cell are cheapest and, in the cantilever, the most accurate
-  ({e('cantilever', 'tetsPerCell', '5')} vs {e('cantilever', 'tetsPerCell', '6')} for 6 and
-  {e('cantilever', 'tetsPerCell', '12')} for 12); in the P-wave bar and the bouncing block the
+  tetrahedra per cell are the fewest elements (at a somewhat smaller stable
+  step) and, in the cantilever, the most accurate
+  ({e('cantilever', 'tetsPerCell', '5')} in {w('cantilever', 'tetsPerCell', '5')} vs
+  {e('cantilever', 'tetsPerCell', '6')} in {w('cantilever', 'tetsPerCell', '6')} for 6 and
+  {e('cantilever', 'tetsPerCell', '12')} in {w('cantilever', 'tetsPerCell', '12')} for 12); in the P-wave bar and the bouncing block the
   three differ by less than the error itself.  6 stays `boxMesh`'s default for
   its uniform (Kuhn) element shape, which the seed's 12-tet cubes share.
 * **Contact radius r = h.** The contact layer is a set of penalty springs
@@ -270,12 +272,15 @@ precision throughout, as Debian's YADE.
             text += "Fitted convergence order (element size): %.2f over all levels, %.2f over the finest three.\n\n" % (
                 res["order"], res["orderFine"])
     text += "## Set-ups (the scripts' docstrings)\n\n"
+    sys.path.insert(0, HERE)
+    import run_accuracy
     seen = set()
-    for name, res in P.items():
-        if res["doc"] in seen:
+    for name in P:
+        mod = run_accuracy.PROBLEMS[name][0]
+        if mod in seen:
             continue
-        seen.add(res["doc"])
-        text += "### %s\n\n```\n%s\n```\n\n" % (res["title"], res["doc"])
+        seen.add(mod)
+        text += "### `scripts/accuracy/%s.py`\n\n```\n%s\n```\n\n" % (mod.__name__, mod.__doc__.strip())
     path = os.path.join(ROOT, "doc", "accuracy.md")
     with open(path, "w") as f:
         f.write(text)
