@@ -40,7 +40,7 @@ bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
 
-# What accuracy costs in time (about 5 min on one thread): out/accuracy/, doc/accuracy.md
+# What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md
 accuracy: build
 	@mkdir -p out/accuracy
 	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/run_accuracy.py --out out/accuracy

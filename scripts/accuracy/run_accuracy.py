@@ -1,8 +1,8 @@
 """What accuracy costs in time: every problem with a known answer, every
 accuracy knob, error and wall time measured in the same run.
 
-    make accuracy          # full study (~10 min on one thread): out/accuracy/, doc/accuracy.md, doc/img/accuracy_*.png
-    make bench             # runs this with --short (about a minute): out/accuracy/ only
+    make accuracy          # full study (3-5 min on one thread): out/accuracy/, doc/accuracy.md, doc/img/accuracy_*.png
+    make bench             # runs this with --short (10-20 s): out/accuracy/ only
 
 Usage: run_accuracy.py [--short] [--out DIR] [--no-doc] [--only PROBLEM ...]
 Runs on one thread (the cost of threads is in doc/performance.md; threads never
@@ -57,7 +57,7 @@ def bestLevel(rows, tol):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--short", action="store_true", help="short form for make bench (about a minute)")
+    ap.add_argument("--short", action="store_true", help="short form for make bench (10-20 s)")
     ap.add_argument("--out", default="out/accuracy")
     ap.add_argument("--no-doc", action="store_true", help="do not regenerate doc/accuracy.md (full run only)")
     ap.add_argument("--only", nargs="*", help="run only these problems (%s)" % ", ".join(PROBLEMS))
