@@ -9,7 +9,7 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py bench clean
+.PHONY: deps build install demo test test-cpp test-py bench accuracy clean
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -39,6 +39,11 @@ test-py:
 bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
+
+# What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md
+accuracy: build
+	@mkdir -p out/accuracy
+	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/run_accuracy.py --out out/accuracy
 
 clean:
 	rm -rf $(BUILD) $(BUILD).cmake.log out

@@ -1,10 +1,13 @@
 // Viscoelastic normal spring-dashpot with a Coulomb-capped tangential spring
 // (Cundall-Strack).  Shared by every contact kind: node-wall, point-polygon,
 // edge-edge.  Why a tangential spring rather than regularised sliding: a block
-// on a slope below the friction angle must stay put, not creep.  Formulas and
-// sources: doc/formulation.md, "Contact law".
+// on a slope below the friction angle must stay put, not creep.  The
+// regularised law (no history) is kept as an option for the accuracy study
+// (World::frictionModel, doc/accuracy.md).  Formulas and sources:
+// doc/formulation.md, "Contact law".
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 
 namespace qdem {
@@ -15,6 +18,7 @@ struct ContactParams {
     double kt;        // tangential stiffness [N/m]
     double ct;        // tangential dashpot [N s/m] (damps stick oscillations)
     double friction;  // Coulomb coefficient; 0 = no tangential force at all
+    double vReg = 0;  // regularised law only: slip speed at which the full mu*Fn is reached [m/s]
 };
 
 struct ContactResult {
@@ -27,7 +31,10 @@ struct ContactResult {
 // n: unit normal towards the particle; overlap > 0; vRel: particle velocity
 // minus obstacle velocity at the contact point; shear: tangential spring
 // elongation carried from step to step (updated in place).
-template <bool Friction>
+// Regularized: instead of the spring, viscous-regularised Coulomb sliding
+// Ft = -mu Fn vt / max(|vt|, vReg): mu Fn against the slip above vReg, a
+// viscous drag below it, no history (shear is zeroed).
+template <bool Friction, bool Regularized = false>
 inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d& n, double overlap,
                                   const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
     ContactResult r;
@@ -38,7 +45,13 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
     r.dampPower = (fnSpring - fn) * vn;  // = -(damping force) * (overlap rate)
     r.force = fn * n;
     r.elastic = 0.5 * fnSpring * overlap;
-    if constexpr (Friction) {
+    if constexpr (Friction && Regularized) {
+        shear.setZero();
+        const Eigen::Vector3d vt = vRel - vn * n;
+        const Eigen::Vector3d ft = (-p.friction * fn / std::max(vt.norm(), p.vReg)) * vt;
+        r.force += ft;
+        r.slipWork = -ft.dot(vt) * dt;  // nothing is stored: all of it is dissipated
+    } else if constexpr (Friction) {
         // Carry the spring onto the current tangent plane, keeping its length,
         // so a rotating contact does not create or lose tangential force.
         const double len = shear.norm();

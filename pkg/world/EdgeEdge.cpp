@@ -26,6 +26,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
     constexpr int K = PieceContactState::kEE;
     const double sinFade2 = std::pow(std::sin(edgeFadeAngle), 2);
     const long stamp = iter;
+    const bool regularized = frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count) reduction(max : maxOv)
     {
@@ -112,12 +113,14 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                                           ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
-                    const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu};
+                    const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu,
+                                           frictionRegVelocity};
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                                   reach, vRel.dot(n), dt);
-                    const ContactResult r = (Friction && law.mu > 0)
-                                                ? contactForce<true>(cp, n, overlap - r0, vRel, dt, sh)
-                                                : contactForce<false>(cp, n, overlap - r0, vRel, dt, sh);
+                    const ContactResult r =
+                        !(Friction && law.mu > 0) ? contactForce<false>(cp, n, overlap - r0, vRel, dt, sh)
+                        : regularized             ? contactForce<true, true>(cp, n, overlap - r0, vRel, dt, sh)
+                                                  : contactForce<true>(cp, n, overlap - r0, vRel, dt, sh);
                     newOther[nNew] = e2;
                     newSide[nNew] = static_cast<int8_t>(sUse);
                     newShear[nNew] = sh;

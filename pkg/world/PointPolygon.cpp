@@ -28,6 +28,8 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     constexpr int K = PieceContactState::kPP;
     const long stamp = iter;
     long interiorTests = 0, interiorNear = 0;
+    const bool regions = pointPolygonRegions;
+    const bool regularized = frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
@@ -64,6 +66,9 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 if (h > reach) return;
                 const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
                 const double dist = (A - cp.point).norm();
+                // The seed's inside test: the projection on the plane must fall
+                // in the triangle or on its boundary (closest point at |h|).
+                if (!regions && dist - std::abs(h) > 1e-9 * reach) return;
                 // Behind the face (inside the other piece) can only be told for
                 // a face-interior closest point; an edge or corner closest point
                 // means the node is outside, in that feature's region.
@@ -204,13 +209,14 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                     usedOld[slot] = true;
                     sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                 }
-                const ContactParams cp{law.kn, law.cn, law.kt, law.ct, law.mu};
+                const ContactParams cp{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity};
                 const Vector3d vRel = at(vel, node) - vT;
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
                                               vRel.dot(n), dt);
-                const ContactResult r = (Friction && law.mu > 0)
-                                            ? contactForce<true>(cp, n, overlap - r0, vRel, dt, sh)
-                                            : contactForce<false>(cp, n, overlap - r0, vRel, dt, sh);
+                const ContactResult r =
+                    !(Friction && law.mu > 0) ? contactForce<false>(cp, n, overlap - r0, vRel, dt, sh)
+                    : regularized             ? contactForce<true, true>(cp, n, overlap - r0, vRel, dt, sh)
+                                              : contactForce<true>(cp, n, overlap - r0, vRel, dt, sh);
                 newKey[nNew] = kk;
                 newPiece[nNew] = pb;
                 newShear[nNew] = sh;

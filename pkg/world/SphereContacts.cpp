@@ -203,6 +203,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
     const long stamp = iter;
     const double cosFeature = std::cos(edgeFeatureAngle);
     const std::size_t nSurf = surfNodes.size();
+    const bool regularized = frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -326,15 +327,16 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                         usedOld[slot] = true;
                         sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     }
-                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu};
+                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity};
                     const Vector3d vRel = v + w.cross(arm) - vT;
                     // A contact found deep on a sphere already watched was missed,
                     // not made: it stores no energy it was not given (ContactDetail.hpp).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
                                                   vRel.dot(nrm), dt);
-                    const ContactResult r = (Friction && law.mu > 0)
-                                                ? contactForce<true>(prm, nrm, ov - r0, vRel, dt, sh)
-                                                : contactForce<false>(prm, nrm, ov - r0, vRel, dt, sh);
+                    const ContactResult r =
+                        !(Friction && law.mu > 0) ? contactForce<false>(prm, nrm, ov - r0, vRel, dt, sh)
+                        : regularized             ? contactForce<true, true>(prm, nrm, ov - r0, vRel, dt, sh)
+                                                  : contactForce<true>(prm, nrm, ov - r0, vRel, dt, sh);
                     newKey[nNew] = kk;
                     newRef[nNew] = r0;
                     newShear[nNew] = sh;

@@ -23,6 +23,8 @@
 
 namespace qdem {
 
+enum class FrictionModel : int { Spring = 0, Regularized = 1 };
+
 struct PieceInfo {
     int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
     int32_t tetBegin, tetEnd;    // [begin, end) in the global tet arrays
@@ -98,9 +100,19 @@ public:
     // quasi-static problems only; 0 (the default) keeps the dynamics exact.
     double localDamping = 0;
     bool frictionOn = true;   // user switch: tangential forces off
+    // Tangential law of every contact: Spring (Cundall-Strack spring with a
+    // Coulomb cap, the default) or Regularized (Ft = -mu Fn vt/max(|vt|, vReg),
+    // no history; it creeps at vReg tan(theta)/mu on a slope: doc/accuracy.md).
+    FrictionModel frictionModel = FrictionModel::Spring;
+    double frictionRegVelocity = 1e-3;  // vReg [m/s] of the regularised law
     // Piece-piece surface contacts (seed §3): which kinds, and how the broad
     // phase registers surface elements.
     bool pointPolygonOn = true;
+    // Point-polygon closest points in the edge and vertex regions of the
+    // triangles too (default).  False: the seed's inside test (§3.1) - a node
+    // counts only when its projection on the triangle's plane falls inside
+    // the triangle (or on its boundary).
+    bool pointPolygonRegions = true;
     bool edgeEdgeOn = true;
     BroadPhase broadPhase = BroadPhase::Triangles;
     // Edge-edge forces fade out as edges become parallel (the point-polygon

@@ -135,6 +135,7 @@ void World::obstaclePhase(double dt) {
     const int nth = omp_get_max_threads();
     obstacleReaction_.assign(static_cast<std::size_t>(nth) * nObs * 6, 0.0);
     const bool energyOn = trackEnergy;
+    const bool regularized = frictionModel == FrictionModel::Regularized;
     double eEl = 0, eDamp = 0, eSlip = 0, eBound = 0;
     const auto nSurf = static_cast<int32_t>(surfNodes.size());
 
@@ -176,14 +177,15 @@ void World::obstaclePhase(double dt) {
                 const double mu = o.friction >= 0 ? o.friction : m.frictionWall;
                 const double kt = kn * 2 * (1 - m.poisson) / (2 - m.poisson);  // Mindlin's ratio
                 ContactParams cp{kn, 2 * xi * std::sqrt(kn * mass[node]), kt, 2 * xi * std::sqrt(kt * mass[node]),
-                                 mu};
+                                 mu, frictionRegVelocity};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);
                 const Eigen::Vector3d vRel = v - vo;
-                const ContactResult r = (frictionOn && mu > 0)
-                                            ? contactForce<true>(cp, hit.normal, hit.overlap, vRel, dt, sh)
-                                            : contactForce<false>(cp, hit.normal, hit.overlap, vRel, dt, sh);
+                const ContactResult r =
+                    !(frictionOn && mu > 0) ? contactForce<false>(cp, hit.normal, hit.overlap, vRel, dt, sh)
+                    : regularized           ? contactForce<true, true>(cp, hit.normal, hit.overlap, vRel, dt, sh)
+                                            : contactForce<true>(cp, hit.normal, hit.overlap, vRel, dt, sh);
                 newBody[used] = o.bodyId;
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;

@@ -1,4 +1,6 @@
 // The QDEM world: pieces, obstacles, stepping, energies, NumPy views.
+#include <cmath>
+
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -172,6 +174,23 @@ void bindWorld(py::module_& m) {
         .def_property_readonly("verletRebuilds", &World::verletRebuilds)
         .def_readwrite("frictionOn", &World::frictionOn)
         .def_readwrite("pointPolygonOn", &World::pointPolygonOn)
+        .def_readwrite("pointPolygonRegions", &World::pointPolygonRegions,
+                       "Point-polygon contacts in the triangles' edge and vertex regions too (True, default); "
+                       "False: the seed's inside test (projection inside the triangle).")
+        .def_property(
+            "frictionModel", [](const World& w) { return static_cast<int>(w.frictionModel); },
+            [](World& w, int m) {
+                if (m < 0 || m > 1) throw InputError("frictionModel must be 0 (spring) or 1 (regularized)");
+                w.frictionModel = static_cast<FrictionModel>(m);
+            },
+            "0: Cundall-Strack spring with a Coulomb cap (default); 1: viscous-regularised Coulomb, no history.")
+        .def_property(
+            "frictionRegVelocity", [](const World& w) { return w.frictionRegVelocity; },
+            [](World& w, double v) {
+                if (!(v > 0) || !std::isfinite(v)) throw InputError("frictionRegVelocity must be positive and finite");
+                w.frictionRegVelocity = v;
+            },
+            "Slip speed [m/s] at which the regularised friction law reaches mu*Fn.")
         .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
         .def_readwrite("edgeFadeAngle", &World::edgeFadeAngle)
         .def_property(

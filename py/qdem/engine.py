@@ -23,6 +23,7 @@ from .world import defaultWorld
 _engines = {}
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
+FRICTION_MODELS = {"spring": 0, "regularized": 1}
 
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
@@ -60,6 +61,17 @@ class QdemEngine(PyRunner):
     sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
                              "larger = fewer proxy moves (each forces a collider run), more spheres read.",
                         lambda v: None if 0.01 <= v <= 10 else "must lie in [0.01, 10]")
+    pointPolygonRegions = Attr(True, "Point-polygon closest points in the edge and vertex regions of the "
+                                     "triangles too (default), so a node over a convex ridge or corner of "
+                                     "the other piece keeps its contact; False: the seed's inside test "
+                                     "(3.1: the projection must fall inside the triangle).")
+    frictionModel = Attr("spring", "Tangential contact law: 'spring' (Cundall-Strack spring with a Coulomb "
+                                   "cap: sticks below the friction angle, the default) or 'regularized' "
+                                   "(Ft = -mu Fn vt/max(|vt|, frictionRegVelocity), no history: creeps on "
+                                   "slopes at frictionRegVelocity tan(theta)/mu). doc/accuracy.md compares them.",
+                         lambda v: None if v in FRICTION_MODELS else "must be one of %s" % list(FRICTION_MODELS))
+    frictionRegVelocity = Attr(1e-3, "Slip speed [m/s] at which the 'regularized' friction law reaches mu*Fn.",
+                               lambda v: None if isinstance(v, (int, float)) and v > 0 else "must be positive")
     broadPhase = Attr("triangles", "How surface elements are registered in the cell list: 'triangles' "
                                    "(default), or the seed's Figure 6 cases 'A' (all tets), 'B' (surface "
                                    "tets), 'C' (surface tets, interior faces skipped).",
@@ -147,6 +159,9 @@ class QdemEngine(PyRunner):
         core.frictionOn = bool(self.friction)
         core.pointPolygonOn = bool(self.pointPolygon)
         core.edgeEdgeOn = bool(self.edgeEdge)
+        core.pointPolygonRegions = bool(self.pointPolygonRegions)
+        core.frictionModel = FRICTION_MODELS[self.frictionModel]
+        core.frictionRegVelocity = float(self.frictionRegVelocity)
         core.broadPhase = BROAD_PHASES[self.broadPhase]
         coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:

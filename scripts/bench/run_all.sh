@@ -31,3 +31,6 @@ echo "bench: 20,000 YADE spheres around one QDEM block: coupling cost, near and 
 yade -j 2 -n -x scripts/bench/bench_spheres.py --steps "${QDEM_BENCH_SPHERE_STEPS:-500}" --out out/bench \
   > out/bench/spheres.log 2>&1 || echo "bench: sphere coupling run failed, see out/bench/spheres.log"
 grep "^bench spheres" out/bench/spheres.log || true
+
+echo "bench: accuracy against cost, short form (make accuracy for the full study and doc/accuracy.md)"
+OMP_NUM_THREADS=1 /usr/bin/python3.11 scripts/accuracy/run_accuracy.py --short --out out/accuracy
