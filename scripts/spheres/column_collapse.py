@@ -90,6 +90,7 @@ def sample():
 print("column_collapse: %d spheres, block %d tets, dt %.3g s, friction %g" % (len(ids), block.tets.shape[0], O.dt,
                                                                               P.sphereFriction))
 start = time.time()
+O.timingEnabled = True  # per-engine cost, printed at the end
 O.run(int(P.settle / O.dt), True)
 O.bodies.erase(gate)
 tGate = O.time
@@ -120,5 +121,7 @@ ax[2].set(xlabel="t after gate [s]", ylabel="mm", title="block compression")
 fig.suptitle("granular column onto a QDEM block, sphere friction %g" % P.sphereFriction)
 fig.tight_layout()
 fig.savefig(out + "/collapse.png", dpi=100)
+for e in O.engines:
+    print("column_collapse: %-22s %7.3f ms/step" % (type(e).__name__, e.execTime * 1e-6 / max(O.iter, 1)))
 print("column_collapse: runout %.3f m, peak load %.3g N, peak compression %.3g mm, wall %.0f s -> %s"
       % (res["final_runout"], res["max_block_load"], 1e3 * res["max_compression"], wall, out))
