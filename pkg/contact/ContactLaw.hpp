@@ -21,6 +21,17 @@ struct ContactParams {
     double vReg = 0;  // regularised law only: slip speed at which the full mu*Fn is reached [m/s]
 };
 
+// The part of a particle pair's law that depends on the two materials only
+// (not on the masses): built by contact_detail::pairConst, tabulated per
+// material pair once per step.
+struct PairConst {
+    double kn;     // normal stiffness
+    double kt;     // tangential stiffness
+    double xi;     // damping ratio from the pair's restitution
+    double mu;     // friction coefficient
+    double reach;  // sum of the radii
+};
+
 struct ContactResult {
     Eigen::Vector3d force;   // on the particle side (the obstacle gets minus this)
     double elastic = 0;      // energy stored in normal and tangential springs [J]

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace qdem {
 
@@ -61,6 +62,82 @@ inline TriPoint closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3
     const double v = vb * denom, w = vc * denom;
     r.point = a + ab * v + ac * w, r.w[0] = 1 - v - w, r.w[1] = v, r.w[2] = w, r.feature = TriFeature::Face;
     return r;
+}
+
+// closestOnTriangle for kTriLanes triangles and one point at once: the same
+// formulas evaluated for every region in every lane, the region picked in the
+// same order, as straight-line lane code the compiler turns into SIMD (no
+// unpredictable branches).  Equal to closestOnTriangle to rounding.  Also
+// returns each triangle's plane height h = (p - a).n and the squared
+// distance to the closest point.
+constexpr int kTriLanes = 8;
+
+struct TriLanes {
+    alignas(64) double a[3][kTriLanes], b[3][kTriLanes], c[3][kTriLanes], n[3][kTriLanes];
+};
+
+struct TriLanesOut {
+    alignas(64) double point[3][kTriLanes], w[3][kTriLanes], h[kTriLanes], dist2[kTriLanes];
+    alignas(64) int32_t feature[kTriLanes];
+};
+
+inline void closestOnTriangles(const double* p, const TriLanes& in, TriLanesOut& out) {
+    const double px = p[0], py = p[1], pz = p[2];
+#pragma omp simd
+    for (int l = 0; l < kTriLanes; ++l) {
+        const double ax = in.a[0][l], ay = in.a[1][l], az = in.a[2][l];
+        const double bx = in.b[0][l], by = in.b[1][l], bz = in.b[2][l];
+        const double cx = in.c[0][l], cy = in.c[1][l], cz = in.c[2][l];
+        const double abx = bx - ax, aby = by - ay, abz = bz - az;
+        const double acx = cx - ax, acy = cy - ay, acz = cz - az;
+        const double apx = px - ax, apy = py - ay, apz = pz - az;
+        const double bpx = px - bx, bpy = py - by, bpz = pz - bz;
+        const double cpx = px - cx, cpy = py - cy, cpz = pz - cz;
+        const double d1 = abx * apx + aby * apy + abz * apz, d2 = acx * apx + acy * apy + acz * apz;
+        const double d3 = abx * bpx + aby * bpy + abz * bpz, d4 = acx * bpx + acy * bpy + acz * bpz;
+        const double d5 = abx * cpx + aby * cpy + abz * cpz, d6 = acx * cpx + acy * cpy + acz * cpz;
+        const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+        // Face interior (the default), then the regions in the reverse of
+        // closestOnTriangle's order, so that its first match wins.
+        const double denom = 1.0 / (va + vb + vc);
+        double v = vb * denom, w = vc * denom;
+        double qx = ax + abx * v + acx * w, qy = ay + aby * v + acy * w, qz = az + abz * v + acz * w;
+        double w0 = 1 - v - w, w1 = v, w2 = w;
+        int32_t f = 0;
+        const double e1 = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {  // edge 1 (b-c)
+            qx = bx + e1 * (cx - bx), qy = by + e1 * (cy - by), qz = bz + e1 * (cz - bz);
+            w0 = 0, w1 = 1 - e1, w2 = e1, f = 2;
+        }
+        const double e2 = d2 / (d2 - d6);
+        if (vb <= 0 && d2 >= 0 && d6 <= 0) {  // edge 2 (a-c)
+            qx = ax + e2 * acx, qy = ay + e2 * acy, qz = az + e2 * acz;
+            w0 = 1 - e2, w1 = 0, w2 = e2, f = 3;
+        }
+        if (d6 >= 0 && d5 <= d6) {  // corner c
+            qx = cx, qy = cy, qz = cz;
+            w0 = 0, w1 = 0, w2 = 1, f = 6;
+        }
+        const double e0 = d1 / (d1 - d3);
+        if (vc <= 0 && d1 >= 0 && d3 <= 0) {  // edge 0 (a-b)
+            qx = ax + e0 * abx, qy = ay + e0 * aby, qz = az + e0 * abz;
+            w0 = 1 - e0, w1 = e0, w2 = 0, f = 1;
+        }
+        if (d3 >= 0 && d4 <= d3) {  // corner b
+            qx = bx, qy = by, qz = bz;
+            w0 = 0, w1 = 1, w2 = 0, f = 5;
+        }
+        if (d1 <= 0 && d2 <= 0) {  // corner a
+            qx = ax, qy = ay, qz = az;
+            w0 = 1, w1 = 0, w2 = 0, f = 4;
+        }
+        out.point[0][l] = qx, out.point[1][l] = qy, out.point[2][l] = qz;
+        out.w[0][l] = w0, out.w[1][l] = w1, out.w[2][l] = w2;
+        out.feature[l] = f;
+        out.h[l] = apx * in.n[0][l] + apy * in.n[1][l] + apz * in.n[2][l];
+        const double dx = px - qx, dy = py - qy, dz = pz - qz;
+        out.dist2[l] = dx * dx + dy * dy + dz * dz;
+    }
 }
 
 struct SegPoints {

@@ -6,6 +6,7 @@
 
 #include "../core/Column.hpp"
 #include "BoxGrid.hpp"
+#include "ContactLaw.hpp"
 #include "CellGrid.hpp"
 #include "SurfaceIndex.hpp"
 
@@ -41,8 +42,11 @@ struct PieceContactState {
     // surface node has moved more than skin/2 since then (two nodes closing
     // in on each other then still cannot have crossed the skin).
     static constexpr int kList = 48;
-    std::vector<int32_t> list;       // kList per surface node
+    std::vector<int32_t> list;       // kList per surface node: built here, then packed into listFlat
     std::vector<int32_t> listCount;  // per surface node; -1 = overflow, query the cells instead
+    // The lists packed (CSR): node i's triangles are listFlat[listStart[i] ..
+    // listStart[i] + listCount[i]), so the step reads them as one stream.
+    std::vector<int32_t> listStart, listFlat;
     std::vector<double> listPos;     // surface node positions at the rebuild (3 each)
     std::vector<uint8_t> listActive; // pieces active at the rebuild
     double listSkin = 0;
@@ -70,6 +74,11 @@ struct PieceContactState {
         return false;
     }
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
+    // Per step: the law's material constants of each neighbour pair (one per
+    // nbrs entry) and each piece's particle radius, so the narrow phase takes
+    // no log or root per contact.
+    std::vector<PairConst> nbrLaw;
+    std::vector<double> pieceRadius;
 
     // Point-polygon history: kPP slots per surface node.
     static constexpr int kPP = 6;

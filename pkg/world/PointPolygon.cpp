@@ -30,11 +30,23 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     long interiorTests = 0, interiorNear = 0;
     const bool regions = pointPolygonRegions;
     const bool regularized = frictionModel == FrictionModel::Regularized;
+    const double cosFeature = std::cos(edgeFeatureAngle);
+    const double* radius = pc_.pieceRadius.data();
+    const uint8_t* active = pc_.pieceActive.data();
+    const int32_t* triPiece = S.triPiece.data();
+    const int32_t* listStart = pc_.listStart.data();
+    const int32_t* listFlat = pc_.listFlat.data();
+    const int32_t* listCount = pc_.listCount.data();
+    const int32_t* tri = S.tri.data();
+    const double* normal = pc_.triNormal.data();
+    const double* X = pos.data();
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
         Candidate cand[kCandidates];
+        TriLanes lanes;
+        TriLanesOut near;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = surfNodes[s];
@@ -47,11 +59,21 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
             if (!watched)  // history is only valid from the previous step
                 for (int k = 0; k < K; ++k) key[k] = -1;
             pc_.ppStamp[s] = stamp;
-            if (!pc_.pieceActive[pa]) {
-                for (int k = 0; k < K; ++k) key[k] = -1;
+            const bool useList = pc_.listValid && listCount[s] >= 0;
+            if (!active[pa] || (useList && listCount[s] == 0)) {
+                // Nothing can touch this node: its slots are empty (slots
+                // after the first empty one are empty too).
+                if (key[0] >= 0)
+                    for (int k = 0; k < K; ++k) key[k] = -1;
                 continue;
             }
             const Material& ma = materials[pieces[pa].material];
+            // The law's constants of this node's piece with piece pb.
+            auto lawOf = [&](int32_t pb) -> PairConst {
+                for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q)
+                    if (pc_.nbrs[q] == pb) return pc_.nbrLaw[q];
+                return pairConst(ma, materials[pieces[pb].material]);  // listed before the pieces parted
+            };
             const Vector3d A = at(pos, node);
             int nc = 0;
             bool anyBehind = false;
@@ -77,18 +99,49 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 anyBehind = anyBehind || behind;
                 cand[nc++] = Candidate{t, cp, dist, behind};
             };
-            const bool useList = pc_.listValid && pc_.listCount[s] >= 0;
             if (useList) {
-                const int32_t* L = &pc_.list[static_cast<std::size_t>(PieceContactState::kList) * s];
-                for (int k = 0; k < pc_.listCount[s]; ++k) {
-                    const int32_t t = L[k];
-                    const int32_t pb = S.triPiece[t];
-                    if (pc_.pieceActive[pb]) consider(t, ma.radius + materials[pieces[pb].material].radius);
+                // The same tests as consider(), the closest points of
+                // kTriLanes listed triangles at a time (SIMD lane code).
+                const int32_t* L = listFlat + listStart[s];
+                const int32_t n = listCount[s];
+                for (int32_t k0 = 0; k0 < n && nc < kCandidates; k0 += kTriLanes) {
+                    const int cnt = std::min<int32_t>(kTriLanes, n - k0);
+                    for (int l = 0; l < kTriLanes; ++l) {
+                        const int32_t t = L[k0 + (l < cnt ? l : cnt - 1)];
+                        const int32_t* c = tri + 3 * t;
+                        for (int d = 0; d < 3; ++d) {
+                            lanes.a[d][l] = X[3 * c[0] + d];
+                            lanes.b[d][l] = X[3 * c[1] + d];
+                            lanes.c[d][l] = X[3 * c[2] + d];
+                            lanes.n[d][l] = normal[3 * t + d];
+                        }
+                    }
+                    closestOnTriangles(A.data(), lanes, near);
+                    for (int l = 0; l < cnt && nc < kCandidates; ++l) {
+                        const int32_t t = L[k0 + l];
+                        const int32_t pb = triPiece[t];
+                        if (!active[pb]) continue;
+                        const double reach = ma.radius + radius[pb];
+                        const double h = near.h[l];
+                        if (h > reach) continue;
+                        const double dist = std::sqrt(near.dist2[l]);
+                        if (!regions && dist - std::abs(h) > 1e-9 * reach) continue;  // seed's inside test
+                        const bool behind = h < 0 && near.feature[l] == static_cast<int32_t>(TriFeature::Face);
+                        if (!behind && dist >= reach) continue;
+                        anyBehind = anyBehind || behind;
+                        Candidate& cd = cand[nc++];
+                        cd.tri = t;
+                        cd.cp.point = Vector3d(near.point[0][l], near.point[1][l], near.point[2][l]);
+                        for (int k = 0; k < 3; ++k) cd.cp.w[k] = near.w[k][l];
+                        cd.cp.feature = static_cast<TriFeature>(near.feature[l]);
+                        cd.dist = dist;
+                        cd.behind = behind;
+                    }
                 }
             }
             for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1] && !useList; ++q) {
                 const int32_t pb = pc_.nbrs[q];
-                const double reach = ma.radius + materials[pieces[pb].material].radius;
+                const double reach = ma.radius + radius[pb];
                 {
                     const Vector3d lo = A.array() - reach, hi = A.array() + reach;
                     bool overlap = true;
@@ -156,9 +209,9 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                         }
                     };
                     if (useList) {
-                        const int32_t* L = &pc_.list[static_cast<std::size_t>(PieceContactState::kList) * s];
-                        for (int k = 0; k < pc_.listCount[s]; ++k)
-                            if (S.triPiece[L[k]] == pb) witness(L[k]);
+                        const int32_t* L = listFlat + listStart[s];
+                        for (int k = 0; k < listCount[s]; ++k)
+                            if (triPiece[L[k]] == pb) witness(L[k]);
                     } else {
                         pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(),
                                                   [&](int32_t local) { witness(pc_.items[i0 + local]); });
@@ -166,7 +219,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 }
 
             const double eps = 1e-12 * ma.radius;
-            selectTouches(A, cand, nc, keep, S.triPiece.data(), eps, std::cos(edgeFeatureAngle));
+            selectTouches(A, cand, nc, keep, triPiece, eps, cosFeature);
 
             int32_t newKey[K], newPiece[K];
             Vector3d newShear[K];
@@ -180,15 +233,14 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 if (!keep[i] || nNew == K) continue;
 
                 const int32_t* tn = &S.tri[3 * c.tri];
-                const int32_t pb = S.triPiece[c.tri];
-                const Material& mb = materials[pieces[pb].material];
+                const int32_t pb = triPiece[c.tri];
                 double mT = 0;
                 Vector3d vT = Vector3d::Zero();
                 for (int k = 0; k < 3; ++k) {
                     mT += c.cp.w[k] * mass[tn[k]];
                     vT += c.cp.w[k] * at(vel, tn[k]);
                 }
-                const PairLaw law = pairLaw(ma, mb, mass[node], mT);
+                const PairLaw law = pairLaw(lawOf(pb), mass[node], mT);
                 const Vector3d nT(pc_.triNormal[3 * c.tri], pc_.triNormal[3 * c.tri + 1], pc_.triNormal[3 * c.tri + 2]);
                 Vector3d n;
                 double overlap;

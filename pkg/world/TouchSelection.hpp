@@ -19,6 +19,8 @@ namespace qdem::contact_detail {
 inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
                           double eps, double cosFeature) {
     const double tol = 1e-9;
+    int32_t piece[kCandidates];  // each candidate's piece, looked up once
+    for (int i = 0; i < nc; ++i) piece[i] = triPiece[cand[i].tri];
     for (int i = 0; i < nc; ++i) {  // snap rounding-level weights
         TriPoint& cp = cand[i].cp;
         int nz = 0, last = 0;
@@ -36,9 +38,9 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
     for (int i = 0; i < nc; ++i) {
         const Candidate& c = cand[i];
         if (!keep[i] || c.cp.feature == TriFeature::Face) continue;
-        const int32_t pb = triPiece[c.tri];
+        const int32_t pb = piece[i];
         for (int j = 0; j < nc && keep[i]; ++j) {
-            if (j == i || !keep[j] || triPiece[cand[j].tri] != pb) continue;
+            if (j == i || !keep[j] || piece[j] != pb) continue;
             const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
             // A face point at (practically) the same distance is the same
             // touch seen from the face: the face keeps it.
@@ -58,7 +60,7 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
     for (int i = 0; i < nc; ++i) {
         if (!keep[i]) continue;
         for (int j = i + 1; j < nc && keep[i]; ++j) {
-            if (!keep[j] || triPiece[cand[j].tri] != triPiece[cand[i].tri]) continue;
+            if (!keep[j] || piece[j] != piece[i]) continue;
             if (cn[i].dot(cn[j]) < cosFeature) continue;
             const double di = cand[i].behind ? -cand[i].dist : cand[i].dist;
             const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;

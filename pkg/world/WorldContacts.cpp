@@ -82,6 +82,15 @@ void World::pieceContactPhase(double dt) {
     for (std::size_t i = 0; i < np; ++i) pc_.pieceActive[i] = pc_.nbrStart[i + 1] > pc_.nbrStart[i];
     const bool any = !pc_.pairs.empty();
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
+    // The contact law's material constants of each pair of pieces that can
+    // touch (a log and roots each): once per step, not once per contact.
+    pc_.nbrLaw.resize(pc_.nbrs.size());
+    pc_.pieceRadius.resize(np);
+    for (std::size_t i = 0; i < np; ++i) {
+        pc_.pieceRadius[i] = materials[pieces[i].material].radius;
+        for (int32_t q = pc_.nbrStart[i]; q < pc_.nbrStart[i + 1]; ++q)
+            pc_.nbrLaw[q] = pairConst(materials[pieces[i].material], materials[pieces[pc_.nbrs[q]].material]);
+    }
     beginContactForces();
 
     double rMax = 0;
@@ -238,6 +247,15 @@ void World::pieceContactPhase(double dt) {
             }
             pc_.listCount[i] = count;
         }
+        // Pack the lists (the step streams through them node after node).
+        pc_.listStart.resize(static_cast<std::size_t>(ns) + 1);
+        pc_.listStart[0] = 0;
+        for (int32_t i = 0; i < ns; ++i) pc_.listStart[i + 1] = pc_.listStart[i] + std::max(0, pc_.listCount[i]);
+        pc_.listFlat.resize(pc_.listStart[ns]);
+#pragma omp parallel for schedule(static)
+        for (int32_t i = 0; i < ns; ++i)
+            std::copy_n(&pc_.list[static_cast<std::size_t>(KL) * i], std::max(0, pc_.listCount[i]),
+                        &pc_.listFlat[pc_.listStart[i]]);
         pc_.listActive.assign(pc_.pieceActive.begin(), pc_.pieceActive.end());
         pc_.listSkin = skin;
         pc_.listTris = S.nTris();
