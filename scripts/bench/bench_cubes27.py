@@ -52,7 +52,7 @@ def measure(w, steps, case, threads):
     for _ in range(steps):
         w.core.step(dt, 1)
         for k, v in w.core.timings.items():
-            acc[k] += v
+            acc[k] = acc.get(k, 0.0) + v
     wall = (time.perf_counter() - t0) / steps
     ms = {k: 1e3 * v / steps for k, v in acc.items()}
     contact = ms["broadPhase"] + ms["pointPolygon"] + ms["edgeEdge"]
