@@ -77,24 +77,34 @@ print("shogi: %s, %d pieces, %d tets, scale %g, dt %.3g s (stable %.3g, %s), %d 
       % (P.scene, len(pieces), qdem.defaultWorld().core.nTets, scale, O.dt, limit["combined"], limit["limitedBy"],
          nSteps))
 start = time.time()
+
+
+def results():
+    """Everything measured so far (written after every frame: a long run that
+    is stopped early keeps what it found)."""
+    wall = time.time() - start
+    result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
+              "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets, "simulated_s": O.time,
+              "wall_s": wall, "wall_s_per_simulated_s": wall / O.time, "firstHit_s": hits, "fallen_s": fallen,
+              "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
+    hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
+    if len(hit) >= 3:
+        slope = np.polyfit([t for _, t in hit[1:]], [x for x, _ in hit[1:]], 1)[0]
+        result["front_speed_m_per_s"] = float(slope)
+    fell = [(x, t) for x, t in zip(result["x0_m"], fallen) if t is not None]
+    if len(fell) >= 3:
+        result["fall_front_speed_m_per_s"] = float(np.polyfit([t for _, t in fell], [x for x, _ in fell], 1)[0])
+    with open(out + "/hits.json.tmp", "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(out + "/hits.json.tmp", out + "/hits.json")  # never a half-written file
+    return result, hit, wall
+
+
 for k in range(P.frames):
     O.run(nSteps // P.frames, True)
     frame()
-wall = time.time() - start
-
-xs = [p.centroid()[0] for p in pieces]
-result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
-          "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets, "simulated_s": O.time,
-          "wall_s": wall, "wall_s_per_simulated_s": wall / O.time, "firstHit_s": hits, "fallen_s": fallen,
-          "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
-hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
-if len(hit) >= 3:
-    slope = np.polyfit([t for _, t in hit[1:]], [x for x, _ in hit[1:]], 1)[0]
-    result["front_speed_m_per_s"] = float(slope)
-fell = [(x, t) for x, t in zip(result["x0_m"], fallen) if t is not None]
-if len(fell) >= 3:
-    result["fall_front_speed_m_per_s"] = float(np.polyfit([t for _, t in fell], [x for x, _ in fell], 1)[0])
-json.dump(result, open(out + "/hits.json", "w"), indent=1)
+    results()
+result, hit, wall = results()
 
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")

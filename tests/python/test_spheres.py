@@ -162,10 +162,10 @@ def test_settled_packing_stays_on_the_block_and_compresses_it_by_its_weight(scen
     sm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.3, density=2500))
     sp = pack.SpherePack()
     zb = H + 2 * mat.radius
-    sp.makeCloud((-L / 2 + 0.001, -L / 2 + 0.001, zb + 0.002), (L / 2 - 0.001, L / 2 - 0.001, zb + 0.06),
+    sp.makeCloud((-L / 2 + 0.001, -L / 2 + 0.001, zb + 0.002), (L / 2 - 0.001, L / 2 - 0.001, zb + 0.065),
                  rMean=0.0025, rRelFuzz=0.2, seed=3)
     ids = sp.toSimulation(material=sm)
-    assert len(ids) >= 1500
+    assert len(ids) >= 2000
     O.engines = _engines(damping=0.4, checkPeriod=100)
     O.engines[3].damping = 0.3  # quasi-static: local damping on the block too
     O.dt = min(0.5 * utils.PWaveTimeStep(), 0.5 * O.engines[3].stableDt()["combined"])
