@@ -68,6 +68,32 @@ def main():
                                  "zero_valued_ms": msPerStep(apart, n),
                                  "note": "zero_valued: same 27 cubes far apart (no piece can reach another)"}
     print("27 cubes apart: %.2f ms" % res["contactsOutOfReach"]["zero_valued_ms"])
+    # YADE spheres (what QdemEngine hands over from the scene): 2,025 spheres
+    # resting on the top of the stack, the same spheres listed but 1 m above it,
+    # and none at all (a scene without spheres: the phase returns at once).
+    import numpy as np
+    top = base.core.pos[:, 2].max()
+    R = 0.05
+    g = np.linspace(-5.5, 5.5, 45)
+    xy = np.array([(x, y) for x in g for y in g])
+    k = len(xy)
+    npc = base.core.nPieces
+    props = [np.full(k, v) for v in (R, 1e8, 0.3, 0.5, -1.0, 1.0)]
+    pairs = (np.arange(0, k * npc + 1, npc, dtype=np.int32), np.tile(np.arange(npc, dtype=np.int32), k))
+
+    def spheresAt(z):
+        base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *pairs)
+        pos = np.column_stack([xy, np.full(k, z)])
+        base.core.setSphereStates(pos, np.zeros((k, 3)), np.zeros((k, 3)))
+        return msPerStep(base, n)
+
+    on = spheresAt(top + 0.04 + R - 0.002)
+    zero = spheresAt(top + 1.0)
+    base.core.setSpheres(np.zeros(0, np.int32), *[np.zeros(0)] * 6, np.zeros(1, np.int32), np.zeros(0, np.int32))
+    off = msPerStep(base, n)
+    res["yadeSpheres"] = {"on_ms": on, "off_ms": off, "zero_valued_ms": zero,
+                          "note": "2,025 spheres on the stack's top / none / listed but 1 m above it"}
+    print("effect yadeSpheres   on %.2f ms, off %.2f ms, zero-valued %.2f ms" % (on, off, zero), flush=True)
     json.dump({"tets": base.core.nTets, "threads": 2, "steps": n, "effects": res},
               open(os.path.join(a.out, "effects.json"), "w"), indent=2)
 
