@@ -123,7 +123,7 @@ ax[1].plot(t, series["load"])
 ax[1].set(xlabel="t after gate [s]", ylabel="|F| sum [N]", title="spheres on the block")
 after = t >= 0
 ax[2].plot(t[after], 1e3 * np.array(series["compression"])[after])
-ax[2].set(xlabel="t after gate [s]", ylabel="mm", title="block compression (own weight excluded)")
+ax[2].set(xlabel="t after gate [s]", ylabel="mm (own weight excluded)", title="block shortening")
 fig.suptitle("granular column onto a QDEM block, sphere friction %g" % P.sphereFriction)
 fig.tight_layout()
 fig.savefig(out + "/collapse.png", dpi=100)

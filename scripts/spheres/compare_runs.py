@@ -25,10 +25,11 @@ for r in runs:
     lab = "mu = %g" % r["sphereFriction"]
     ax[0].plot(t, s["runout"], label=lab)
     ax[1].plot(t, s["load"], label=lab)
-    ax[2].plot(t, 1e3 * np.array(s["compression"]), label=lab)
+    after = t >= 0
+    ax[2].plot(t[after], 1e3 * np.array(s["compression"])[after], label=lab)
 ax[0].set(xlabel="t after gate [s]", ylabel="front x [m]", title="runout")
 ax[1].set(xlabel="t after gate [s]", ylabel="N", title="load on the block")
-ax[2].set(xlabel="t after gate [s]", ylabel="mm", title="block compression")
+ax[2].set(xlabel="t after gate [s]", ylabel="mm (own weight excluded)", title="block shortening")
 ax[0].legend()
 fig.tight_layout()
 out = os.path.join(root, "friction_sweep.png")
