@@ -15,7 +15,7 @@ os.makedirs(OUT, exist_ok=True)
 duration = float(sys.argv[1]) if len(sys.argv) > 1 else 4.0
 
 # A rubber-like block, 0.4 m wide, tilted so that it lands on an edge.
-mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=1000, frictionWall=0.5, radius=0.01,
+mat = qdem.QdemMat(young=5e6, poisson=0.3, density=1000, viscosity=1000, frictionWall=0.5, radius=0.01,
                    restitution=0.5)
 block = qdem.addPiece(qdem.boxMesh((0.4, 0.4, 0.4), (8, 8, 8), tetsPerCell=6), mat, pos=(0, 0, 0.6),
                       ori=((1, 1, 0), 0.4))
