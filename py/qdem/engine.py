@@ -108,6 +108,12 @@ class QdemEngine(PyRunner):
             self._spheres.listAll(O)  # any sphere may come near: bound them all
         return self.world.core.stableDt()
 
+    def proxyIds(self):
+        """Ids of the proxy bodies (one non-dynamic wire Tetra per piece) through which
+        YADE's collider finds the spheres near each piece; skip them in loops over
+        O.bodies that expect only your own bodies."""
+        return list(self._spheres.proxies) if self._spheres is not None else []
+
     def bodiesChanged(self):
         """Call after erasing bodies and appending others in the same step (YADE may
         reuse the ids): the engine scans O.bodies again at its next step."""

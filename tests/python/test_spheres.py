@@ -206,6 +206,9 @@ def test_only_near_spheres_are_listed_and_an_erased_one_lets_go(scene):
     O.run(int(0.4 / O.dt), True)
     assert qe.world.core.nSpheres == 1
     assert qe.world.core.contactCounts["sphere"] >= 1
+    proxies = qe.proxyIds()
+    assert len(proxies) == 1 and type(O.bodies[proxies[0]].shape).__name__ == "Tetra"
+    assert not O.bodies[proxies[0]].dynamic
     farWeight = sum(O.bodies[i].state.mass for i in far) * 9.81  # they load the floor too
     load = (block.totalMass + O.bodies[onTop].state.mass) * 9.81 + farWeight
     assert O.forces.f(floor)[2] == pytest.approx(-load, rel=0.01)
