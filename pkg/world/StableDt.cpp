@@ -131,25 +131,13 @@ static Mat12 currentStiffness(const Mat3& B, const Mat3& F, const Mat3& S, doubl
 void World::checkCurrentDt(double dt) const {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
     stableDt();  // fills the reference frequencies
-    bool rigid = false;
-    double stiffestObstacle = 0;
-    for (const auto& o : obstacles) {
-        if (o.young <= 0) rigid = true;
-        stiffestObstacle = std::max(stiffestObstacle, o.young);
-    }
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
         const double lam = m.lambda(), mu = m.mu();
         const double beta = viscosityOn ? m.beta() : 0.0;
         double wc = 0, xic = 0;
-        if (!obstacles.empty() || pieces.size() > 1) {  // as in stableDt()
-            const double kn = (rigid || pieces.size() > 1)
-                                  ? 2 * m.young * m.radius
-                                  : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
-            wc = std::sqrt(kn / p.minSurfaceNodeMass);
-            xic = dampingRatioFromRestitution(m.restitution);
-        }
+        contactMode(i, wc, xic);  // as in stableDt()
         auto limitAt = [&](double we) {
             const double w = std::sqrt(we * we + wc * wc);
             const double c = beta * we * we + 2 * xic * wc;
@@ -198,18 +186,39 @@ void World::checkCurrentDt(double dt) const {
     }
 }
 
+// Stiffest contact spring on the lightest surface node of piece i: its
+// angular frequency wc and damping ratio xic (0, 0 when nothing can touch it).
+void World::contactMode(std::size_t i, double& wc, double& xic) const {
+    const PieceInfo& p = pieces[i];
+    const Material& m = materials[p.material];
+    wc = 0, xic = 0;
+    if (!obstacles.empty() || pieces.size() > 1) {
+        double stiffestObstacle = 0;  // Young of the stiffest obstacle; <= 0 means rigid
+        bool rigid = false;
+        for (const auto& o : obstacles) {
+            if (o.young <= 0) rigid = true;
+            stiffestObstacle = std::max(stiffestObstacle, o.young);
+        }
+        // Piece-piece springs are at most 2 E r too (the rigid-wall value).
+        const double kn = (rigid || pieces.size() > 1)
+                              ? 2 * m.young * m.radius
+                              : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
+        wc = std::sqrt(kn / p.minSurfaceNodeMass);
+        xic = dampingRatioFromRestitution(m.restitution);
+    }
+    if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {
+        // YADE spheres near the piece: their springs on its lightest node.
+        const double ws = std::sqrt(spheres.pieceKnMax[i] / p.minSurfaceNodeMass);
+        if (ws > wc) wc = ws, xic = dampingRatioFromRestitution(m.restitution);
+    }
+}
+
 StableDt World::stableDt() const {
     const double inf = std::numeric_limits<double>::infinity();
     StableDt r{inf, inf, inf, inf, "none"};
     if (omegaCache_.size() != pieces.size()) {
         omegaCache_.resize(pieces.size());
         for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
-    }
-    double stiffestObstacle = 0;  // Young of the stiffest obstacle; <= 0 means rigid
-    bool rigid = false;
-    for (const auto& o : obstacles) {
-        if (o.young <= 0) rigid = true;
-        stiffestObstacle = std::max(stiffestObstacle, o.young);
     }
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         const PieceInfo& p = pieces[i];
@@ -219,24 +228,8 @@ StableDt World::stableDt() const {
         r.elastic = std::min(r.elastic, leapfrogLimit(we, 0.0));
         r.viscous = std::min(r.viscous, leapfrogLimit(we, 0.5 * beta * we));
         double wc = 0, xic = 0;
-        if (!obstacles.empty() || pieces.size() > 1) {
-            // Piece-piece springs are at most 2 E r too (the rigid-wall value).
-            const double kn = (rigid || pieces.size() > 1)
-                                  ? 2 * m.young * m.radius
-                                  : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
-            wc = std::sqrt(kn / p.minSurfaceNodeMass);
-            xic = dampingRatioFromRestitution(m.restitution);
-            r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
-        }
-        if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {
-            // YADE spheres near the piece: their springs on its lightest node.
-            const double ws = std::sqrt(spheres.pieceKnMax[i] / p.minSurfaceNodeMass);
-            if (ws > wc) {
-                wc = ws;
-                xic = dampingRatioFromRestitution(m.restitution);
-                r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
-            }
-        }
+        contactMode(i, wc, xic);
+        if (wc > 0) r.contact = std::min(r.contact, leapfrogLimit(wc, xic));
         // Element and contact springs on the same node: frequencies add in
         // quadrature, damping rates (c/m) add.
         const double w = std::sqrt(we * we + wc * wc);

@@ -172,6 +172,7 @@ private:
     template <bool Friction>
     void edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv);
     double elementOmegaMax(const PieceInfo& p) const;
+    void contactMode(std::size_t piece, double& wc, double& xic) const;
 
     ThreadLayout layout_;
     // Contact history: kSlots (obstacle body id, tangential spring) per surface node.
