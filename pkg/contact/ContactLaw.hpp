@@ -96,4 +96,14 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
     return r;
 }
 
+// The law as every contact kind calls it: no tangential force at all unless
+// friction is on (the caller's switch and a positive coefficient), then the
+// tangential spring or, when chosen, the regularised law.
+inline ContactResult lawForce(bool friction, bool regularized, const ContactParams& p, const Eigen::Vector3d& n,
+                              double overlap, const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
+    if (!friction) return contactForce<false>(p, n, overlap, vRel, dt, shear);
+    return regularized ? contactForce<true, true>(p, n, overlap, vRel, dt, shear)
+                       : contactForce<true>(p, n, overlap, vRel, dt, shear);
+}
+
 }  // namespace qdem

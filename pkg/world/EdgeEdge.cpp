@@ -118,9 +118,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                                   reach, vRel.dot(n), dt);
                     const ContactResult r =
-                        !(Friction && law.mu > 0) ? contactForce<false>(cp, n, overlap - r0, vRel, dt, sh)
-                        : regularized             ? contactForce<true, true>(cp, n, overlap - r0, vRel, dt, sh)
-                                                  : contactForce<true>(cp, n, overlap - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
                     newOther[nNew] = e2;
                     newSide[nNew] = static_cast<int8_t>(sUse);
                     newShear[nNew] = sh;

@@ -266,9 +266,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
                                               vRel.dot(n), dt);
                 const ContactResult r =
-                    !(Friction && law.mu > 0) ? contactForce<false>(cp, n, overlap - r0, vRel, dt, sh)
-                    : regularized             ? contactForce<true, true>(cp, n, overlap - r0, vRel, dt, sh)
-                                              : contactForce<true>(cp, n, overlap - r0, vRel, dt, sh);
+                    lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
                 newKey[nNew] = kk;
                 newPiece[nNew] = pb;
                 newShear[nNew] = sh;

@@ -334,9 +334,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
                                                   vRel.dot(nrm), dt);
                     const ContactResult r =
-                        !(Friction && law.mu > 0) ? contactForce<false>(prm, nrm, ov - r0, vRel, dt, sh)
-                        : regularized             ? contactForce<true, true>(prm, nrm, ov - r0, vRel, dt, sh)
-                                                  : contactForce<true>(prm, nrm, ov - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh);
                     newKey[nNew] = kk;
                     newRef[nNew] = r0;
                     newShear[nNew] = sh;

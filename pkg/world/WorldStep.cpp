@@ -183,9 +183,7 @@ void World::obstaclePhase(double dt) {
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
-                    !(frictionOn && mu > 0) ? contactForce<false>(cp, hit.normal, hit.overlap, vRel, dt, sh)
-                    : regularized           ? contactForce<true, true>(cp, hit.normal, hit.overlap, vRel, dt, sh)
-                                            : contactForce<true>(cp, hit.normal, hit.overlap, vRel, dt, sh);
+                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
                 newBody[used] = o.bodyId;
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;
