@@ -20,7 +20,7 @@ using namespace contact_detail;
 // edge; each pair is handled by its lower edge id.
 
 template <bool Friction>
-void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv) {
+void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
     const SurfaceIndex& S = pc_.surf;
     const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
     constexpr int K = PieceContactState::kEE;
@@ -28,13 +28,18 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
     const long stamp = iter;
     const bool regularized = frictionModel == FrictionModel::Regularized;
 
-#pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count) reduction(max : maxOv)
+#pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
+        double* pe = trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = pc_.edgeItems[ie];
             const int32_t pa = S.edgePiece[e];
+            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
+                pc_.eeStamp[e] = stamp;
+                continue;
+            }
             int32_t* other = &pc_.eeOther[K * e];
             int8_t* side = &pc_.eeSide[K * e];
             double* shear = &pc_.eeShear[3 * K * e];
@@ -128,7 +133,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
                     addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force);
                     addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force);
                     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force);
-                    eEl += r.elastic;
+                    if (pe) pe[3 * pa + 2] += r.elastic;
                     eDamp += r.dampPower * dt;
                     eSlip += r.slipWork;
                     ++count;
@@ -165,7 +170,7 @@ void World::edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long&
     }
 }
 
-template void World::edgeEdge<true>(double, double&, double&, double&, long&, double&);
-template void World::edgeEdge<false>(double, double&, double&, double&, long&, double&);
+template void World::edgeEdge<true>(double, double&, double&, long&, double&);
+template void World::edgeEdge<false>(double, double&, double&, long&, double&);
 
 }  // namespace qdem

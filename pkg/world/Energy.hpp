@@ -16,10 +16,11 @@ struct Energy {
     double friction = 0;        // accumulated: Coulomb slip dissipation
     double boundaryWork = 0;    // accumulated: -(work of moving obstacles on the nodes)
     double localDamping = 0;    // accumulated: Cundall's non-viscous damping (when switched on)
+    double sleep = 0;           // accumulated: kinetic energy zeroed when pieces fell asleep
 
     double total() const {
         return kinetic + elastic + gravity + viscous + contactElastic + contactDamping + friction + boundaryWork +
-               localDamping;
+               localDamping + sleep;
     }
 };
 

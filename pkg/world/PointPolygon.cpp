@@ -20,7 +20,7 @@ using namespace contact_detail;
 // other pieces.  One thread per surface node (seed §4.1).
 
 template <bool Friction>
-void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv) {
+void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
     const SurfaceIndex& S = pc_.surf;
     const auto ns = static_cast<int32_t>(surfNodes.size());
     const bool tets = broadPhase != BroadPhase::Triangles;
@@ -41,9 +41,10 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     const double* normal = pc_.triNormal.data();
     const double* X = pos.data();
 
-#pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
+#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
+        double* pe = trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
         Candidate cand[kCandidates];
         TriLanes lanes;
         TriLanesOut near;
@@ -51,6 +52,10 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = surfNodes[s];
             const int32_t pa = nodePiece[node];
+            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
+                pc_.ppStamp[s] = stamp;
+                continue;
+            }
             int32_t* key = &pc_.ppKey[K * s];
             int32_t* kpiece = &pc_.ppPiece[K * s];
             double* shear = &pc_.ppShear[3 * K * s];
@@ -275,7 +280,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
                 fA += r.force;
                 for (int k = 0; k < 3; ++k)
                     if (c.cp.w[k] != 0) addTo(buf, S.surfIndexOfNode[tn[k]], -c.cp.w[k] * r.force);
-                eEl += r.elastic;
+                if (pe) pe[3 * pa + 2] += r.elastic;
                 eDamp += r.dampPower * dt;
                 eSlip += r.slipWork;
                 ++count;
@@ -295,7 +300,7 @@ void World::pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, l
     contactCounts.interiorFaceNear = interiorNear;
 }
 
-template void World::pointPolygon<true>(double, double&, double&, double&, long&, double&);
-template void World::pointPolygon<false>(double, double&, double&, double&, long&, double&);
+template void World::pointPolygon<true>(double, double&, double&, long&, double&);
+template void World::pointPolygon<false>(double, double&, double&, long&, double&);
 
 }  // namespace qdem

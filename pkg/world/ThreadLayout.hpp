@@ -1,8 +1,10 @@
 // How the element loop is shared among threads without atomics.
 //
-// Tets are split into contiguous chunks, one per thread.  A thread adds its
-// nodal forces into a private buffer covering only the node range its chunk
-// touches; thanks to the space-filling-curve order those ranges barely
+// The tets to compute (every piece's, or only the awake pieces' when some
+// sleep: doc/sleeping.md) are split into equal contiguous shares, one per
+// thread; a share is a list of segments, each inside one piece.  A thread
+// adds its nodal forces into a private buffer covering only the node range its
+// share touches; thanks to the space-filling-curve order those ranges barely
 // overlap, so the buffers together are about one force array in size and the
 // integrator sums the (at most a few) buffers covering each node.
 #pragma once
@@ -11,15 +13,20 @@
 
 namespace qdem {
 
+struct TetSegment {
+    int32_t piece, t0, t1;  // tets [t0, t1) of one piece
+};
+
 struct ThreadLayout {
     int nThreads = 0;
-    std::size_t nTets = 0;
-    std::vector<int32_t> tetBegin;       // nThreads + 1 chunk bounds
-    std::vector<int32_t> nodeLo, nodeHi; // node range [lo, hi] touched by each chunk
+    long version = -1;                           // the World's awake-set version it was built for
+    std::vector<std::vector<TetSegment>> share;  // per thread
+    std::vector<int32_t> nodeLo, nodeHi;         // node range [lo, hi] touched by each share
     std::vector<std::vector<double>> buffers;
 
-    bool matches(int threads, std::size_t tets) const { return threads == nThreads && tets == nTets; }
-    void build(const int32_t* tetNodes, std::size_t tets, int threads);
+    bool matches(int threads, long v) const { return threads == nThreads && v == version; }
+    // ranges: the segments to compute, in tet order (one per piece).
+    void build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v);
 };
 
 }  // namespace qdem

@@ -102,7 +102,15 @@ int World::addPiece(const TetMesh& mesh, int material) {
     pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
     pc_.surf.classifyEdges(refPos.data(), edgeFeatureAngle);
     omegaCache_.clear();
-    layout_ = ThreadLayout();  // tet count changed: rebuilt at the next step
+    asleep_.push_back(0);
+    frozen_.push_back(0);
+    normalsFresh_.push_back(0);
+    slowFor_.push_back(0);
+    pieceSpeed2_.push_back(0);
+    sleepMoved2_.push_back(0);
+    frozenReaction_.emplace_back();
+    pieceEnergy_.resize(3 * pieces.size(), 0.0);
+    awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
     return pieceId;
 }
 
@@ -115,6 +123,7 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
     }
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
+    wakeAll();  // frozen reactions are kept by obstacle index
     omegaCache_.clear();
 }
 

@@ -129,6 +129,26 @@ public:
     long iter = 0;
     Energy energy;
 
+    // ---- sleeping pieces (doc/sleeping.md) ---------------------------------
+    // A piece whose nodes have all been slower than sleepVelocity [m/s] for
+    // sleepTime [s], and whose neighbour pieces are asleep or as slow, is put
+    // to sleep: its velocities are zeroed (energy.sleep books the kinetic
+    // energy removed) and it is left out of the step - no element forces, no
+    // integration, no contacts with the floor or other sleeping pieces; what
+    // it pushed on obstacles stays in their reactions.  It wakes when a
+    // neighbour piece moves faster than sleepVelocity, an obstacle near it
+    // moves, a YADE sphere comes near, or wake()/wakeAll() is called (the
+    // Python Piece does so when its arrays are handed out for writing).
+    // sleepVelocity 0 (the default) turns sleeping off.
+    double sleepVelocity = 0;
+    double sleepTime = 0.01;
+    bool asleep(std::size_t piece) const { return piece < asleep_.size() && asleep_[piece]; }
+    long nAsleep() const { return nAsleep_; }
+    long sleepCount = 0;  // pieces put to sleep so far (diagnostics)
+    long wakeCount = 0;   // and woken
+    void wake(std::size_t piece);
+    void wakeAll();
+
     std::size_t nNodes() const { return mass.size(); }
     std::size_t nTets() const { return tetVol0.size(); }
 
@@ -168,13 +188,38 @@ private:
     void updatePieceBounds();
     void beginContactForces();
     template <bool Friction>
-    void pointPolygon(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv);
+    void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     template <bool Friction>
-    void edgeEdge(double dt, double& eEl, double& eDamp, double& eSlip, long& count, double& maxOv);
+    void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     double elementOmegaMax(const PieceInfo& p) const;
+    // Sleeping (Sleep.cpp): the decisions at the end of a step, one piece
+    // put to sleep, and the derived lists when the awake set changed.
+    void updateSleep(double dt);
+    void putToSleep(std::size_t p);
+    void awakeSetChanged();
+    void beginPieceEnergy();
+    void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
 
     ThreadLayout layout_;
+    // Sleeping: per piece flags and clocks (sized in addPiece).
+    std::vector<uint8_t> asleep_;
+    std::vector<uint8_t> frozen_;        // asleep with all neighbours asleep: its contacts are skipped
+    std::vector<uint8_t> normalsFresh_;  // asleep and its triangle normals computed since it stopped
+    std::vector<double> slowFor_;        // time all its nodes have been slower than sleepVelocity [s]
+    std::vector<double> pieceSpeed2_;    // largest squared node speed in the last step
+    std::vector<double> sleepMoved2_;    // squared displacement since the last list rebuild, when it fell asleep
+    std::vector<std::vector<double>> threadSpeed2_;      // per thread, per piece
+    std::vector<std::vector<double>> frozenReaction_;    // per piece: (obstacle index, F, T) x 7 at its sleep
+    std::vector<double> pairReaction_;   // per (piece, obstacle) pair of the last obstacle phase, 6 each
+    long nAsleep_ = 0;
+    long awakeVersion_ = 0;              // bumped whenever pieces are added or fall asleep or wake
+    std::vector<TetSegment> awakeTets_;  // per awake piece, its tets
+    std::vector<int32_t> awakeNodes_;    // ids of the nodes of awake pieces (used when some sleep)
+    // Energy states per piece (elastic, contact with obstacles, contact with
+    // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
+    std::vector<double> pieceEnergy_;
+    std::vector<std::vector<double>> threadPieceEnergy_;
     // Contact history: kSlots (obstacle body id, tangential spring) per surface node.
     static constexpr int kSlots = 4;
     Column<int32_t> slotBody_;

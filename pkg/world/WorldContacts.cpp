@@ -22,6 +22,7 @@ void World::updatePieceBounds() {
     pc_.pieceLo.resize(3 * np);
     pc_.pieceHi.resize(3 * np);
     for (std::size_t ip = 0; ip < np; ++ip) {
+        if (asleep_[ip]) continue;  // has not moved
         const PieceInfo& p = pieces[ip];
         Vector3d lo = Vector3d::Constant(1e300), hi = -lo;
         for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
@@ -39,9 +40,11 @@ void World::updatePieceBounds() {
 
 void World::beginContactForces() {
     if (contactsActive_) return;
-    const std::size_t ns = surfNodes.size();
-    for (std::size_t i = 0; i < ns; ++i)
-        for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[i] + d] = 0.0;
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+        if (asleep_[p]) continue;  // not integrated: its contact forces are not read
+        for (int32_t i = pieces[p].surfBegin; i < pieces[p].surfEnd; ++i)
+            for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[i] + d] = 0.0;
+    }
     contactsActive_ = true;
 }
 
@@ -50,6 +53,7 @@ void World::pieceContactPhase(double dt) {
     contactCounts.pointPolygon = contactCounts.edgeEdge = 0;
     maxPieceOverlap = 0;
     const std::size_t np = pieces.size();
+    std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || (!pointPolygonOn && !edgeEdgeOn)) return;
 
     // Which pieces can touch another one at all?  Sweep and prune on x:
@@ -80,6 +84,15 @@ void World::pieceContactPhase(double dt) {
     pc_.nbrFill.assign(pc_.nbrStart.begin(), pc_.nbrStart.end() - 1);
     for (std::size_t q = 0; q < pc_.pairs.size(); q += 2) pc_.nbrs[pc_.nbrFill[pc_.pairs[q]]++] = pc_.pairs[q + 1];
     for (std::size_t i = 0; i < np; ++i) pc_.pieceActive[i] = pc_.nbrStart[i + 1] > pc_.nbrStart[i];
+    // A sleeping piece whose neighbours all sleep has nothing moving near it:
+    // its contacts are skipped (their history kept).
+    if (nAsleep_ > 0)
+        for (std::size_t i = 0; i < np; ++i) {
+            if (!asleep_[i]) continue;
+            bool all = true;
+            for (int32_t q = pc_.nbrStart[i]; q < pc_.nbrStart[i + 1] && all; ++q) all = asleep_[pc_.nbrs[q]];
+            frozen_[i] = all;
+        }
     const bool any = !pc_.pairs.empty();
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     // The contact law's material constants of each pair of pieces that can
@@ -113,9 +126,12 @@ void World::pieceContactPhase(double dt) {
 #pragma omp parallel for schedule(static) reduction(max : moved2)
         for (int32_t i = 0; i < ns; ++i) {
             const int32_t n = surfNodes[i];
-            if (!pc_.pieceActive[nodePiece[n]]) continue;
+            if (!pc_.pieceActive[nodePiece[n]] || asleep_[nodePiece[n]]) continue;
             moved2 = std::max(moved2, (at(pos, n) - Eigen::Map<const Vector3d>(&pc_.listPos[3 * i])).squaredNorm());
         }
+        // Sleeping pieces do not move now, but may have moved before they fell asleep.
+        for (std::size_t ip = 0; ip < np && nAsleep_ > 0; ++ip)
+            if (pc_.pieceActive[ip] && asleep_[ip]) moved2 = std::max(moved2, sleepMoved2_[ip]);
         rebuild = moved2 > 0.25 * skin * skin;
     }
     const double grow = verlet ? skin : 0.0;
@@ -197,15 +213,18 @@ void World::pieceContactPhase(double dt) {
             pc_.edgeGrid[ip].build(pc_.edgeLo.data() + 3 * e0, pc_.edgeHi.data() + 3 * e0, e1 - e0,
                                    edgeR + 2 * rMax + grow);
     }
-    // Unit normals of the surface triangles of active pieces (quick plane test).
+    // Unit normals of the surface triangles of active pieces (quick plane
+    // test); a sleeping piece's once after it stopped.
     const auto ntri = static_cast<int32_t>(S.nTris());
 #pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < ntri; ++t) {
-        if (!pc_.pieceActive[S.triPiece[t]]) continue;
+        const int32_t p = S.triPiece[t];
+        if (!pc_.pieceActive[p] || normalsFresh_[p]) continue;
         const int32_t* c = &S.tri[3 * t];
         const Vector3d n = (at(pos, c[1]) - at(pos, c[0])).cross(at(pos, c[2]) - at(pos, c[0])).normalized();
         for (int d = 0; d < 3; ++d) pc_.triNormal[3 * t + d] = n[d];
     }
+    for (std::size_t ip = 0; ip < np && nAsleep_ > 0; ++ip) normalsFresh_[ip] = asleep_[ip] && pc_.pieceActive[ip];
     if (verlet && rebuild && pointPolygonOn) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
@@ -257,6 +276,7 @@ void World::pieceContactPhase(double dt) {
             std::copy_n(&pc_.list[static_cast<std::size_t>(KL) * i], std::max(0, pc_.listCount[i]),
                         &pc_.listFlat[pc_.listStart[i]]);
         pc_.listActive.assign(pc_.pieceActive.begin(), pc_.pieceActive.end());
+        std::fill(sleepMoved2_.begin(), sleepMoved2_.end(), 0.0);  // lists now from the current positions
         pc_.listSkin = skin;
         pc_.listTris = S.nTris();
         pc_.listValid = true;
@@ -296,29 +316,35 @@ void World::pieceContactPhase(double dt) {
     const double t1 = omp_get_wtime();
     timings.broadPhase = t1 - t0;
 
-    double eEl = 0, eDamp = 0, eSlip = 0, maxOv = 0;
+    double eDamp = 0, eSlip = 0, maxOv = 0;
     long nPP = 0, nEE = 0;
     const bool fric = frictionOn;
+    // Thread buffers: only awake pieces' nodes are read (and so zeroed).
+    const bool all = nAsleep_ == 0;
 #pragma omp parallel num_threads(nth)
     {
         auto& b = pc_.threadForce[omp_get_thread_num()];
-        std::fill(b.begin(), b.end(), 0.0);
+        if (all) std::fill(b.begin(), b.end(), 0.0);
+        else
+            for (std::size_t ip = 0; ip < np; ++ip)
+                if (!asleep_[ip]) std::fill(&b[3 * pieces[ip].surfBegin], &b[3 * pieces[ip].surfEnd], 0.0);
     }
     if (pointPolygonOn) {
-        if (fric) pointPolygon<true>(dt, eEl, eDamp, eSlip, nPP, maxOv);
-        else pointPolygon<false>(dt, eEl, eDamp, eSlip, nPP, maxOv);
+        if (fric) pointPolygon<true>(dt, eDamp, eSlip, nPP, maxOv);
+        else pointPolygon<false>(dt, eDamp, eSlip, nPP, maxOv);
     }
     const double t2 = omp_get_wtime();
     if (edgeEdgeOn) {
-        if (fric) edgeEdge<true>(dt, eEl, eDamp, eSlip, nEE, maxOv);
-        else edgeEdge<false>(dt, eEl, eDamp, eSlip, nEE, maxOv);
+        if (fric) edgeEdge<true>(dt, eDamp, eSlip, nEE, maxOv);
+        else edgeEdge<false>(dt, eDamp, eSlip, nEE, maxOv);
     }
     const double tEE = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
     const auto ns = static_cast<int32_t>(surfNodes.size());
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t s = 0; s < ns; ++s)
-        for (int th = 0; th < nth; ++th)
+        if (all || !asleep_[nodePiece[surfNodes[s]]])
+            for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[s] + d] += pc_.threadForce[th][3 * s + d];
     const double t3 = omp_get_wtime();
     // The sum of the thread buffers is booked to point-polygon, the main user.
@@ -327,8 +353,7 @@ void World::pieceContactPhase(double dt) {
     contactCounts.pointPolygon = nPP;
     contactCounts.edgeEdge = nEE;
     maxPieceOverlap = maxOv;
-    if (trackEnergy) {
-        energy.contactElastic += eEl;  // reset at the start of each step
+    if (trackEnergy) {  // (the elastic energy is summed per piece)
         energy.contactDamping += eDamp;
         energy.friction += eSlip;
     }

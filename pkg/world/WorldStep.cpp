@@ -17,7 +17,10 @@ void World::step(double dt) {
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
     double t0 = omp_get_wtime();
     contactsActive_ = false;
-    if (trackEnergy) energy.contactElastic = 0;  // a state: summed afresh by the contact phases
+    if (trackEnergy) {
+        energy.contactElastic = 0;  // a state: summed afresh by the contact phases
+        beginPieceEnergy();
+    }
     updatePieceBounds();
     obstaclePhase(dt);
     const double tObs = omp_get_wtime();
@@ -27,12 +30,14 @@ void World::step(double dt) {
     elementPhase(dt);
     double t2 = omp_get_wtime();
     integratePhase(dt);
+    if (trackEnergy) finishPieceEnergy();
     double t3 = omp_get_wtime();
     timings.obstacles = tObs - t0;
     timings.elements = t2 - t1;
     timings.integrate = t3 - t2;
     time += dt;
     ++iter;
+    updateSleep(dt);
 }
 
 // ---------------------------------------------------------------------------
@@ -68,31 +73,28 @@ void World::elementRange(int32_t t0, int32_t t1, const Material& m, double* buf,
 
 void World::elementPhase(double dt) {
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, nTets())) layout_.build(tetNodes.data(), nTets(), nth);
-    double wEl = 0, diss = 0;
+    if (!layout_.matches(nth, awakeVersion_)) layout_.build(tetNodes.data(), awakeTets_, nth, awakeVersion_);
+    double diss = 0;
     const bool energyOn = trackEnergy;
-#pragma omp parallel num_threads(layout_.nThreads) reduction(+ : wEl, diss)
+#pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
     {
         const int th = omp_get_thread_num();
         std::vector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
-        const int32_t c0 = layout_.tetBegin[th], c1 = layout_.tetBegin[th + 1];
-        for (const PieceInfo& p : pieces) {
-            const int32_t a = std::max(c0, p.tetBegin), b = std::min(c1, p.tetEnd);
-            if (a >= b) continue;
-            const Material& m = materials[p.material];
+        double* pe = energyOn ? threadPieceEnergy_[th].data() : nullptr;
+        for (const TetSegment& sg : layout_.share[th]) {
+            const Material& m = materials[pieces[sg.piece].material];
             const bool visc = viscosityOn && m.viscosity > 0;
-            if (visc && energyOn) elementRange<true, true>(a, b, m, buf.data(), lo, wEl, diss);
-            else if (visc) elementRange<true, false>(a, b, m, buf.data(), lo, wEl, diss);
-            else if (energyOn) elementRange<false, true>(a, b, m, buf.data(), lo, wEl, diss);
-            else elementRange<false, false>(a, b, m, buf.data(), lo, wEl, diss);
+            double w = 0;
+            if (visc && energyOn) elementRange<true, true>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            else if (visc) elementRange<true, false>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            else if (energyOn) elementRange<false, true>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            else elementRange<false, false>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            if (energyOn) pe[3 * sg.piece] += w;  // strain energy per piece (sleeping ones keep theirs)
         }
     }
-    if (energyOn) {
-        energy.elastic = wEl;
-        energy.viscous += diss * dt;
-    }
+    if (energyOn) energy.viscous += diss * dt;
 }
 
 // ---------------------------------------------------------------------------
@@ -104,6 +106,19 @@ void World::obstaclePhase(double dt) {
         o.reactionForce.setZero();
         o.reactionTorque.setZero();
     }
+    // Sleeping pieces still push on obstacles with what they pushed when
+    // they fell asleep.
+    for (std::size_t p = 0; p < frozenReaction_.size(); ++p) {
+        const std::vector<double>& fr = frozenReaction_[p];
+        for (std::size_t k = 0; k + 7 <= fr.size(); k += 7) {
+            Obstacle& o = obstacles[static_cast<int>(fr[k])];
+            o.reactionForce += Eigen::Vector3d(fr[k + 1], fr[k + 2], fr[k + 3]);
+            o.reactionTorque += Eigen::Vector3d(fr[k + 4], fr[k + 5], fr[k + 6]);
+        }
+    }
+    pieceObstacles_.clear();
+    pieceObstacleBegin_.clear();
+    pairReaction_.clear();
     if (nObs == 0 || surfNodes.size() == 0) return;
 
     // Which obstacles can each piece reach this step (bounding boxes + radius)?
@@ -133,19 +148,26 @@ void World::obstaclePhase(double dt) {
 
     beginContactForces();
     const int nth = omp_get_max_threads();
-    obstacleReaction_.assign(static_cast<std::size_t>(nth) * nObs * 6, 0.0);
+    // Reactions per thread and (piece, obstacle) pair: a piece that falls
+    // asleep keeps its own.
+    const std::size_t nPairs = pieceObstacles_.size();
+    obstacleReaction_.assign(static_cast<std::size_t>(nth) * nPairs * 6, 0.0);
     const bool energyOn = trackEnergy;
     const bool regularized = frictionModel == FrictionModel::Regularized;
-    double eEl = 0, eDamp = 0, eSlip = 0, eBound = 0;
+    double eDamp = 0, eSlip = 0, eBound = 0;
     const auto nSurf = static_cast<int32_t>(surfNodes.size());
+    const uint8_t* asleep = asleep_.data();
 
-#pragma omp parallel num_threads(nth) reduction(+ : eEl, eDamp, eSlip, eBound)
+#pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound)
     {
-        double* react = obstacleReaction_.data() + static_cast<std::size_t>(omp_get_thread_num()) * nObs * 6;
+        const int th = omp_get_thread_num();
+        double* react = obstacleReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
+        double* pe = energyOn ? threadPieceEnergy_[th].data() : nullptr;
 #pragma omp for schedule(static)
         for (int32_t s = 0; s < nSurf; ++s) {
             const int32_t node = surfNodes[s];
             const int ip = nodePiece[node];
+            if (asleep[ip]) continue;  // history kept as it is
             const int ob0 = pieceObstacleBegin_[ip], ob1 = pieceObstacleBegin_[ip + 1];
             int32_t* body = &slotBody_[kSlots * s];
             double* shear = &slotShear_[3 * kSlots * s];
@@ -189,14 +211,14 @@ void World::obstaclePhase(double dt) {
                 newShear[used] = sh;
                 ++used;
                 fNode += r.force;
-                double* R = react + 6 * io;
+                double* R = react + 6 * j;
                 const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
                 for (int d = 0; d < 3; ++d) {
                     R[d] -= r.force[d];
                     R[3 + d] += torque[d];
                 }
                 if (energyOn) {
-                    eEl += r.elastic;
+                    pe[3 * ip + 1] += r.elastic;
                     eDamp += r.dampPower * dt;
                     eSlip += r.slipWork;
                     eBound -= r.force.dot(vo) * dt;
@@ -211,14 +233,17 @@ void World::obstaclePhase(double dt) {
             for (int d = 0; d < 3; ++d) contactForce_[3 * node + d] += fNode[d];
         }
     }
+    pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
-        for (int i = 0; i < nObs; ++i) {
-            const double* R = obstacleReaction_.data() + (static_cast<std::size_t>(th) * nObs + i) * 6;
-            obstacles[i].reactionForce += Eigen::Vector3d(R[0], R[1], R[2]);
-            obstacles[i].reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
-        }
+        for (std::size_t j = 0; j < 6 * nPairs; ++j)
+            pairReaction_[j] += obstacleReaction_[static_cast<std::size_t>(th) * nPairs * 6 + j];
+    for (std::size_t j = 0; j < nPairs; ++j) {
+        const double* R = &pairReaction_[6 * j];
+        Obstacle& o = obstacles[pieceObstacles_[j]];
+        o.reactionForce += Eigen::Vector3d(R[0], R[1], R[2]);
+        o.reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
+    }
     if (energyOn) {
-        energy.contactElastic += eEl;
         energy.contactDamping += eDamp;
         energy.friction += eSlip;
         energy.boundaryWork += eBound;
@@ -243,37 +268,56 @@ void World::integratePhase(double dt) {
     const uint8_t* blk = blocked.data();
     double ek = 0, eg = 0, ed = 0;
     const double damp = localDamping;
-#pragma omp parallel for schedule(static) num_threads(nth) reduction(+ : ek, eg, ed)
-    for (int32_t n = 0; n < N; ++n) {
-        double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
-        for (int t = 0; t < nth; ++t)
-            if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
-                const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
-                f[0] += b[0];
-                f[1] += b[1];
-                f[2] += b[2];
+    // Sleeping pieces are skipped: then only the awake nodes are visited.
+    const bool all = nAsleep_ == 0;
+    const int32_t* ids = awakeNodes_.data();
+    const auto count = all ? N : static_cast<int32_t>(awakeNodes_.size());
+    const bool sleepOn = sleepVelocity > 0;
+    if (sleepOn) {
+        threadSpeed2_.resize(nth);
+        for (auto& t : threadSpeed2_) t.assign(pieces.size(), 0.0);
+    }
+#pragma omp parallel num_threads(nth) reduction(+ : ek, eg, ed)
+    {
+        double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < count; ++i) {
+            const int32_t n = all ? i : ids[i];
+            double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
+            for (int t = 0; t < nth; ++t)
+                if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
+                    const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
+                    f[0] += b[0];
+                    f[1] += b[1];
+                    f[2] += b[2];
+                }
+            if (withContacts)
+                for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
+            const double invM = 1.0 / M[n];
+            for (int d = 0; d < 3; ++d) {
+                Fout[3 * n + d] = f[d];
+                const double vOld = V[3 * n + d];
+                const bool free = !((blk[n] >> d) & 1u);
+                if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
+                    const double vm = vOld + 0.5 * dt * f[d] * invM;
+                    const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                    f[d] -= fd;
+                    if (energyOn) ed += fd * vm * dt;
+                }
+                const double a = free ? f[d] * invM : 0.0;
+                if (energyOn) {
+                    const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
+                    ek += 0.5 * M[n] * vMid * vMid;
+                    eg -= M[n] * g[d] * vOld * dt;
+                }
+                V[3 * n + d] = vOld + dt * a;
+                X[3 * n + d] += dt * V[3 * n + d];
             }
-        if (withContacts)
-            for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
-        const double invM = 1.0 / M[n];
-        for (int d = 0; d < 3; ++d) {
-            Fout[3 * n + d] = f[d];
-            const double vOld = V[3 * n + d];
-            const bool free = !((blk[n] >> d) & 1u);
-            if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
-                const double vm = vOld + 0.5 * dt * f[d] * invM;
-                const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
-                f[d] -= fd;
-                if (energyOn) ed += fd * vm * dt;
+            if (speed2) {
+                const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
+                double& m = speed2[nodePiece[n]];
+                m = std::max(m, v2);
             }
-            const double a = free ? f[d] * invM : 0.0;
-            if (energyOn) {
-                const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
-                ek += 0.5 * M[n] * vMid * vMid;
-                eg -= M[n] * g[d] * vOld * dt;
-            }
-            V[3 * n + d] = vOld + dt * a;
-            X[3 * n + d] += dt * V[3 * n + d];
         }
     }
     if (energyOn) {

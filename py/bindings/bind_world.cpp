@@ -31,6 +31,7 @@ py::dict energyDict(const Energy& e) {
     d["friction"] = e.friction;
     d["boundaryWork"] = e.boundaryWork;
     d["localDamping"] = e.localDamping;
+    d["sleep"] = e.sleep;
     d["total"] = e.total();
     return d;
 }
@@ -165,7 +166,10 @@ void bindWorld(py::module_& m) {
                                })
         .def_property(
             "gravity", [](const World& w) { return w.gravity; },
-            [](World& w, const Eigen::Vector3d& g) { w.gravity = g; })
+            [](World& w, const Eigen::Vector3d& g) {
+                if (g != w.gravity) w.wakeAll();  // a sleeping piece would not feel the change
+                w.gravity = g;
+            })
         .def_readwrite("trackEnergy", &World::trackEnergy)
         .def_readwrite("viscosityOn", &World::viscosityOn)
         .def_readwrite("localDamping", &World::localDamping)
@@ -191,6 +195,28 @@ void bindWorld(py::module_& m) {
                 w.frictionRegVelocity = v;
             },
             "Slip speed [m/s] at which the regularised friction law reaches mu*Fn.")
+        .def_property(
+            "sleepVelocity", [](const World& w) { return w.sleepVelocity; },
+            [](World& w, double v) {
+                if (!(v >= 0) || !std::isfinite(v)) throw InputError("sleepVelocity must be >= 0 and finite (0 = off)");
+                w.sleepVelocity = v;
+            },
+            "Pieces whose nodes all stay slower than this [m/s] for sleepTime fall asleep (0 = never).")
+        .def_property(
+            "sleepTime", [](const World& w) { return w.sleepTime; },
+            [](World& w, double t) {
+                if (!(t >= 0) || !std::isfinite(t)) throw InputError("sleepTime must be >= 0 and finite");
+                w.sleepTime = t;
+            },
+            "How long [s] a piece must stay slow before it falls asleep.")
+        .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
+             "Is the piece asleep (left out of the step until something near it moves)?")
+        .def_property_readonly("nAsleep", &World::nAsleep)
+        .def_readonly("sleepCount", &World::sleepCount, "Pieces put to sleep so far.")
+        .def_readonly("wakeCount", &World::wakeCount, "Pieces woken so far.")
+        .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),
+             "Wake a sleeping piece (before changing its state from outside).")
+        .def("wakeAll", &World::wakeAll)
         .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
         .def_readwrite("edgeFadeAngle", &World::edgeFadeAngle)
         .def_property(

@@ -1,0 +1,168 @@
+// Sleeping pieces (doc/sleeping.md): pieces at rest are left out of the step
+// until something near them moves.  In a domino line of 40 pieces only the
+// few around the front move at any time; the rest stand or lie still.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "World.hpp"
+
+namespace qdem {
+
+void World::awakeSetChanged() {
+    ++awakeVersion_;
+    const std::size_t np = pieces.size();
+    awakeTets_.clear();
+    awakeNodes_.clear();
+    nAsleep_ = 0;
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) {
+            ++nAsleep_;
+            continue;
+        }
+        awakeTets_.push_back({static_cast<int32_t>(p), pieces[p].tetBegin, pieces[p].tetEnd});
+        for (int32_t n = pieces[p].nodeBegin; n < pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
+    }
+}
+
+void World::wake(std::size_t p) {
+    if (p >= asleep_.size() || !asleep_[p]) return;
+    asleep_[p] = 0;
+    frozen_[p] = 0;
+    normalsFresh_[p] = 0;
+    slowFor_[p] = 0;
+    frozenReaction_[p].clear();
+    ++wakeCount;
+    awakeSetChanged();
+}
+
+void World::wakeAll() {
+    if (nAsleep_ == 0) return;
+    for (std::size_t p = 0; p < asleep_.size(); ++p)
+        if (asleep_[p]) {
+            asleep_[p] = 0;
+            frozen_[p] = 0;
+            normalsFresh_[p] = 0;
+            slowFor_[p] = 0;
+            frozenReaction_[p].clear();
+            ++wakeCount;
+        }
+    awakeSetChanged();
+}
+
+void World::putToSleep(std::size_t p) {
+    const PieceInfo& P = pieces[p];
+    // Velocities to zero: the kinetic energy left is booked as removed.
+    double ek = 0;
+    for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n)
+        for (int d = 0; d < 3; ++d) {
+            double& v = vel[3 * n + d];
+            ek += 0.5 * mass[n] * v * v;
+            v = 0;
+        }
+    if (trackEnergy) energy.sleep += ek;
+    // What it pushed on obstacles this step stays in their reactions.
+    std::vector<double>& fr = frozenReaction_[p];
+    fr.clear();
+    if (pieceObstacleBegin_.size() == pieces.size() + 1 && pairReaction_.size() == 6 * pieceObstacles_.size())
+        for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
+            fr.push_back(pieceObstacles_[j]);
+            fr.insert(fr.end(), &pairReaction_[6 * j], &pairReaction_[6 * j + 6]);
+        }
+    // How far it moved since the Verlet lists were built: other nodes may
+    // only move the rest of half the skin before the lists are rebuilt.
+    double m2 = 0;
+    if (pc_.listValid && pc_.listPos.size() == 3 * surfNodes.size())
+        for (int32_t s = P.surfBegin; s < P.surfEnd; ++s) {
+            const int32_t n = surfNodes[s];
+            double d2 = 0;
+            for (int d = 0; d < 3; ++d) d2 += std::pow(pos[3 * n + d] - pc_.listPos[3 * s + d], 2);
+            m2 = std::max(m2, d2);
+        }
+    sleepMoved2_[p] = m2;
+    asleep_[p] = 1;
+    normalsFresh_[p] = 0;
+    ++sleepCount;
+}
+
+void World::updateSleep(double dt) {
+    const std::size_t np = pieces.size();
+    if (!(sleepVelocity > 0)) {
+        wakeAll();
+        return;
+    }
+    const double v2 = sleepVelocity * sleepVelocity;
+    // Largest node speed of each awake piece, from the integration.
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) continue;
+        double m = 0;
+        for (const auto& t : threadSpeed2_) m = std::max(m, t[p]);
+        pieceSpeed2_[p] = m;
+        slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
+    }
+    const bool nbrsValid = pc_.nbrStart.size() == np + 1 && (pointPolygonOn || edgeEdgeOn) && np > 1;
+    auto fastNeighbour = [&](std::size_t p) {
+        if (!nbrsValid) return false;
+        for (int32_t q = pc_.nbrStart[p]; q < pc_.nbrStart[p + 1]; ++q) {
+            const int32_t b = pc_.nbrs[q];
+            if (!asleep_[b] && pieceSpeed2_[b] >= v2) return true;
+        }
+        return false;
+    };
+    auto movingObstacle = [&](std::size_t p) {
+        if (pieceObstacleBegin_.size() != np + 1) return false;
+        for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
+            const Obstacle& o = obstacles[pieceObstacles_[j]];
+            if (o.vel.squaredNorm() > 0 || o.angVel.squaredNorm() > 0) return true;
+        }
+        return false;
+    };
+    auto nearSphere = [&](std::size_t p) { return p < spheres.pieceUsed.size() && spheres.pieceUsed[p]; };
+    bool changed = false;
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) {
+            if (fastNeighbour(p) || movingObstacle(p) || nearSphere(p)) {
+                asleep_[p] = 0;
+                frozen_[p] = 0;
+                slowFor_[p] = 0;
+                pieceSpeed2_[p] = 0;
+                frozenReaction_[p].clear();
+                ++wakeCount;
+                changed = true;
+            }
+        } else if (slowFor_[p] >= sleepTime && !fastNeighbour(p) && !movingObstacle(p) && !nearSphere(p)) {
+            putToSleep(p);
+            changed = true;
+        }
+    }
+    if (changed) awakeSetChanged();
+}
+
+// Energy states per piece: a sleeping piece keeps the values it had, since
+// nothing of it moves (its contacts are with sleeping pieces only while they
+// are skipped).
+void World::beginPieceEnergy() {
+    const std::size_t nth = std::max(1, omp_get_max_threads());
+    if (threadPieceEnergy_.size() < nth) threadPieceEnergy_.resize(nth);
+    for (auto& t : threadPieceEnergy_) t.assign(3 * pieces.size(), 0.0);
+}
+
+void World::finishPieceEnergy() {
+    double el = 0, contact = 0;
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+        for (int c = 0; c < 3; ++c) {
+            const bool computed = c < 2 ? !asleep_[p] : !frozen_[p];
+            if (!computed) continue;
+            double sum = 0;
+            for (const auto& t : threadPieceEnergy_) sum += t[3 * p + c];
+            pieceEnergy_[3 * p + c] = sum;
+        }
+        el += pieceEnergy_[3 * p];
+        contact += pieceEnergy_[3 * p + 1] + pieceEnergy_[3 * p + 2];
+    }
+    energy.elastic = el;
+    energy.contactElastic += contact;
+}
+
+}  // namespace qdem
