@@ -28,7 +28,7 @@ FRICTION_MODELS = {"spring": 0, "regularized": 1}
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
                "contactDamping": "qdemContactDamp", "friction": "qdemFrictDissip",
-               "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp"}
+               "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp", "sleep": "qdemSleep"}
 
 
 
@@ -76,6 +76,15 @@ class QdemEngine(PyRunner):
                                    "(default), or the seed's Figure 6 cases 'A' (all tets), 'B' (surface "
                                    "tets), 'C' (surface tets, interior faces skipped).",
                        lambda v: None if v in BROAD_PHASES else "must be one of %s" % list(BROAD_PHASES))
+
+    sleepVelocity = Attr(0.0, "Pieces at rest sleep: one whose nodes all stay slower than this [m/s] for "
+                              "sleepTime, with no faster piece near it, is left out of the step (zero "
+                              "velocity, no element or contact work; its push on obstacles kept) until a "
+                              "neighbour piece moves faster than this, an obstacle near it moves or a sphere "
+                              "comes near.  0 (default) = never.  doc/sleeping.md: choice and error.",
+                         lambda v: None if isinstance(v, (int, float)) and v >= 0 else "must be >= 0")
+    sleepTime = Attr(0.01, "How long [s] a piece must stay slower than sleepVelocity before it sleeps.",
+                     lambda v: None if isinstance(v, (int, float)) and v >= 0 else "must be >= 0")
 
     def __init__(self, world=None, **kw):
         PyRunner.__init__(self)
@@ -169,6 +178,8 @@ class QdemEngine(PyRunner):
         core.frictionModel = FRICTION_MODELS[self.frictionModel]
         core.frictionRegVelocity = float(self.frictionRegVelocity)
         core.broadPhase = BROAD_PHASES[self.broadPhase]
+        core.sleepVelocity = float(self.sleepVelocity)
+        core.sleepTime = float(self.sleepTime)
         coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
             t0 = time.perf_counter()
@@ -210,6 +221,8 @@ class QdemEngine(PyRunner):
         c = core.contactCounts
         line = "qdem: step %d  t=%.6g s  %.0f steps/s  %d contacts" % (
             O.iter, O.time, rate, c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
+        if core.sleepVelocity > 0:
+            line += "  %d/%d pieces asleep" % (core.nAsleep, core.nPieces)
         if core.trackEnergy:  # energies are only summed when O.trackEnergy is on
             e = core.energy
             line += "  E_kin=%.4g J  E_el=%.4g J" % (e["kinetic"], e["elastic"])

@@ -8,6 +8,8 @@ class Piece:
     """One QDEM piece in a world.  The array properties are NumPy *views* of the
     world's storage (writing ``piece.vel[:] = ...`` changes the simulation); take
     them again after adding pieces, since adding pieces moves the storage.
+    Handing out a writable view wakes the piece if it sleeps (doc/sleeping.md):
+    what is written to it then takes effect.
 
     Node order is the solver's (space-filling-curve) order; ``originalNodeIds[i]``
     is the index in the mesh you passed of solver node ``i``."""
@@ -19,15 +21,31 @@ class Piece:
         self.nodeSlice, self.tetSlice = slice(n0, n1), slice(t0, t1)
 
     # -- views -----------------------------------------------------------------
+    def _nodes(self, name):
+        """A node array of the world restricted to this piece (no waking)."""
+        return getattr(self.world.core, name)[self.nodeSlice]
+
+    def _wake(self):
+        if self.world.core.nAsleep:
+            self.world.core.wake(self.id)
+
+    @property
+    def asleep(self):
+        """Is the piece asleep: at rest and left out of the step until something
+        near it moves (QdemEngine.sleepVelocity, doc/sleeping.md)?"""
+        return self.world.core.asleep(self.id)
+
     @property
     def pos(self):
         """Node positions (n,3) [m], writable view."""
-        return self.world.core.pos[self.nodeSlice]
+        self._wake()
+        return self._nodes("pos")
 
     @property
     def vel(self):
         """Node velocities (n,3) [m/s] at the last half step, writable view."""
-        return self.world.core.vel[self.nodeSlice]
+        self._wake()
+        return self._nodes("vel")
 
     @property
     def force(self):
@@ -37,7 +55,8 @@ class Piece:
     @property
     def extForce(self):
         """Persistent user force on each node (n,3) [N], writable view."""
-        return self.world.core.extForce[self.nodeSlice]
+        self._wake()
+        return self._nodes("extForce")
 
     @property
     def refPos(self):
@@ -53,6 +72,7 @@ class Piece:
     def blocked(self):
         """Per node bit mask of prescribed DOFs (1=x, 2=y, 4=z): those keep
         their velocity, like YADE's blockedDOFs.  Writable view."""
+        self._wake()
         return self.world.core.blocked[self.nodeSlice]
 
     @property
@@ -62,7 +82,7 @@ class Piece:
 
     @property
     def displacement(self):
-        return self.pos - self.refPos
+        return self._nodes("pos") - self.refPos
 
     def stress(self):
         """Cauchy stress (t,6: xx yy zz yz xz xy) [Pa] of each tet, elastic + viscous."""
@@ -91,11 +111,11 @@ class Piece:
     def centroid(self):
         """Centre of mass [m]."""
         m = self.mass
-        return (self.pos * m[:, None]).sum(axis=0) / m.sum()
+        return (self._nodes("pos") * m[:, None]).sum(axis=0) / m.sum()
 
     def momentum(self):
         """Linear momentum (sum m v) [kg m/s]."""
-        return (self.vel * self.mass[:, None]).sum(axis=0)
+        return (self._nodes("vel") * self.mass[:, None]).sum(axis=0)
 
     def velocity(self):
         """Centre-of-mass velocity [m/s]."""
@@ -103,7 +123,7 @@ class Piece:
 
     def angularMomentum(self, about=None):
         c = self.centroid() if about is None else np.asarray(about, dtype=float)
-        return (np.cross(self.pos - c, self.vel) * self.mass[:, None]).sum(axis=0)
+        return (np.cross(self._nodes("pos") - c, self._nodes("vel")) * self.mass[:, None]).sum(axis=0)
 
     def __repr__(self):
         return "<qdem.Piece %d: %d nodes, %d tets>" % (

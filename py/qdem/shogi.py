@@ -154,15 +154,19 @@ SCENES = {
 }
 
 
-def scene(name, material, scale, spacing=0.8, push=None, world=None):
+def scene(name, material, scale, spacing=0.8, push=None, world=None, count=None):
     """Build one of the seed's scenes (SCENES) with pieces `scale` times real
     size.  Sideways offsets are in units of the largest height.  The first
     piece is tipped with an angular velocity that takes it past its balance
     point.  Spacing 0.8 heights: at 0.5-0.6 a toppled piece comes to rest
     leaning on the next without tipping it (measured with three rooks).
-    Returns the Pieces."""
-    spec = SCENES[name]
-    hMax = max(KINDS[k][0] for k in spec["kinds"]) * scale * 1e-3
+    count: only the first `count` pieces of the line.  Returns the Pieces."""
+    spec = dict(SCENES[name])
+    if count:
+        for k in ("kinds", "offsets", "xs"):
+            if k in spec:
+                spec[k] = spec[k][:count]
+    hMax = max(KINDS[k][0] for k in SCENES[name]["kinds"]) * scale * 1e-3  # the whole line's: same spacing
     offsets = [o * hMax for o in spec["offsets"]] if "offsets" in spec else None
     if push is None:  # about 2.6x the angular velocity that just tips a piece over (0.38 sqrt(g/H))
         push = 1.0 * math.sqrt(9.81 / hMax)

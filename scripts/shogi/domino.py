@@ -8,8 +8,13 @@
 #   frictionPiece kinetic friction between pieces (seed: 0.1 and 0.5)
 #   material      table1 (seed Table 1, pieces scaled until Table 1's step is
 #                 stable) | soft (E 1 MPa, no viscosity, real size: minutes, not hours)
-#   duration      simulated seconds
+#   duration      simulated seconds after the push
 #   frames        VTU frames / PNG snapshots over the run
+#   count         only the first `count` pieces of the line (0 = all)
+#   settle        seconds of damped settling on the floor before the push, in
+#                 units of sqrt(H/g) (0 = push at once, from the stress-free shape)
+#   sleep         sleeping pieces (doc/sleeping.md): QdemEngine.sleepVelocity in
+#                 units of sqrt(g H) (0 = off); sleepTime is 0.1 sqrt(H/g)
 # Writes out/shogi/<scene>_mu<friction>_<material>/: block VTU series (.pvd),
 # PNG snapshots coloured by von Mises stress, hits.json (time each piece is
 # first hit) and front.png (first-hit time against position).
@@ -21,11 +26,11 @@ import time
 import numpy as np
 import qdem
 from qdem import render, shogi
-from yade import O, ForceResetter, NewtonIntegrator, PyRunner, utils
+from yade import O, ForceResetter, FrictMat, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 
-readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6,
-                    noTableOk=True)
+readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6, count=0,
+                    settle=0.0, sleep=0.0, noTableOk=True)
 from yade.params import table as P  # noqa: E402
 
 if P.material == "table1":
@@ -37,11 +42,17 @@ else:
                        frictionPiece=P.frictionPiece, frictionWall=0.5)
     scale, dt = 1.0, None
 
-out = "out/shogi/%s_mu%g_%s" % (P.scene, P.frictionPiece, P.material)
+out = "out/shogi/%s%s_mu%g_%s%s" % (P.scene, "_n%d" % P.count if P.count else "", P.frictionPiece, P.material,
+                                  "_sleep%g" % P.sleep if P.sleep else "")
 os.makedirs(out, exist_ok=True)
-pieces = shogi.scene(P.scene, mat, scale)
-floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
 H = max(shogi.KINDS[k][0] for k in shogi.SCENES[P.scene]["kinds"]) * scale * 1e-3
+push = math.sqrt(9.81 / H)                      # as shogi.scene: ~2.6x the angular velocity that just tips it
+pieces = shogi.scene(P.scene, mat, scale, count=P.count or None, push=0.0 if P.settle else push)
+pivot = np.array([0.0, 0.0, mat.radius])        # the first piece's base point (its mesh origin)
+# The floor: YADE's default material (E = 1e7 Pa) for the soft pieces, as stiff
+# as the pieces for Table 1 (its default would let 766x pieces sink).
+floorMat = O.materials.append(FrictMat(young=max(1e7, mat.young), poisson=0.3, frictionAngle=0.5))
+floor = O.bodies.append(utils.wall(0, axis=2, sense=1, material=floorMat))
 hitSpeed = 0.02 * math.sqrt(9.81 * H)          # a piece counts as hit above this speed
 hits = [0.0] + [None] * (len(pieces) - 1)
 fallen = [None] * len(pieces)                   # centre of mass below 70 % of its height: tipped ~45 deg
@@ -49,34 +60,68 @@ z0 = [p.centroid()[2] for p in pieces]
 frames = []
 
 
+tPush = None                                    # simulated time of the push (after settling)
+
+
 def watch():
+    if tPush is None:
+        return
     for i, p in enumerate(pieces):
+        if p.asleep:                            # still, unchanged since it fell asleep
+            continue
         if hits[i] is None and np.linalg.norm(p.velocity()) > hitSpeed:
-            hits[i] = O.time
+            hits[i] = O.time - tPush
         if fallen[i] is None and p.centroid()[2] < 0.7 * z0[i]:
-            fallen[i] = O.time
+            fallen[i] = O.time - tPush
 
 
 def frame():
     k = len(frames)
     path = "%s/snap%02d.png" % (out, k)
     vmax = render.snapshot(qdem.defaultWorld(), path, title="%s, mu=%g, t=%.3f s" % (P.scene, P.frictionPiece,
-                                                                                       O.time), floor=0.0)
-    frames.append((O.time, path, vmax))
+                                                                                       O.time - tPush), floor=0.0)
+    frames.append((O.time - tPush, path, vmax))
 
 
-engine = qdem.QdemEngine(progressPeriod=20000)
+engine = qdem.QdemEngine(progressPeriod=20000, sleepVelocity=P.sleep * math.sqrt(9.81 * H),
+                         sleepTime=0.1 * math.sqrt(H / 9.81))
 O.engines = [ForceResetter(), engine, PyRunner(command="watch()", iterPeriod=50),
              qdem.VtkRecorder(fileBase=out + "/shogi-", iterPeriod=1), NewtonIntegrator(gravity=(0, 0, -9.80665))]
 limit = engine.stableDt()
 O.dt = dt if dt else 0.8 * limit["combined"]
 nSteps = int(P.duration / O.dt)
-O.engines[3].iterPeriod = max(1, nSteps // P.frames)
-O.engines[3].dead = False
 print("shogi: %s, %d pieces, %d tets, scale %g, dt %.3g s (stable %.3g, %s), %d steps"
       % (P.scene, len(pieces), qdem.defaultWorld().core.nTets, scale, O.dt, limit["combined"], limit["limitedBy"],
          nSteps))
 start = time.time()
+if P.settle:
+    # Settle on the floor under gravity by kinetic damping (dynamic relaxation:
+    # each piece's velocities are zeroed whenever its kinetic energy has just
+    # peaked), then start from rest: the line stands still before the first
+    # piece is tipped.
+    O.engines[3].dead = True
+    core = qdem.defaultWorld().core
+    chunk = max(1, int(0.002 * math.sqrt(H / 9.81) / O.dt))     # ~1/40 of a piece's vertical period
+    lastKe = [0.0] * len(pieces)
+    while O.time < P.settle * math.sqrt(H / 9.81):
+        O.run(chunk, True)
+        for i, p in enumerate(pieces):
+            if p.asleep:
+                continue
+            ke = 0.5 * float((p.mass[:, None] * p._nodes("vel") ** 2).sum())
+            if ke < lastKe[i]:
+                p.vel[:] = 0.0
+                ke = 0.0
+            lastKe[i] = ke
+    core.vel[:] = 0.0                           # (sleeping pieces' are zero already)
+    p0 = pieces[0]
+    p0.vel[:] = np.cross([0.0, push, 0.0], p0.pos - pivot)
+    print("shogi: settled for %.3g s (%.0f s wall), %d pieces asleep; first piece tipped"
+          % (O.time, time.time() - start, core.nAsleep))
+    z0 = [p.centroid()[2] for p in pieces]
+tPush = O.time
+O.engines[3].iterPeriod = max(1, nSteps // P.frames)
+O.engines[3].dead = False
 
 
 def results():
@@ -84,8 +129,10 @@ def results():
     is stopped early keeps what it found)."""
     wall = time.time() - start
     result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
-              "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets, "simulated_s": O.time,
-              "wall_s": wall, "wall_s_per_simulated_s": wall / O.time, "firstHit_s": hits, "fallen_s": fallen,
+              "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets,
+              "simulated_s": O.time - tPush, "settle_s": tPush, "sleep": P.sleep,
+              "asleep_now": qdem.defaultWorld().core.nAsleep, "wall_s": wall,
+              "wall_s_per_simulated_s": wall / max(O.time, 1e-12), "firstHit_s": hits, "fallen_s": fallen,
               "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
     hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
     if len(hit) >= 3:

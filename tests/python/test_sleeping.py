@@ -1,0 +1,186 @@
+"""Sleeping pieces (doc/sleeping.md): a piece at rest is left out of the step
+until something near it moves, and what the scene does is the same as without
+sleeping to within the sleep velocity.
+
+* A block resting on the floor falls asleep, stays exactly where it is, and
+  still presses on the floor with its weight (frozen reaction).
+* A block sliding into a sleeping block wakes it and pushes it as if it had
+  been awake all along (velocities within 1 % of the sliding speed).
+* Energy: the total is as well kept as without sleeping; only the kinetic
+  energy zeroed at sleep (tiny) is booked as "sleep".
+* Two stacked sleeping blocks skip their contact (none computed) and keep
+  their elastic and contact energies.
+* A moving obstacle, a write through Piece.vel or a change of gravity wakes
+  a sleeping piece."""
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+MAT = dict(radius=2e-3, viscosity=2000.0, frictionWall=0.0, frictionPiece=0.3)
+
+
+def _floor(w, vz=0.0):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId, o.axis, o.sense = 0, 0, 2, 1
+    w.core.setObstacles([o])
+    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, vz, 0, 0, 0.0]]))
+
+
+def _block(w, mat, x=0.0, z=None, vel=(0, 0, 0)):
+    z = 0.05 + mat.radius if z is None else z
+    return w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(x, 0, z), vel=vel)
+
+
+def _world(sleep):
+    w = qdem.World()
+    w.core.gravity = (0, 0, -9.81)
+    if sleep:
+        w.core.sleepVelocity = 2e-4
+        w.core.sleepTime = 0.01
+    return w
+
+
+def _dt(w):
+    return 0.8 * w.stableDt()["combined"]
+
+
+def _stepUntil(w, dt, cond, limit):
+    for _ in range(limit):
+        w.core.step(dt, 50)
+        if cond():
+            return True
+    return False
+
+
+def test_block_at_rest_sleeps_stays_put_and_keeps_pressing_on_the_floor():
+    w = _world(True)
+    mat = rubber(**MAT)
+    b = _block(w, mat)
+    _floor(w)
+    dt = _dt(w)
+    assert _stepUntil(w, dt, lambda: b.asleep, 400), "a block at rest on the floor must fall asleep"
+    assert w.core.nAsleep == 1 and w.core.sleepCount == 1
+    x = b._nodes("pos").copy()
+    weight = b.totalMass * 9.81
+    w.core.step(dt, 500)
+    assert np.array_equal(b._nodes("pos"), x)           # not integrated
+    assert np.all(b._nodes("vel") == 0)
+    fz = w.core.obstacleReactions()[0][2]
+    assert -fz == pytest.approx(weight, rel=0.01)        # still pressing with its weight
+    assert b.asleep
+    b.vel[:] = 0.0                                       # a writable view handed out: awake
+    assert not b.asleep and w.core.wakeCount == 1
+
+
+def _collision(sleep, energy=False):
+    w = _world(sleep)
+    w.core.trackEnergy = energy
+    mat = rubber(**MAT)
+    a = _block(w, mat, x=-0.3, vel=(1.0, 0, 0))
+    b = _block(w, mat, x=0.0)
+    _floor(w)
+    dt = _dt(w)
+    w.core.step(dt, 1)
+    e0 = w.core.energy["total"]
+    states = []
+    while w.core.time < 0.32:
+        w.core.step(dt, 20)
+        states.append((w.core.time, b.asleep, b.velocity()[0], a.velocity()[0]))
+    return w, states, e0
+
+
+def test_collision_with_a_sleeping_block_is_the_same_as_awake():
+    _, awake, _ = _collision(False)
+    w, slept, _ = _collision(True)
+    asleepBefore = [s[1] for s in slept if s[0] < 0.15]
+    assert any(asleepBefore), "the block standing still must sleep before it is hit"
+    assert not slept[-1][1], "the hit must wake it"
+    assert w.core.wakeCount >= 1
+    # The sliding block reaches B at about 0.2 s; compare after the hit.
+    after = [(s0, s1) for s0, s1 in zip(awake, slept) if s0[0] > 0.25]
+    assert after and max(abs(p[2] - q[2]) for p, q in after) < 0.01   # B's velocity, 1 % of 1 m/s
+    assert max(abs(p[3] - q[3]) for p, q in after) < 0.01              # A's
+    assert max(p[2] for p, _ in after) > 0.3                            # B was really pushed
+
+
+def test_energy_is_kept_across_sleep_and_wake():
+    w0, _, e00 = _collision(False, energy=True)
+    w1, _, e10 = _collision(True, energy=True)
+    drift0 = abs(w0.core.energy["total"] - e00)
+    drift1 = abs(w1.core.energy["total"] - e10)
+    ke0 = 0.5 * 1.0 ** 2 * w1.pieces[0].totalMass
+    assert drift1 <= drift0 + 1e-4 * ke0
+    assert 0 <= w1.core.energy["sleep"] < 1e-4 * ke0
+
+
+def test_stacked_sleeping_blocks_skip_their_contact_and_keep_their_energy():
+    w = _world(True)
+    w.core.trackEnergy = True
+    mat = rubber(**MAT)
+    low = _block(w, mat)
+    top = _block(w, mat, z=0.15 + 3 * mat.radius)  # faces 2 r apart: just touching
+    _floor(w)
+    dt = _dt(w)
+    w.core.step(dt, 1)
+    assert w.core.contactCounts["pointPolygon"] > 0
+    assert _stepUntil(w, dt, lambda: low.asleep and top.asleep, 600)
+    e = w.core.energy
+    w.core.step(dt, 100)
+    assert w.core.contactCounts["pointPolygon"] == 0 and w.core.contactCounts["edgeEdge"] == 0
+    e2 = w.core.energy
+    for k in ("elastic", "contactElastic", "kinetic"):
+        assert e2[k] == e[k]
+    assert e2["elastic"] > 0 and e2["contactElastic"] > 0
+    fz = w.core.obstacleReactions()[0][2]
+    assert -fz == pytest.approx((low.totalMass + top.totalMass) * 9.81, rel=0.01)
+
+
+def test_moving_floor_and_gravity_change_wake_pieces():
+    w = _world(True)
+    mat = rubber(**MAT)
+    b = _block(w, mat)
+    _floor(w)
+    dt = _dt(w)
+    assert _stepUntil(w, dt, lambda: b.asleep, 400)
+    _floor(w, vz=0.01)                 # the same floor, now moving up
+    w.core.step(dt, 1)
+    assert not b.asleep
+    w.core.step(dt, 200)
+    assert not b.asleep                # never while the floor moves
+    _floor(w)
+    assert _stepUntil(w, dt, lambda: b.asleep, 400)
+    w.core.gravity = (0, 0, -5.0)
+    assert not b.asleep
+
+
+def test_sleeping_is_off_by_default_and_checks_its_settings():
+    w = qdem.World()
+    assert w.core.sleepVelocity == 0
+    with pytest.raises(Exception, match="sleepVelocity"):
+        w.core.sleepVelocity = -1.0
+    with pytest.raises(Exception, match="sleepTime"):
+        w.core.sleepTime = float("nan")
+    with pytest.raises(ValueError, match="sleepVelocity"):
+        qdem.QdemEngine(sleepVelocity=-1)
+
+
+def test_engine_puts_a_block_on_a_yade_wall_to_sleep(scene):
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O = scene
+    mat = rubber(**MAT)
+    b = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.05 + mat.radius))
+    wall = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    O.engines = [ForceResetter(), qdem.QdemEngine(sleepVelocity=1e-3, sleepTime=0.01),
+                 NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.8 * qdem.stableDt()["combined"]
+    O.trackEnergy = True
+    for _ in range(400):
+        O.run(50, True)
+        if b.asleep:
+            break
+    assert b.asleep
+    O.run(10, True)
+    assert -O.forces.f(wall)[2] == pytest.approx(b.totalMass * 9.81, rel=0.01)
+    assert "qdemSleep" in O.energy.keys()
