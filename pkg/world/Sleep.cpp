@@ -15,6 +15,7 @@ void World::awakeSetChanged() {
     const std::size_t np = pieces.size();
     awakeTets_.clear();
     awakeNodes_.clear();
+    awakeSurf_.clear();
     nAsleep_ = 0;
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
@@ -23,6 +24,7 @@ void World::awakeSetChanged() {
         }
         awakeTets_.push_back({static_cast<int32_t>(p), pieces[p].tetBegin, pieces[p].tetEnd});
         for (int32_t n = pieces[p].nodeBegin; n < pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
+        for (int32_t s = pieces[p].surfBegin; s < pieces[p].surfEnd; ++s) awakeSurf_.push_back(s);
     }
 }
 

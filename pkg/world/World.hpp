@@ -216,6 +216,7 @@ private:
     long awakeVersion_ = 0;              // bumped whenever pieces are added or fall asleep or wake
     std::vector<TetSegment> awakeTets_;  // per awake piece, its tets
     std::vector<int32_t> awakeNodes_;    // ids of the nodes of awake pieces (used when some sleep)
+    std::vector<int32_t> awakeSurf_;     // indices (into surfNodes) of their surface nodes
     // Energy states per piece (elastic, contact with obstacles, contact with
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;

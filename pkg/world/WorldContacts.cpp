@@ -121,12 +121,14 @@ void World::pieceContactPhase(double dt) {
                    pc_.listActive.size() != np;
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = pc_.pieceActive[ip] && !pc_.listActive[ip];
     if (!rebuild) {
-        const auto ns = static_cast<int32_t>(surfNodes.size());
+        const bool all = nAsleep_ == 0;  // else only the awake pieces' nodes move
+        const auto ns = all ? static_cast<int32_t>(surfNodes.size()) : static_cast<int32_t>(awakeSurf_.size());
         double moved2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
-        for (int32_t i = 0; i < ns; ++i) {
+        for (int32_t j = 0; j < ns; ++j) {
+            const int32_t i = all ? j : awakeSurf_[j];
             const int32_t n = surfNodes[i];
-            if (!pc_.pieceActive[nodePiece[n]] || asleep_[nodePiece[n]]) continue;
+            if (!pc_.pieceActive[nodePiece[n]]) continue;
             moved2 = std::max(moved2, (at(pos, n) - Eigen::Map<const Vector3d>(&pc_.listPos[3 * i])).squaredNorm());
         }
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
@@ -215,14 +217,15 @@ void World::pieceContactPhase(double dt) {
     }
     // Unit normals of the surface triangles of active pieces (quick plane
     // test); a sleeping piece's once after it stopped.
-    const auto ntri = static_cast<int32_t>(S.nTris());
-#pragma omp parallel for schedule(static)
-    for (int32_t t = 0; t < ntri; ++t) {
-        const int32_t p = S.triPiece[t];
-        if (!pc_.pieceActive[p] || normalsFresh_[p]) continue;
-        const int32_t* c = &S.tri[3 * t];
-        const Vector3d n = (at(pos, c[1]) - at(pos, c[0])).cross(at(pos, c[2]) - at(pos, c[0])).normalized();
-        for (int d = 0; d < 3; ++d) pc_.triNormal[3 * t + d] = n[d];
+#pragma omp parallel
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        if (!pc_.pieceActive[ip] || normalsFresh_[ip]) continue;
+#pragma omp for schedule(static) nowait
+        for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
+            const int32_t* c = &S.tri[3 * t];
+            const Vector3d n = (at(pos, c[1]) - at(pos, c[0])).cross(at(pos, c[2]) - at(pos, c[0])).normalized();
+            for (int d = 0; d < 3; ++d) pc_.triNormal[3 * t + d] = n[d];
+        }
     }
     for (std::size_t ip = 0; ip < np && nAsleep_ > 0; ++ip) normalsFresh_[ip] = asleep_[ip] && pc_.pieceActive[ip];
     if (verlet && rebuild && pointPolygonOn) {
@@ -340,12 +343,13 @@ void World::pieceContactPhase(double dt) {
     }
     const double tEE = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
-    const auto ns = static_cast<int32_t>(surfNodes.size());
+    const auto ns = all ? static_cast<int32_t>(surfNodes.size()) : static_cast<int32_t>(awakeSurf_.size());
 #pragma omp parallel for schedule(static) num_threads(nth)
-    for (int32_t s = 0; s < ns; ++s)
-        if (all || !asleep_[nodePiece[surfNodes[s]]])
-            for (int th = 0; th < nth; ++th)
+    for (int32_t j = 0; j < ns; ++j) {
+        const int32_t s = all ? j : awakeSurf_[j];
+        for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[s] + d] += pc_.threadForce[th][3 * s + d];
+    }
     const double t3 = omp_get_wtime();
     // The sum of the thread buffers is booked to point-polygon, the main user.
     timings.pointPolygon = (t2 - t1) + (t3 - tEE);

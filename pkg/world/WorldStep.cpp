@@ -155,8 +155,10 @@ void World::obstaclePhase(double dt) {
     const bool energyOn = trackEnergy;
     const bool regularized = frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
-    const auto nSurf = static_cast<int32_t>(surfNodes.size());
-    const uint8_t* asleep = asleep_.data();
+    // Sleeping pieces' nodes are skipped (their history kept as it is).
+    const bool all = nAsleep_ == 0;
+    const auto nSurf = all ? static_cast<int32_t>(surfNodes.size()) : static_cast<int32_t>(awakeSurf_.size());
+    const int32_t* awakeSurf = awakeSurf_.data();
 
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound)
     {
@@ -164,10 +166,10 @@ void World::obstaclePhase(double dt) {
         double* react = obstacleReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
         double* pe = energyOn ? threadPieceEnergy_[th].data() : nullptr;
 #pragma omp for schedule(static)
-        for (int32_t s = 0; s < nSurf; ++s) {
+        for (int32_t i = 0; i < nSurf; ++i) {
+            const int32_t s = all ? i : awakeSurf[i];
             const int32_t node = surfNodes[s];
             const int ip = nodePiece[node];
-            if (asleep[ip]) continue;  // history kept as it is
             const int ob0 = pieceObstacleBegin_[ip], ob1 = pieceObstacleBegin_[ip + 1];
             int32_t* body = &slotBody_[kSlots * s];
             double* shear = &slotShear_[3 * kSlots * s];

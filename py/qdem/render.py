@@ -10,19 +10,37 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 from .stress import vonMises  # noqa: E402
 
 
-def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None):
-    """Write a PNG of every piece's surface; each triangle takes the von Mises
+def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None):
+    """Write a PNG of every piece's surface (or only of the piece indices in
+    `pieces`, framed on them: a close-up); each triangle takes the von Mises
     stress of its tetrahedron.  vmax fixes the colour scale across frames."""
     core = world.core
     X = core.pos
     vm = vonMises(core.stress())
     tris, colors = [], []
-    for p in range(core.nPieces):
+    shown = range(core.nPieces) if pieces is None else pieces
+    for p in shown:
         s = core.pieceSurface(p)
         tris.append(s["triangles"])
         colors.append(_faceStress(core, p, s, vm))
-    tris = np.vstack(tris)
-    val = np.concatenate(colors)
+    return surfacePlot(X, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor)
+
+
+def surfaceOfTets(tets):
+    """Boundary triangles of a tet mesh (faces used by one tet only) and the
+    tet owning each: for meshes read back from VTU files."""
+    tets = np.asarray(tets)
+    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 3, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 1]]])
+    owner = np.tile(np.arange(len(tets)), 4)
+    key = np.sort(faces, axis=1)
+    _, idx, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    keep = idx[count == 1]
+    return faces[keep], owner[keep]
+
+
+def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None):
+    """Write a PNG of triangles `tris` over node positions X, coloured by the
+    per-triangle values `val` (von Mises stress), framed on the triangles."""
     vmax = vmax or max(float(val.max()), 1e-30)
     fig = plt.figure(figsize=(9, 5.5))
     ax = fig.add_subplot(111, projection="3d")
@@ -31,7 +49,8 @@ def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None):
     poly.set_cmap("jet")
     poly.set_clim(0, vmax)
     ax.add_collection3d(poly)
-    lo, hi = X.min(axis=0), X.max(axis=0)
+    used = X[np.unique(tris)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
     span = (hi - lo).max()
     mid = 0.5 * (lo + hi)
     ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)

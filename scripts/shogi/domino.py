@@ -16,7 +16,9 @@
 #   sleep         sleeping pieces (doc/sleeping.md): QdemEngine.sleepVelocity in
 #                 units of sqrt(g H) (0 = off); sleepTime is 0.1 sqrt(H/g)
 # Writes out/shogi/<scene>_mu<friction>_<material>/: block VTU series (.pvd),
-# PNG snapshots coloured by von Mises stress, hits.json (time each piece is
+# PNG snapshots coloured by von Mises stress (and close-ups of the front for long
+# lines; scripts/shogi/closeups.py makes them afterwards from the VTU frames),
+# hits.json (time each piece is
 # first hit) and front.png (first-hit time against position).
 import json
 import math
@@ -81,6 +83,11 @@ def frame():
     vmax = render.snapshot(qdem.defaultWorld(), path, title="%s, mu=%g, t=%.3f s" % (P.scene, P.frictionPiece,
                                                                                        O.time - tPush), floor=0.0)
     frames.append((O.time - tPush, path, vmax))
+    if len(pieces) > 5:  # and a close-up of the front: the last piece hit, 3 behind, 2 ahead
+        front = max(i for i, h in enumerate(hits) if h is not None)
+        shown = range(max(0, front - 3), min(len(pieces), front + 3))
+        render.snapshot(qdem.defaultWorld(), "%s/close%02d.png" % (out, k), floor=0.0, pieces=shown,
+                        title="t=%.3f s, pieces %d-%d" % (O.time - tPush, shown[0] + 1, shown[-1] + 1))
 
 
 engine = qdem.QdemEngine(progressPeriod=20000, sleepVelocity=P.sleep * math.sqrt(9.81 * H),
