@@ -23,7 +23,8 @@ def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pi
         s = core.pieceSurface(p)
         tris.append(s["triangles"])
         colors.append(_faceStress(core, p, s, vm))
-    return surfacePlot(X, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor)
+    return surfacePlot(X, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor,
+                       fit=pieces is not None)
 
 
 def surfaceOfTets(tets):
@@ -38,9 +39,10 @@ def surfaceOfTets(tets):
     return faces[keep], owner[keep]
 
 
-def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None):
+def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None, fit=False):
     """Write a PNG of triangles `tris` over node positions X, coloured by the
-    per-triangle values `val` (von Mises stress), framed on the triangles."""
+    per-triangle values `val` (von Mises stress), framed on the triangles (in
+    a cube, or with fit=True in a box shaped like them: close-ups)."""
     vmax = vmax or max(float(val.max()), 1e-30)
     fig = plt.figure(figsize=(9, 5.5))
     ax = fig.add_subplot(111, projection="3d")
@@ -53,14 +55,21 @@ def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floo
     lo, hi = used.min(axis=0), used.max(axis=0)
     span = (hi - lo).max()
     mid = 0.5 * (lo + hi)
-    ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
-    ax.set_ylim(mid[1] - span / 2, mid[1] + span / 2)
-    ax.set_zlim(max(lo[2], mid[2] - span / 2), max(lo[2], mid[2] - span / 2) + span)
+    if fit:  # equal scales, box shaped like what is shown
+        box0, box1 = lo - 0.05 * span, hi + 0.05 * span
+        if floor is not None:
+            box0[2] = min(box0[2], floor)
+    else:
+        box0 = np.array([mid[0] - span / 2, mid[1] - span / 2, max(lo[2], mid[2] - span / 2)])
+        box1 = box0 + span
+    ax.set_xlim(box0[0], box1[0])
+    ax.set_ylim(box0[1], box1[1])
+    ax.set_zlim(box0[2], box1[2])
     if floor is not None:
-        xx, yy = np.meshgrid([mid[0] - span / 2, mid[0] + span / 2], [mid[1] - span / 2, mid[1] + span / 2])
+        xx, yy = np.meshgrid([box0[0], box1[0]], [box0[1], box1[1]])
         ax.plot_surface(xx, yy, np.full_like(xx, floor), color=(0.8, 0.8, 0.8, 0.3))
     ax.view_init(elev=elev, azim=azim)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_box_aspect(tuple(box1 - box0))
     ax.set_axis_off()
     fig.colorbar(poly, ax=ax, shrink=0.6, label="von Mises stress [Pa]")
     ax.set_title(title)

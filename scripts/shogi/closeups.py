@@ -42,14 +42,15 @@ def main():
         lo, hi = max(0, front - a.behind), min(hits["pieces"] - 1, front + a.ahead)
         m = meshio.read(path)
         tets = m.cells_dict["tetra"]
-        piece = np.asarray(m.cell_data_dict["piece"]["tetra"])
-        vm = np.asarray(m.cell_data_dict["vonMises"]["tetra"])
+        piece = np.asarray(m.cell_data_dict["piece"]["tetra"]).ravel()
+        vm = np.asarray(m.cell_data_dict["vonMises"]["tetra"]).ravel()
         sel = (piece >= lo) & (piece <= hi)
         tris, owner = render.surfaceOfTets(tets[sel])
         out = os.path.join(a.run, "close_%05.2fs.png" % t)
-        render.surfacePlot(m.points, tris, vm[sel][owner], out,
-                           title="t = %.2f s, pieces %d-%d (front: piece %d)" % (t, lo + 1, hi + 1, front + 1),
-                           floor=0.0)
+        val = vm[sel][owner]
+        render.surfacePlot(m.points, tris, val, out, elev=12, azim=-75, fit=True, floor=0.0,
+                           vmax=float(np.percentile(val, 99.5)),  # contact spots would wash out the rest
+                           title="t = %.2f s, pieces %d-%d (front: piece %d)" % (t, lo + 1, hi + 1, front + 1))
         print("closeups: wrote", out)
 
 
