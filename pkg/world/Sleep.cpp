@@ -133,7 +133,8 @@ void World::updateSleep(double dt) {
                 ++wakeCount;
                 changed = true;
             }
-        } else if (slowFor_[p] >= sleepTime && !fastNeighbour(p) && !movingObstacle(p) && !nearSphere(p)) {
+        } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&
+                   !nearSphere(p)) {
             putToSleep(p);
             changed = true;
         }

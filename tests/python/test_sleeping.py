@@ -155,6 +155,20 @@ def test_moving_floor_and_gravity_change_wake_pieces():
     assert not b.asleep
 
 
+def test_a_moving_piece_never_sleeps_even_with_zero_sleep_time():
+    w = _world(True)
+    w.core.sleepTime = 0.0
+    mat = rubber(**MAT)
+    b = _block(w, mat, z=0.5, vel=(0.5, 0, 0))    # in flight
+    rest = _block(w, mat, x=1.0)                  # at rest on the floor
+    _floor(w)
+    dt = _dt(w)
+    w.core.step(dt, 1)
+    assert not b.asleep
+    w.core.step(dt, 200)
+    assert not b.asleep and rest.asleep
+
+
 def test_sleeping_is_off_by_default_and_checks_its_settings():
     w = qdem.World()
     assert w.core.sleepVelocity == 0
