@@ -28,28 +28,26 @@ void World::awakeSetChanged() {
     }
 }
 
-void World::wake(std::size_t p) {
-    if (p >= asleep_.size() || !asleep_[p]) return;
+void World::wakeOne(std::size_t p) {
     asleep_[p] = 0;
     frozen_[p] = 0;
     normalsFresh_[p] = 0;
     slowFor_[p] = 0;
+    pieceSpeed2_[p] = 0;
     frozenReaction_[p].clear();
     ++wakeCount;
+}
+
+void World::wake(std::size_t p) {
+    if (p >= asleep_.size() || !asleep_[p]) return;
+    wakeOne(p);
     awakeSetChanged();
 }
 
 void World::wakeAll() {
     if (nAsleep_ == 0) return;
     for (std::size_t p = 0; p < asleep_.size(); ++p)
-        if (asleep_[p]) {
-            asleep_[p] = 0;
-            frozen_[p] = 0;
-            normalsFresh_[p] = 0;
-            slowFor_[p] = 0;
-            frozenReaction_[p].clear();
-            ++wakeCount;
-        }
+        if (asleep_[p]) wakeOne(p);
     awakeSetChanged();
 }
 
@@ -125,12 +123,7 @@ void World::updateSleep(double dt) {
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
             if (fastNeighbour(p) || movingObstacle(p) || nearSphere(p)) {
-                asleep_[p] = 0;
-                frozen_[p] = 0;
-                slowFor_[p] = 0;
-                pieceSpeed2_[p] = 0;
-                frozenReaction_[p].clear();
-                ++wakeCount;
+                wakeOne(p);
                 changed = true;
             }
         } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&

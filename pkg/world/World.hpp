@@ -196,6 +196,7 @@ private:
     // put to sleep, and the derived lists when the awake set changed.
     void updateSleep(double dt);
     void putToSleep(std::size_t p);
+    void wakeOne(std::size_t p);  // flags and clocks only: the caller calls awakeSetChanged()
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();
