@@ -20,6 +20,7 @@
 #include "../mesh/TetMesh.hpp"
 #include "Energy.hpp"
 #include "ThreadLayout.hpp"
+#include "WorldState.hpp"
 
 namespace qdem {
 
@@ -74,6 +75,13 @@ public:
     void checkCurrentDt(double dt) const;
     // Throws StabilityError when a position or velocity became NaN/infinite.
     void checkFinite() const;
+
+    // ---- restarts (Checkpoint.cpp) ---------------------------------------
+    // The dynamic state (positions, velocities, contact histories, sleeping
+    // pieces, clocks, energy sums); loadState needs the same scene built
+    // first and throws InputError naming the mismatch otherwise.
+    WorldState saveState() const;
+    void loadState(const WorldState& s);
 
     // ---- output -----------------------------------------------------------
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
@@ -185,7 +193,7 @@ private:
     template <bool Friction>
     void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
     void buildSphereGrids();
-    void updatePieceBounds();
+    void updatePieceBounds(bool all = false);  // all: sleeping pieces' too (after a load)
     void beginContactForces();
     template <bool Friction>
     void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
@@ -196,7 +204,9 @@ private:
     // put to sleep, and the derived lists when the awake set changed.
     void updateSleep(double dt);
     void putToSleep(std::size_t p);
-    void wakeOne(std::size_t p);  // flags and clocks only: the caller calls awakeSetChanged()
+    void wakeOne(std::size_t p);
+    template <class F>
+    void forEachStateColumn(F&& f);  // flags and clocks only: the caller calls awakeSetChanged()
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();

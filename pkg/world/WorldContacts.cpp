@@ -17,12 +17,12 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
-void World::updatePieceBounds() {
+void World::updatePieceBounds(bool all) {
     const std::size_t np = pieces.size();
     pc_.pieceLo.resize(3 * np);
     pc_.pieceHi.resize(3 * np);
     for (std::size_t ip = 0; ip < np; ++ip) {
-        if (asleep_[ip]) continue;  // has not moved
+        if (asleep_[ip] && !all) continue;  // has not moved
         const PieceInfo& p = pieces[ip];
         Vector3d lo = Vector3d::Constant(1e300), hi = -lo;
         for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {

@@ -217,6 +217,27 @@ void bindWorld(py::module_& m) {
         .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),
              "Wake a sleeping piece (before changing its state from outside).")
         .def("wakeAll", &World::wakeAll)
+        .def(
+            "saveState",
+            [](const World& w) {
+                py::dict d;
+                for (const auto& [name, bytes] : w.saveState().fields)
+                    d[py::str(name)] = py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+                return d;
+            },
+            "The dynamic state (positions, velocities, contact histories, sleeping pieces, clocks, energies) "
+            "as a dict of bytes: qdem.saveState writes it to a file.")
+        .def(
+            "loadState",
+            [](World& w, const py::dict& d) {
+                WorldState s;
+                for (const auto& [k, v] : d) {
+                    const std::string b = py::cast<py::bytes>(v);
+                    s.fields[py::cast<std::string>(k)] = std::vector<uint8_t>(b.begin(), b.end());
+                }
+                w.loadState(s);
+            },
+            py::arg("state"), "Restore a state from saveState() into a world built with the same pieces.")
         .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
         .def_readwrite("edgeFadeAngle", &World::edgeFadeAngle)
         .def_property(

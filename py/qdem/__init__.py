@@ -14,6 +14,7 @@ from ._core import StabilityError
 from .material import QdemMat
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface
 from .piece import Piece
+from .restart import loadState, saveState
 from .world import World, addPiece, defaultWorld, reset, stableDt
 
 __version__ = "0.1.0"
@@ -28,4 +29,4 @@ else:
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "defaultWorld", "reset",
-           "stableDt"]
+           "stableDt", "saveState", "loadState"]

@@ -1,0 +1,67 @@
+"""Restarts (qdem.saveState / loadState, py/qdem/restart.py): a run saved and
+loaded into the same scene built again goes on exactly as if it had not
+stopped - same positions and velocities to the bit, contact springs,
+sleeping pieces and energies included; a different scene or a broken file is
+refused with a message and leaves the world as it was."""
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+
+def _scene(threads=1):
+    qdem._core.setThreads(threads)
+    w = qdem.World()
+    mat = rubber(radius=2e-3, viscosity=2000.0, frictionWall=0.0, frictionPiece=0.3)
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.3, 0, 0.052), vel=(1.0, 0, 0))
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.0, 0.02, 0.052))
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.0, 0.02, 0.156))  # stacked on the second
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId, o.axis, o.sense = 0, 0, 2, 1
+    w.core.setObstacles([o])
+    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
+    w.core.gravity = (0, 0, -9.81)
+    w.core.trackEnergy = True
+    w.core.sleepVelocity = 1e-3
+    w.core.sleepTime = 0.01
+    return w
+
+
+def test_a_restarted_run_goes_on_exactly(tmp_path):
+    path = str(tmp_path / "run.qdem.npz")
+    w = _scene()
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 11000)         # the sliding block is about to hit the sleeping stack
+    assert w.core.nAsleep >= 1
+    qdem.saveState(path, world=w, scriptTime=1.25, label="run")
+    w.core.step(dt, 5000)          # through the hit
+    assert w.core.wakeCount >= 1 and w.core.contactCounts["pointPolygon"] > 0
+    w2 = _scene()
+    extra = qdem.loadState(path, world=w2)
+    assert extra == {"scriptTime": 1.25, "label": "run"}
+    w2.core.step(dt, 5000)
+    assert np.array_equal(w2.core.pos, w.core.pos)
+    assert np.array_equal(w2.core.vel, w.core.vel)
+    assert w2.core.time == w.core.time and w2.core.iter == w.core.iter
+    assert w2.core.energy == w.core.energy
+    assert [w2.core.asleep(i) for i in range(3)] == [w.core.asleep(i) for i in range(3)]
+
+
+def test_a_different_scene_or_a_broken_file_is_refused_and_changes_nothing(tmp_path):
+    path = str(tmp_path / "run.qdem.npz")
+    w = _scene()
+    w.core.step(1e-5, 10)
+    qdem.saveState(path, world=w)
+    other = qdem.World()
+    mat = rubber()
+    other.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat)
+    before = other.core.pos.copy()
+    with pytest.raises(ValueError, match="build the same scene"):
+        qdem.loadState(path, world=other)
+    assert np.array_equal(other.core.pos, before)
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(open(path, "rb").read()[:100])
+    with pytest.raises(ValueError, match="not a QDEM state file"):
+        qdem.loadState(str(broken), world=_scene())
+    assert not (tmp_path / "run.qdem.npz.tmp.npz").exists()
