@@ -2,7 +2,7 @@
 import os
 
 import numpy as np
-from yade import O, PyRunner
+from yade import PyRunner
 
 from .attrs import Attr, AttrObject
 from .stress import vonMises
@@ -24,7 +24,9 @@ def writeFrame(world, path):
 
 class VtkRecorder(PyRunner):
     """Writes ``<fileBase>NNNNNN.vtu`` every ``iterPeriod`` steps and keeps
-    ``<fileBase>.pvd`` (open it in ParaView) up to date."""
+    ``<fileBase>.pvd`` (open it in ParaView) up to date.  NNNNNN and the frame
+    times are the QDEM world's step count and time; ``frames`` lists (time,
+    file) of the frames so far (set it after a restart to keep the series)."""
 
     fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + '.pvd', "
                                  "a trailing '-', '_' or '.' dropped (out/qdem-000100.vtu, out/qdem.pvd).")
@@ -51,9 +53,12 @@ class VtkRecorder(PyRunner):
         d = os.path.dirname(self.fileBase)
         if d:
             os.makedirs(d, exist_ok=True)
-        path = "%s%06d.vtu" % (self.fileBase, O.iter)
+        # Named by the QDEM world's own step count and time, which a restart
+        # (qdem.loadState) restores: a restarted run's frames go on the series.
+        core = self.world.core
+        path = "%s%06d.vtu" % (self.fileBase, core.iter)
         writeFrame(self.world, path)
-        self.frames.append((O.time, os.path.basename(path)))
+        self.frames.append((core.time, os.path.basename(path)))
         writePvd(self.pvdPath(), self.frames)
 
     def pvdPath(self):

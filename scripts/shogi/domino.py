@@ -15,6 +15,9 @@
 #                 units of sqrt(H/g) (0 = push at once, from the stress-free shape)
 #   sleep         sleeping pieces (doc/sleeping.md): QdemEngine.sleepVelocity in
 #                 units of sqrt(g H) (0 = off); sleepTime is 0.1 sqrt(H/g)
+#   restart       1: a state is saved with every frame (checkpoint.npz,
+#                 qdem.saveState) and a run started again goes on from the last
+#                 one; 0: always from the start
 # Writes out/shogi/<scene>_mu<friction>_<material>/: block VTU series (.pvd),
 # PNG snapshots coloured by von Mises stress (and close-ups of the front for long
 # lines; scripts/shogi/closeups.py makes them afterwards from the VTU frames),
@@ -32,7 +35,7 @@ from yade import O, ForceResetter, FrictMat, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 
 readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6, count=0,
-                    settle=0.0, sleep=0.0, noTableOk=True)
+                    settle=0.0, sleep=0.0, restart=1, noTableOk=True)
 from yade.params import table as P  # noqa: E402
 
 if P.material == "table1":
@@ -72,28 +75,31 @@ def watch():
         if p.asleep:                            # still, unchanged since it fell asleep
             continue
         if hits[i] is None and np.linalg.norm(p.velocity()) > hitSpeed:
-            hits[i] = O.time - tPush
+            hits[i] = core.time - tPush
         if fallen[i] is None and p.centroid()[2] < 0.7 * z0[i]:
-            fallen[i] = O.time - tPush
+            fallen[i] = core.time - tPush
 
 
 def frame():
     k = len(frames)
     path = "%s/snap%02d.png" % (out, k)
+    recorder.record()
     vmax = render.snapshot(qdem.defaultWorld(), path, title="%s, mu=%g, t=%.3f s" % (P.scene, P.frictionPiece,
-                                                                                       O.time - tPush), floor=0.0)
-    frames.append((O.time - tPush, path, vmax))
+                                                                                       core.time - tPush), floor=0.0)
+    frames.append((core.time - tPush, path, vmax))
     if len(pieces) > 5:  # and a close-up of the front: the last piece hit, 3 behind, 2 ahead
         front = max(i for i, h in enumerate(hits) if h is not None)
         shown = range(max(0, front - 3), min(len(pieces), front + 3))
         render.snapshot(qdem.defaultWorld(), "%s/close%02d.png" % (out, k), floor=0.0, pieces=shown,
-                        title="t=%.3f s, pieces %d-%d" % (O.time - tPush, shown[0] + 1, shown[-1] + 1))
+                        title="t=%.3f s, pieces %d-%d" % (core.time - tPush, shown[0] + 1, shown[-1] + 1))
 
 
+core = qdem.defaultWorld().core
 engine = qdem.QdemEngine(progressPeriod=20000, sleepVelocity=P.sleep * math.sqrt(9.81 * H),
                          sleepTime=0.1 * math.sqrt(H / 9.81))
-O.engines = [ForceResetter(), engine, PyRunner(command="watch()", iterPeriod=50),
-             qdem.VtkRecorder(fileBase=out + "/shogi-", iterPeriod=1), NewtonIntegrator(gravity=(0, 0, -9.80665))]
+recorder = qdem.VtkRecorder(fileBase=out + "/shogi-", dead=True)  # frames written by frame()
+O.engines = [ForceResetter(), engine, PyRunner(command="watch()", iterPeriod=50), recorder,
+             NewtonIntegrator(gravity=(0, 0, -9.80665))]
 limit = engine.stableDt()
 O.dt = dt if dt else 0.8 * limit["combined"]
 nSteps = int(P.duration / O.dt)
@@ -101,16 +107,24 @@ print("shogi: %s, %d pieces, %d tets, scale %g, dt %.3g s (stable %.3g, %s), %d 
       % (P.scene, len(pieces), qdem.defaultWorld().core.nTets, scale, O.dt, limit["combined"], limit["limitedBy"],
          nSteps))
 start = time.time()
-if P.settle:
+wallBefore = 0.0                                # wall time of the runs this one restarts
+checkpoint = out + "/checkpoint.npz"
+if P.restart and os.path.exists(checkpoint):
+    saved = json.loads(qdem.loadState(checkpoint)["script"])
+    tPush, hits, fallen, z0 = saved["tPush"], saved["hits"], saved["fallen"], saved["z0"]
+    frames[:] = [tuple(f) for f in saved["frames"]]
+    recorder.frames = [tuple(f) for f in saved["vtk"]]
+    wallBefore = saved["wall"]
+    print("shogi: restarted from %s at t=%.4g s after the push (%d frames done)" % (checkpoint, core.time - tPush,
+                                                                                    len(frames)))
+elif P.settle:
     # Settle on the floor under gravity by kinetic damping (dynamic relaxation:
     # each piece's velocities are zeroed whenever its kinetic energy has just
     # peaked), then start from rest: the line stands still before the first
     # piece is tipped.
-    O.engines[3].dead = True
-    core = qdem.defaultWorld().core
     chunk = max(1, int(0.002 * math.sqrt(H / 9.81) / O.dt))     # ~1/40 of a piece's vertical period
     lastKe = [0.0] * len(pieces)
-    while O.time < P.settle * math.sqrt(H / 9.81):
+    while core.time < P.settle * math.sqrt(H / 9.81):
         O.run(chunk, True)
         for i, p in enumerate(pieces):
             if p.asleep:
@@ -124,22 +138,21 @@ if P.settle:
     p0 = pieces[0]
     p0.vel[:] = np.cross([0.0, push, 0.0], p0.pos - pivot)
     print("shogi: settled for %.3g s (%.0f s wall), %d pieces asleep; first piece tipped"
-          % (O.time, time.time() - start, core.nAsleep))
+          % (core.time, time.time() - start, core.nAsleep))
     z0 = [p.centroid()[2] for p in pieces]
-tPush = O.time
-O.engines[3].iterPeriod = max(1, nSteps // P.frames)
-O.engines[3].dead = False
+if tPush is None:
+    tPush = core.time
 
 
 def results():
     """Everything measured so far (written after every frame: a long run that
     is stopped early keeps what it found)."""
-    wall = time.time() - start
+    wall = wallBefore + time.time() - start
     result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
               "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets,
-              "simulated_s": O.time - tPush, "settle_s": tPush, "sleep": P.sleep,
+              "simulated_s": core.time - tPush, "settle_s": tPush, "sleep": P.sleep,
               "asleep_now": qdem.defaultWorld().core.nAsleep, "wall_s": wall,
-              "wall_s_per_simulated_s": wall / max(O.time, 1e-12), "firstHit_s": hits, "fallen_s": fallen,
+              "wall_s_per_simulated_s": wall / max(core.time, 1e-12), "firstHit_s": hits, "fallen_s": fallen,
               "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
     hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
     if len(hit) >= 3:
@@ -154,10 +167,15 @@ def results():
     return result, hit, wall
 
 
-for k in range(P.frames):
-    O.run(nSteps // P.frames, True)
+while len(frames) < P.frames:
+    tNext = tPush + (len(frames) + 1) * P.duration / P.frames
+    O.run(max(1, int(round((tNext - core.time) / O.dt))), True)
     frame()
     results()
+    if P.restart:
+        qdem.saveState(checkpoint, script=json.dumps({
+            "tPush": tPush, "hits": hits, "fallen": fallen, "z0": z0, "frames": frames, "vtk": recorder.frames,
+            "wall": wallBefore + time.time() - start}))
 result, hit, wall = results()
 
 import matplotlib  # noqa: E402
@@ -172,4 +190,4 @@ ax.legend()
 fig.tight_layout()
 fig.savefig(out + "/front.png", dpi=110)
 print("shogi: %.3g s simulated in %.1f s (%.3g s wall per simulated s); first hits %s; fallen %s; written to %s"
-      % (O.time, wall, wall / O.time, hits, fallen, out))
+      % (core.time, wall, wall / core.time, hits, fallen, out))
