@@ -54,13 +54,18 @@ def _stepUntil(w, dt, cond, limit):
     return False
 
 
-def test_block_at_rest_sleeps_stays_put_and_keeps_pressing_on_the_floor():
+def _sleepingBlock():
+    """A block resting on the floor, stepped until it sleeps."""
     w = _world(True)
-    mat = rubber(**MAT)
-    b = _block(w, mat)
+    b = _block(w, rubber(**MAT))
     _floor(w)
     dt = _dt(w)
     assert _stepUntil(w, dt, lambda: b.asleep, 400), "a block at rest on the floor must fall asleep"
+    return w, b, dt
+
+
+def test_block_at_rest_sleeps_stays_put_and_keeps_pressing_on_the_floor():
+    w, b, dt = _sleepingBlock()
     assert w.core.nAsleep == 1 and w.core.sleepCount == 1
     x = b._nodes("pos").copy()
     weight = b.totalMass * 9.81
@@ -138,12 +143,7 @@ def test_stacked_sleeping_blocks_skip_their_contact_and_keep_their_energy():
 
 
 def test_moving_floor_and_gravity_change_wake_pieces():
-    w = _world(True)
-    mat = rubber(**MAT)
-    b = _block(w, mat)
-    _floor(w)
-    dt = _dt(w)
-    assert _stepUntil(w, dt, lambda: b.asleep, 400)
+    w, b, dt = _sleepingBlock()
     _floor(w, vz=0.01)                 # the same floor, now moving up
     w.core.step(dt, 1)
     assert not b.asleep
