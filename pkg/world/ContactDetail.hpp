@@ -87,4 +87,31 @@ struct Candidate {
 
 constexpr int kCandidates = 32;
 
+// Mass and velocity of a candidate's closest point on triangle tn (the
+// triangle nodes' values weighted by the point's barycentric weights).
+inline void trianglePointState(const Candidate& c, const int32_t* tn, const Column<double>& mass,
+                               const Column<double>& vel, double& m, Vector3d& v) {
+    m = 0;
+    v = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+        m += c.cp.w[k] * mass[tn[k]];
+        v += c.cp.w[k] * at(vel, tn[k]);
+    }
+}
+
+// Contact normal (towards the query point P) and overlap of a candidate at
+// contact reach `reach`: a point behind the face is inside the other piece,
+// so the normal points back out and the overlap grows past the reach.  nT,
+// the face normal, stands in when P lies on the surface (dist <= eps).
+inline void candidateContact(const Candidate& c, const Vector3d& P, const Vector3d& nT, double reach, double eps,
+                             Vector3d& n, double& overlap) {
+    if (c.behind) {
+        n = c.dist > eps ? Vector3d((c.cp.point - P) / c.dist) : nT;
+        overlap = reach + c.dist;
+    } else {
+        n = c.dist > eps ? Vector3d((P - c.cp.point) / c.dist) : nT;
+        overlap = reach - c.dist;
+    }
+}
+
 }  // namespace qdem::contact_detail

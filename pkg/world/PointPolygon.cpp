@@ -239,23 +239,14 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
 
                 const int32_t* tn = &S.tri[3 * c.tri];
                 const int32_t pb = triPiece[c.tri];
-                double mT = 0;
-                Vector3d vT = Vector3d::Zero();
-                for (int k = 0; k < 3; ++k) {
-                    mT += c.cp.w[k] * mass[tn[k]];
-                    vT += c.cp.w[k] * at(vel, tn[k]);
-                }
+                double mT;
+                Vector3d vT;
+                trianglePointState(c, tn, mass, vel, mT, vT);
                 const PairLaw law = pairLaw(lawOf(pb), mass[node], mT);
                 const Vector3d nT(pc_.triNormal[3 * c.tri], pc_.triNormal[3 * c.tri + 1], pc_.triNormal[3 * c.tri + 2]);
                 Vector3d n;
                 double overlap;
-                if (c.behind) {
-                    n = c.dist > eps ? Vector3d((c.cp.point - A) / c.dist) : nT;
-                    overlap = law.reach + c.dist;
-                } else {
-                    n = c.dist > eps ? Vector3d((A - c.cp.point) / c.dist) : nT;
-                    overlap = law.reach - c.dist;
-                }
+                candidateContact(c, A, nT, law.reach, eps, n, overlap);
                 // Tangential history: same surface feature, else inherited from
                 // a contact with the same piece that ended this step (a node
                 // sliding onto the next triangle keeps its spring).

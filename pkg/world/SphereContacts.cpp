@@ -300,23 +300,14 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     if (!keep[k] || nNew == K) continue;
                     const Candidate& c = cand[k];
                     const int32_t* tn = &surf.tri[3 * c.tri];
-                    double mT = 0;
-                    Vector3d vT = Vector3d::Zero();
-                    for (int j = 0; j < 3; ++j) {
-                        mT += c.cp.w[j] * mass[tn[j]];
-                        vT += c.cp.w[j] * at(vel, tn[j]);
-                    }
+                    double mT;
+                    Vector3d vT;
+                    trianglePointState(c, tn, mass, vel, mT, vT);
                     const PairLaw law = sphereLaw(S, i, mb, mT);
                     const Vector3d nT(S.triNormal[3 * c.tri], S.triNormal[3 * c.tri + 1], S.triNormal[3 * c.tri + 2]);
                     Vector3d nrm;
                     double ov;
-                    if (c.behind) {
-                        nrm = c.dist > eps ? Vector3d((c.cp.point - C) / c.dist) : nT;
-                        ov = law.reach + c.dist;
-                    } else {
-                        nrm = c.dist > eps ? Vector3d((C - c.cp.point) / c.dist) : nT;
-                        ov = law.reach - c.dist;
-                    }
+                    candidateContact(c, C, nT, law.reach, eps, nrm, ov);
                     // Contact point on the sphere, half the overlap inside it
                     // (YADE's convention): the lever arm of friction.
                     const Vector3d arm = -std::max(R - 0.5 * ov, 0.0) * nrm;

@@ -36,6 +36,14 @@ py::dict energyDict(const Energy& e) {
     return d;
 }
 
+// A setter that refuses negative, NaN and infinite values, naming the setting.
+auto nonNegative(double World::*field, const char* name) {
+    return [field, name](World& w, double v) {
+        if (!(v >= 0) || !std::isfinite(v)) throw InputError(std::string(name) + " must be >= 0 and finite");
+        w.*field = v;
+    };
+}
+
 // (begin, end) ranges of piece i in the global arrays.
 const PieceInfo& piece(const World& w, int i) {
     if (i < 0 || i >= static_cast<int>(w.pieces.size())) throw InputError("no piece " + std::to_string(i));
@@ -195,20 +203,11 @@ void bindWorld(py::module_& m) {
                 w.frictionRegVelocity = v;
             },
             "Slip speed [m/s] at which the regularised friction law reaches mu*Fn.")
-        .def_property(
-            "sleepVelocity", [](const World& w) { return w.sleepVelocity; },
-            [](World& w, double v) {
-                if (!(v >= 0) || !std::isfinite(v)) throw InputError("sleepVelocity must be >= 0 and finite (0 = off)");
-                w.sleepVelocity = v;
-            },
-            "Pieces whose nodes all stay slower than this [m/s] for sleepTime fall asleep (0 = never).")
-        .def_property(
-            "sleepTime", [](const World& w) { return w.sleepTime; },
-            [](World& w, double t) {
-                if (!(t >= 0) || !std::isfinite(t)) throw InputError("sleepTime must be >= 0 and finite");
-                w.sleepTime = t;
-            },
-            "How long [s] a piece must stay slow before it falls asleep.")
+        .def_property("sleepVelocity", [](const World& w) { return w.sleepVelocity; },
+                      nonNegative(&World::sleepVelocity, "sleepVelocity"),
+                      "Pieces whose nodes all stay slower than this [m/s] for sleepTime fall asleep (0 = never).")
+        .def_property("sleepTime", [](const World& w) { return w.sleepTime; }, nonNegative(&World::sleepTime, "sleepTime"),
+                      "How long [s] a piece must stay slow before it falls asleep.")
         .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
              "Is the piece asleep (left out of the step until something near it moves)?")
         .def_property_readonly("nAsleep", &World::nAsleep)
