@@ -9,6 +9,18 @@ namespace qdem {
 
 using Eigen::Vector3d;
 
+std::vector<double> obstacleSignature(const std::vector<Obstacle>& obstacles) {
+    std::vector<double> sig;
+    sig.reserve(18 * obstacles.size());
+    for (const Obstacle& o : obstacles) {
+        sig.insert(sig.end(), {static_cast<double>(o.kind), static_cast<double>(o.bodyId), o.young, o.friction,
+                               static_cast<double>(o.axis), static_cast<double>(o.sense)});
+        sig.insert(sig.end(), o.halfExtents.data(), o.halfExtents.data() + 3);
+        for (const auto& v : o.localVerts) sig.insert(sig.end(), v.data(), v.data() + 3);
+    }
+    return sig;
+}
+
 void Obstacle::updateDerived() {
     rot = ori.normalized().toRotationMatrix();
     const double inf = std::numeric_limits<double>::infinity();

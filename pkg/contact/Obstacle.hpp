@@ -3,6 +3,7 @@
 // YADE every step; their reactions are summed here and handed back to YADE
 // through O.forces.
 #pragma once
+#include <vector>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -39,6 +40,11 @@ struct Obstacle {
     void updateDerived();
     Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return vel + angVel.cross(p - pos); }
 };
+
+// What identifies a list of obstacles apart from their motion: kind, body,
+// material and shape of each, flattened (18 numbers per obstacle).  Equal
+// signatures mean contact histories and reactions by index stay valid.
+std::vector<double> obstacleSignature(const std::vector<Obstacle>& obstacles);
 
 // Where a particle of radius r centred at x touches an obstacle.
 struct ObstacleHit {

@@ -57,6 +57,9 @@ WorldState World::saveState() const {
     }
     s.put("frozenStart", start.data(), start.size());
     s.put("frozenReaction", flat.data(), flat.size());
+    const std::vector<double> sig = obstacleSignature(obstacles);
+    s.put("obstacles", sig.data(), sig.size());
+    s.put("gravity", gravity.data(), 3);
     return s;
 }
 
@@ -101,6 +104,14 @@ void World::loadState(const WorldState& s) {
     updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
     pc_.listValid = false;      // Verlet lists: rebuilt from the loaded positions
     contactsActive_ = false;
+    // Sleeping pieces rest in the obstacles and gravity the state was saved
+    // with (frozen reactions are by obstacle index): if this world gets others
+    // (or the file predates these fields) they are woken at the next step.
+    obstaclesPending_ = s.fields.count("obstacles") > 0;
+    gravityPending_ = s.fields.count("gravity") > 0 && s.fields.find("gravity")->second.size() == 3 * sizeof(double);
+    loadedObstacles_ = obstaclesPending_ ? s.getAll<double>("obstacles") : std::vector<double>{};
+    if (gravityPending_) s.get("gravity", loadedGravity_.data(), 3);
+    if (!obstaclesPending_ || !gravityPending_) wakeAll();
     awakeSetChanged();
 }
 

@@ -51,6 +51,20 @@ void World::wakeAll() {
     awakeSetChanged();
 }
 
+void World::setGravity(const Eigen::Vector3d& g) {
+    const bool same = g == gravity || (gravityPending_ && g == loadedGravity_);
+    gravityPending_ = false;
+    gravity = g;
+    if (!same) wakeAll();  // a sleeping piece would not feel the change
+}
+
+void World::checkLoadedRest() {
+    const bool same = (!gravityPending_ || gravity == loadedGravity_) &&
+                      (!obstaclesPending_ || obstacleSignature(obstacles) == loadedObstacles_);
+    gravityPending_ = obstaclesPending_ = false;
+    if (!same) wakeAll();
+}
+
 void World::putToSleep(std::size_t p) {
     const PieceInfo& P = pieces[p];
     // Velocities to zero: the kinetic energy left is booked as removed.

@@ -121,9 +121,12 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
         if (o.kind == ObstacleKind::Box && !(o.halfExtents.minCoeff() >= 0))
             throw InputError(cat("obstacle ", o.bodyId, ": box extents must be >= 0"));
     }
+    const std::vector<double> sig = obstacleSignature(obs);
+    const bool same = obstaclesPending_ ? sig == loadedObstacles_ : sig == obstacleSignature(obstacles);
+    obstaclesPending_ = false;
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
-    wakeAll();  // frozen reactions are kept by obstacle index
+    if (!same) wakeAll();  // frozen reactions are kept by obstacle index
     omegaCache_.clear();
 }
 

@@ -51,6 +51,9 @@ public:
     int addMaterial(const Material& m);
     // Adds a checked mesh whose coordinates are already in the world frame.
     int addPiece(const TetMesh& mesh, int material);
+    // Pieces asleep are woken only when the list differs from the last one
+    // (or from the one of a loaded state) in kind, body or material: the
+    // reactions they keep are by obstacle index.
     void setObstacles(const std::vector<Obstacle>& obstacles);
     // Copies one obstacle's state (from YADE) for the coming step.
     void setObstacleState(int i, const Eigen::Vector3d& pos, const Eigen::Quaterniond& ori,
@@ -100,7 +103,8 @@ public:
     SphereSet spheres;  // YADE spheres near pieces: states in, forceTorque out
 
     // ---- settings -----------------------------------------------------------
-    Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+    Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // set through setGravity when pieces may sleep
+    void setGravity(const Eigen::Vector3d& g);            // wakes sleeping pieces when it changes
     bool trackEnergy = false;
     bool viscosityOn = true;  // user switch: the viscous term can be turned off
     // Cundall's non-viscous local damping, as YADE's NewtonIntegrator.damping:
@@ -222,6 +226,16 @@ private:
     std::vector<double> sleepMoved2_;    // squared displacement since the last list rebuild, when it fell asleep
     std::vector<std::vector<double>> threadSpeed2_;      // per thread, per piece
     std::vector<std::vector<double>> frozenReaction_;    // per piece: (obstacle index, F, T) x 7 at its sleep
+    // What the sleeping pieces of a loaded state rest in: the obstacle list
+    // (obstacleSignature) and gravity it was saved with.  A script restarting
+    // in a new process loads the state before its engine hands over gravity
+    // and the YADE bodies: when they are the saved ones nobody is woken; if
+    // the first step comes with others, every piece is (checkLoadedRest).
+    std::vector<double> loadedObstacles_;
+    Eigen::Vector3d loadedGravity_ = Eigen::Vector3d::Zero();
+    bool obstaclesPending_ = false;
+    bool gravityPending_ = false;
+    void checkLoadedRest();
     std::vector<double> pairReaction_;   // per (piece, obstacle) pair of the last obstacle phase, 6 each
     long nAsleep_ = 0;
     long awakeVersion_ = 0;              // bumped whenever pieces are added or fall asleep or wake

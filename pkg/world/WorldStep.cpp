@@ -16,6 +16,7 @@ void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
     double t0 = omp_get_wtime();
+    if (obstaclesPending_ || gravityPending_) checkLoadedRest();
     contactsActive_ = false;
     if (trackEnergy) {
         energy.contactElastic = 0;  // a state: summed afresh by the contact phases

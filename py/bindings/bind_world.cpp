@@ -174,10 +174,7 @@ void bindWorld(py::module_& m) {
                                })
         .def_property(
             "gravity", [](const World& w) { return w.gravity; },
-            [](World& w, const Eigen::Vector3d& g) {
-                if (g != w.gravity) w.wakeAll();  // a sleeping piece would not feel the change
-                w.gravity = g;
-            })
+            [](World& w, const Eigen::Vector3d& g) { w.setGravity(g); })
         .def_readwrite("trackEnergy", &World::trackEnergy)
         .def_readwrite("viscosityOn", &World::viscosityOn)
         .def_readwrite("localDamping", &World::localDamping)

@@ -212,15 +212,15 @@ class QdemEngine(PyRunner):
             self._progress(core)
 
     def _progress(self, core):
+        # The QDEM clock (core.iter, core.time): it goes on across restarts,
+        # where O.iter and O.time start again from 0.
         now = time.time()
-        if self._lastProgress is None:
-            rate = float("nan")
-        else:
-            rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
-        self._lastProgress = (core.iter, now)
         c = core.contactCounts
-        line = "qdem: step %d  t=%.6g s  %.0f steps/s  %d contacts" % (
-            O.iter, O.time, rate, c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
+        line = "qdem: step %d  t=%.6g s" % (core.iter, core.time)
+        if self._lastProgress is not None and core.iter > self._lastProgress[0]:
+            line += "  %.0f steps/s" % ((core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9))
+        self._lastProgress = (core.iter, now)
+        line += "  %d contacts" % (c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
         if core.sleepVelocity > 0:
             line += "  %d/%d pieces asleep" % (core.nAsleep, core.nPieces)
         if core.trackEnergy:  # energies are only summed when O.trackEnergy is on
