@@ -60,6 +60,7 @@ WorldState World::saveState() const {
     const std::vector<double> sig = obstacleSignature(obstacles);
     s.put("obstacles", sig.data(), sig.size());
     s.put("gravity", gravity.data(), 3);
+    s.put("held", held_.data(), held_.size());
     return s;
 }
 
@@ -85,7 +86,11 @@ void World::loadState(const WorldState& s) {
     forEachStateColumn([&](const char* name, auto& c) {
         s.check<std::decay_t<decltype(*c.data())>>(name, c.size());
     });
+    const bool hasHeld = s.fields.count("held") > 0;  // (files from before Piece.dynamic have none)
+    if (hasHeld) s.check<uint8_t>("held", held_.size());
     forEachStateColumn([&](const char* name, auto& c) { s.get(name, c.data(), c.size()); });
+    if (hasHeld) s.get("held", held_.data(), held_.size());
+    else std::fill(held_.begin(), held_.end(), 0);
     double clock[1];
     int64_t steps[3];
     double e[10];

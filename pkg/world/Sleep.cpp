@@ -7,6 +7,8 @@
 #include <cmath>
 
 #include "World.hpp"
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
 
 namespace qdem {
 
@@ -39,16 +41,34 @@ void World::wakeOne(std::size_t p) {
 }
 
 void World::wake(std::size_t p) {
-    if (p >= asleep_.size() || !asleep_[p]) return;
+    if (p >= asleep_.size() || !asleep_[p] || held_[p]) return;
     wakeOne(p);
     awakeSetChanged();
 }
 
 void World::wakeAll() {
     if (nAsleep_ == 0) return;
+    bool changed = false;
     for (std::size_t p = 0; p < asleep_.size(); ++p)
-        if (asleep_[p]) wakeOne(p);
-    awakeSetChanged();
+        if (asleep_[p] && !held_[p]) {
+            wakeOne(p);
+            changed = true;
+        }
+    if (changed) awakeSetChanged();
+}
+
+void World::setDynamic(std::size_t p, bool dynamic) {
+    if (p >= pieces.size()) throw InputError(cat("setDynamic: no piece ", p));
+    if (dynamic) {
+        held_[p] = 0;
+        wake(p);
+        return;
+    }
+    held_[p] = 1;
+    if (!asleep_[p]) {
+        putToSleep(p);
+        awakeSetChanged();
+    }
 }
 
 void World::setGravity(const Eigen::Vector3d& g) {
@@ -136,7 +156,7 @@ void World::updateSleep(double dt) {
     bool changed = false;
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
-            if (fastNeighbour(p) || movingObstacle(p) || nearSphere(p)) {
+            if (!held_[p] && (fastNeighbour(p) || movingObstacle(p) || nearSphere(p))) {
                 wakeOne(p);
                 changed = true;
             }

@@ -108,6 +108,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     slowFor_.push_back(0);
     pieceSpeed2_.push_back(0);
     sleepMoved2_.push_back(0);
+    held_.push_back(0);
     frozenReaction_.emplace_back();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step

@@ -160,6 +160,12 @@ public:
     long wakeCount = 0;   // and woken
     void wake(std::size_t piece);
     void wakeAll();
+    // A piece that is not dynamic (YADE's Body.dynamic) is put to sleep where
+    // it is and stays so: nothing wakes it until it is made dynamic again.
+    // Awake pieces still touch it as a fixed body; its push on obstacles
+    // stays what it was.  Works with sleeping off too.
+    bool dynamic(std::size_t piece) const { return piece >= held_.size() || !held_[piece]; }
+    void setDynamic(std::size_t piece, bool dynamic);
 
     std::size_t nNodes() const { return mass.size(); }
     std::size_t nTets() const { return tetVol0.size(); }
@@ -223,6 +229,7 @@ private:
     std::vector<uint8_t> normalsFresh_;  // asleep and its triangle normals computed since it stopped
     std::vector<double> slowFor_;        // time all its nodes have been slower than sleepVelocity [s]
     std::vector<double> pieceSpeed2_;    // largest squared node speed in the last step
+    std::vector<uint8_t> held_;          // per piece: not dynamic (asleep until made dynamic)
     std::vector<double> sleepMoved2_;    // squared displacement since the last list rebuild, when it fell asleep
     std::vector<std::vector<double>> threadSpeed2_;      // per thread, per piece
     std::vector<std::vector<double>> frozenReaction_;    // per piece: (obstacle index, F, T) x 7 at its sleep

@@ -213,6 +213,12 @@ void bindWorld(py::module_& m) {
         .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),
              "Wake a sleeping piece (before changing its state from outside).")
         .def("wakeAll", &World::wakeAll)
+        .def("dynamic", [](const World& w, int i) { piece(w, i); return w.dynamic(i); }, py::arg("piece"),
+             "Is the piece dynamic (moved by the step)?  One that is not stays asleep where it is.")
+        .def("setDynamic", [](World& w, int i, bool d) { piece(w, i); w.setDynamic(i, d); }, py::arg("piece"),
+             py::arg("dynamic"),
+             "False: the piece stops where it is and is left out of the step until set True again "
+             "(awake pieces touch it as a fixed body).")
         .def(
             "saveState",
             [](const World& w) {

@@ -25,9 +25,18 @@ class Piece:
         """A node array of the world restricted to this piece (no waking)."""
         return getattr(self.world.core, name)[self.nodeSlice]
 
-    def _wake(self):
-        if self.world.core.nAsleep:
-            self.world.core.wake(self.id)
+    def _writable(self, name):
+        """A node array for writing: wakes the piece so that what is written
+        takes effect; read-only while the piece is not dynamic (it is held
+        where it is: set dynamic = True first)."""
+        core = self.world.core
+        a = getattr(core, name)[self.nodeSlice]
+        if not core.dynamic(self.id):
+            a = a.view()
+            a.flags.writeable = False
+        elif core.nAsleep:
+            core.wake(self.id)
+        return a
 
     @property
     def asleep(self):
@@ -36,16 +45,27 @@ class Piece:
         return self.world.core.asleep(self.id)
 
     @property
+    def dynamic(self):
+        """Is the piece moved by the step (YADE's Body.dynamic)?  Set False, it
+        stops where it is, as a sleeping piece that nothing wakes: awake pieces
+        and spheres touch it as a fixed body, its push on the floor stays what
+        it was, its kinetic energy goes to energy['sleep'].  Its pos, vel,
+        extForce and blocked are read-only until it is set True again."""
+        return self.world.core.dynamic(self.id)
+
+    @dynamic.setter
+    def dynamic(self, value):
+        self.world.core.setDynamic(self.id, bool(value))
+
+    @property
     def pos(self):
-        """Node positions (n,3) [m], writable view."""
-        self._wake()
-        return self._nodes("pos")
+        """Node positions (n,3) [m], writable view (read-only while not dynamic)."""
+        return self._writable("pos")
 
     @property
     def vel(self):
         """Node velocities (n,3) [m/s] at the last half step, writable view."""
-        self._wake()
-        return self._nodes("vel")
+        return self._writable("vel")
 
     @property
     def force(self):
@@ -55,8 +75,7 @@ class Piece:
     @property
     def extForce(self):
         """Persistent user force on each node (n,3) [N], writable view."""
-        self._wake()
-        return self._nodes("extForce")
+        return self._writable("extForce")
 
     @property
     def refPos(self):
@@ -72,8 +91,7 @@ class Piece:
     def blocked(self):
         """Per node bit mask of prescribed DOFs (1=x, 2=y, 4=z): those keep
         their velocity, like YADE's blockedDOFs.  Writable view."""
-        self._wake()
-        return self.world.core.blocked[self.nodeSlice]
+        return self._writable("blocked")
 
     @property
     def tets(self):

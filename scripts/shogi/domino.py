@@ -15,6 +15,12 @@
 #                 units of sqrt(H/g) (0 = push at once, from the stress-free shape)
 #   sleep         sleeping pieces (doc/sleeping.md): QdemEngine.sleepVelocity in
 #                 units of sqrt(g H) (0 = off); sleepTime is 0.1 sqrt(H/g)
+#   retire        K > 0: a piece that has fallen and lies K or more pieces behind
+#                 the last one hit is made non-dynamic (Piece.dynamic = False:
+#                 held where it lies, awake pieces still touch it).  The pile
+#                 behind the front creeps on for seconds and would otherwise keep
+#                 every fallen piece awake; doc/shogi.md checks that K = 3 leaves
+#                 the front as it is.  0 = never
 #   restart       1: a state is saved with every frame (checkpoint.npz,
 #                 qdem.saveState) and a run started again goes on from the last
 #                 one; 0: always from the start
@@ -35,7 +41,7 @@ from yade import O, ForceResetter, FrictMat, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 
 readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6, count=0,
-                    settle=0.0, sleep=0.0, restart=1, noTableOk=True)
+                    settle=0.0, sleep=0.0, retire=0, restart=1, noTableOk=True)
 from yade.params import table as P  # noqa: E402
 
 if P.material == "table1":
@@ -47,8 +53,8 @@ else:
                        frictionPiece=P.frictionPiece, frictionWall=0.5)
     scale, dt = 1.0, None
 
-out = "out/shogi/%s%s_mu%g_%s%s" % (P.scene, "_n%d" % P.count if P.count else "", P.frictionPiece, P.material,
-                                  "_sleep%g" % P.sleep if P.sleep else "")
+out = "out/shogi/%s%s_mu%g_%s%s%s" % (P.scene, "_n%d" % P.count if P.count else "", P.frictionPiece, P.material,
+                                    "_sleep%g" % P.sleep if P.sleep else "", "_retire%d" % P.retire if P.retire else "")
 os.makedirs(out, exist_ok=True)
 H = max(shogi.KINDS[k][0] for k in shogi.SCENES[P.scene]["kinds"]) * scale * 1e-3
 push = math.sqrt(9.81 / H)                      # as shogi.scene: ~2.6x the angular velocity that just tips it
@@ -78,6 +84,11 @@ def watch():
             hits[i] = core.time - tPush
         if fallen[i] is None and p.centroid()[2] < 0.7 * z0[i]:
             fallen[i] = core.time - tPush
+    if P.retire:
+        front = max(i for i, h in enumerate(hits) if h is not None)
+        for i in range(front - P.retire + 1):
+            if fallen[i] is not None and pieces[i].dynamic:
+                pieces[i].dynamic = False
 
 
 def frame():
@@ -150,7 +161,7 @@ def results():
     wall = wallBefore + time.time() - start
     result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
               "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets,
-              "simulated_s": core.time - tPush, "settle_s": tPush, "sleep": P.sleep,
+              "simulated_s": core.time - tPush, "settle_s": tPush, "sleep": P.sleep, "retire": P.retire,
               "asleep_now": qdem.defaultWorld().core.nAsleep, "wall_s": wall,
               "wall_s_per_simulated_s": wall / max(core.time, 1e-12), "firstHit_s": hits, "fallen_s": fallen,
               "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}

@@ -11,7 +11,10 @@ sleeping to within the sleep velocity.
 * Two stacked sleeping blocks skip their contact (none computed) and keep
   their elastic and contact energies.
 * A moving obstacle, a write through Piece.vel or a change of gravity wakes
-  a sleeping piece."""
+  a sleeping piece.
+* A piece that is not dynamic (Piece.dynamic = False) stays where it is,
+  whatever touches it, until it is made dynamic again; a block bouncing off it
+  moves as off the same block with every node blocked."""
 import numpy as np
 import pytest
 
@@ -198,3 +201,71 @@ def test_engine_puts_a_block_on_a_yade_wall_to_sleep(scene):
     O.run(10, True)
     assert -O.forces.f(wall)[2] == pytest.approx(b.totalMass * 9.81, rel=0.01)
     assert "qdemSleep" in O.energy.keys()
+
+
+# -- Piece.dynamic = False: held asleep where it is ---------------------------
+
+def _hitFixedBlock(hold):
+    """Block A slides into block B, which is fixed from step 200 on: held
+    (dynamic = False) or every node blocked at zero velocity (the reference)."""
+    w = _world(False)                      # holding works with sleeping off
+    w.core.trackEnergy = True
+    mat = rubber(**MAT)
+    a = _block(w, mat, x=-0.3, vel=(1.0, 0, 0))
+    b = _block(w, mat, x=0.0)
+    _floor(w)
+    dt = _dt(w)
+    w.core.step(dt, 200)
+    if hold:
+        b.dynamic = False
+    else:
+        b.vel[:] = 0.0
+        b.blocked[:] = 7
+    e0 = w.core.energy["total"]
+    history = []
+    while w.core.time < 0.4:
+        w.core.step(dt, 100)
+        history.append(a.velocity()[0])
+    return w, a, b, np.array(history), e0
+
+
+def test_a_piece_that_is_not_dynamic_stays_put_and_others_bounce_off_it():
+    ref = _hitFixedBlock(hold=False)[3]
+    w, a, b, held, e0 = _hitFixedBlock(hold=True)
+    assert not b.dynamic and b.asleep and w.core.nAsleep == 1
+    x = b._nodes("pos").copy()
+    with pytest.raises(ValueError, match="read-only"):
+        b.pos[:] = 0.0
+    w.core.wakeAll()                       # nothing but dynamic = True wakes it
+    w.core.step(_dt(w), 100)
+    assert np.array_equal(b._nodes("pos"), x) and b.asleep
+    # A bounces off B as off the same block with every node blocked.
+    assert ref.min() < -0.3 and held[-1] < -0.3
+    assert np.abs(held - ref).max() < 1e-3
+    ke = 0.5 * a.totalMass * 1.0 ** 2
+    assert abs(w.core.energy["total"] - e0) < 0.01 * ke   # the books stay balanced
+
+
+def test_a_piece_held_in_the_air_falls_freely_once_dynamic_again(tmp_path):
+    w = _world(True)
+    mat = rubber(**MAT)
+    b = _block(w, mat, z=1.0)
+    b.dynamic = False
+    dt = _dt(w)
+    w.core.step(dt, 500)
+    z0 = b.centroid()[2]
+    assert z0 == pytest.approx(1.0, abs=1e-12) and b.asleep
+    path = str(tmp_path / "held.npz")       # kept across a restart
+    qdem.saveState(path, world=w)
+    w2 = _world(True)
+    b2 = _block(w2, mat, z=1.0)
+    qdem.loadState(path, world=w2)
+    assert not b2.dynamic and b2.asleep
+    b2.dynamic = True
+    assert not b2.asleep
+    t0 = w2.core.time
+    w2.core.step(dt, 2000)
+    t = w2.core.time - t0
+    assert z0 - b2.centroid()[2] == pytest.approx(0.5 * 9.81 * t * t, rel=0.01)
+    with pytest.raises(Exception, match="piece"):
+        w2.core.setDynamic(5, False)
