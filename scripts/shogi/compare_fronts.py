@@ -2,7 +2,11 @@
 hits.json files that scripts/shogi/domino.py writes: one plot and the front
 speeds (seed Figures 7 and 10: friction slows the propagation).
 
-    /usr/bin/python3.11 scripts/shogi/compare_fronts.py [scene] [material]
+    /usr/bin/python3.11 scripts/shogi/compare_fronts.py [scene] [material] [--reference MATERIAL2]
+
+With --reference, the runs of the same scene named MATERIAL2 (for instance
+the same line without `retire`) are drawn as open circles in the same colour,
+and the differences of first-hit times piece by piece are printed.
 """
 import glob
 import json
@@ -14,8 +18,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-scene = sys.argv[1] if len(sys.argv) > 1 else "forty"
-material = sys.argv[2] if len(sys.argv) > 2 else "soft"
+args = sys.argv[1:]
+reference = None
+if "--reference" in args:
+    i = args.index("--reference")
+    if i + 1 >= len(args):
+        sys.exit("--reference needs the material suffix of the reference runs")
+    reference = args[i + 1]
+    del args[i:i + 2]
+scene = args[0] if len(args) > 0 else "forty"
+material = args[1] if len(args) > 1 else "soft"
 runs = sorted(glob.glob("out/shogi/%s_mu*_%s/hits.json" % (scene, material)))
 if not runs:
     sys.exit("no runs of %s (%s) under out/shogi: run scripts/shogi/domino.py first" % (scene, material))
@@ -36,6 +48,17 @@ for path in runs:
                                    "fall_front_speed_m_per_s": r.get("fall_front_speed_m_per_s"),
                                    "last_hit_s": float(t.max()),
                                    "fallen_s": r.get("fallen_s")}
+    refPath = path.replace("_%s/" % material, "_%s/" % reference) if reference else None
+    if refPath and glob.glob(refPath):
+        ref = json.load(open(refPath))
+        both = [(x_, a, b) for x_, a, b in zip(r["x0_m"], r["firstHit_s"], ref["firstHit_s"])
+                if a is not None and b is not None]
+        bx, _, bt = np.array(both).T
+        ax.plot(bx, bt, "o", mfc="none", ms=10, color=line.get_color(),
+                label="first hit, friction %g, %s" % (r["frictionPiece"], reference))
+        summary[r["frictionPiece"]]["reference"] = {
+            "material": reference, "pieces_hit": sum(t_ is not None for t_ in ref["firstHit_s"]),
+            "hit_s_minus_reference_s": [round(a - b, 4) for _, a, b in both]}
 ax.set_xlabel("piece position along the line [m]")
 ax.set_ylabel("time of first hit [s]")
 ax.set_title("%s: propagation front" % scene)
