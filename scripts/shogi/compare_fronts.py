@@ -2,7 +2,7 @@
 hits.json files that scripts/shogi/domino.py writes: one plot and the front
 speeds (seed Figures 7 and 10: friction slows the propagation).
 
-    /usr/bin/python3.11 scripts/shogi/compare_fronts.py [scene] [material] [--reference MATERIAL2]
+    /usr/bin/python3.11 scripts/shogi/compare_fronts.py [scene] [material] [--reference MATERIAL2[:label]]
 
 With --reference, the runs of the same scene named MATERIAL2 (for instance
 the same line without `retire`) are drawn as open circles in the same colour,
@@ -24,7 +24,8 @@ if "--reference" in args:
     i = args.index("--reference")
     if i + 1 >= len(args):
         sys.exit("--reference needs the material suffix of the reference runs")
-    reference = args[i + 1]
+    reference, _, refLabel = args[i + 1].partition(":")
+    refLabel = refLabel or reference
     del args[i:i + 2]
 scene = args[0] if len(args) > 0 else "forty"
 material = args[1] if len(args) > 1 else "soft"
@@ -55,7 +56,7 @@ for path in runs:
                 if a is not None and b is not None]
         bx, _, bt = np.array(both).T
         ax.plot(bx, bt, "o", mfc="none", ms=10, color=line.get_color(),
-                label="first hit, friction %g, %s" % (r["frictionPiece"], reference))
+                label="first hit, friction %g, %s" % (r["frictionPiece"], refLabel))
         summary[r["frictionPiece"]]["reference"] = {
             "material": reference, "pieces_hit": sum(t_ is not None for t_ in ref["firstHit_s"]),
             "hit_s_minus_reference_s": [round(a - b, 4) for _, a, b in both]}
