@@ -82,14 +82,19 @@ def test_block_at_rest_sleeps_stays_put_and_keeps_pressing_on_the_floor():
     assert not b.asleep and w.core.wakeCount == 1
 
 
-def _collision(sleep, energy=False):
+def _slidingIntoStill(sleep, energy):
+    """Block A sliding at 1 m/s towards block B standing still 0.3 m ahead."""
     w = _world(sleep)
     w.core.trackEnergy = energy
     mat = rubber(**MAT)
     a = _block(w, mat, x=-0.3, vel=(1.0, 0, 0))
     b = _block(w, mat, x=0.0)
     _floor(w)
-    dt = _dt(w)
+    return w, a, b, _dt(w)
+
+
+def _collision(sleep, energy=False):
+    w, a, b, dt = _slidingIntoStill(sleep, energy)
     w.core.step(dt, 1)
     e0 = w.core.energy["total"]
     states = []
@@ -208,13 +213,7 @@ def test_engine_puts_a_block_on_a_yade_wall_to_sleep(scene):
 def _hitFixedBlock(hold):
     """Block A slides into block B, which is fixed from step 200 on: held
     (dynamic = False) or every node blocked at zero velocity (the reference)."""
-    w = _world(False)                      # holding works with sleeping off
-    w.core.trackEnergy = True
-    mat = rubber(**MAT)
-    a = _block(w, mat, x=-0.3, vel=(1.0, 0, 0))
-    b = _block(w, mat, x=0.0)
-    _floor(w)
-    dt = _dt(w)
+    w, a, b, dt = _slidingIntoStill(sleep=False, energy=True)   # holding works with sleeping off
     w.core.step(dt, 200)
     if hold:
         b.dynamic = False
