@@ -69,6 +69,7 @@ void World::setDynamic(std::size_t p, bool dynamic) {
         putToSleep(p);
         awakeSetChanged();
     }
+    updatePieceBounds(true);  // its box is no longer updated by the step (and may not exist yet)
 }
 
 void World::setGravity(const Eigen::Vector3d& g) {

@@ -52,7 +52,7 @@ public:
     // Adds a checked mesh whose coordinates are already in the world frame.
     int addPiece(const TetMesh& mesh, int material);
     // Pieces asleep are woken only when the list differs from the last one
-    // (or from the one of a loaded state) in kind, body or material: the
+    // (or from the one of a loaded state) in kind, body, material or shape: the
     // reactions they keep are by obstacle index.
     void setObstacles(const std::vector<Obstacle>& obstacles);
     // Copies one obstacle's state (from YADE) for the coming step.

@@ -267,3 +267,30 @@ def test_qdem_threads_leave_yade_own_thread_count_alone(scene):
     assert gomp.omp_get_max_threads() == before
     assert qdem._core.getThreads() == 2
     assert len([i for i in O.interactions if i.isReal]) > 20
+
+
+def test_sphere_bounces_off_a_piece_that_is_not_dynamic(scene):
+    # A held piece (Piece.dynamic = False) is a fixed body for spheres too:
+    # the sphere comes back up, nothing of the slab moves, the slab stays held.
+    from yade import FrictMat, Vector3, utils
+    O = scene
+    mat, slab, _ = _slab(O)
+    slab.dynamic = False
+    x0 = slab._nodes("pos").copy()
+    fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=100))
+    R = 0.005
+    top = slab.refPos[:, 2].max() + mat.radius + R + 1e-4
+    sid = O.bodies.append(utils.sphere((0.02, 0.04, top), R, material=fm))
+    O.bodies[sid].state.vel = Vector3(0, 0, -1.0)
+    O.engines = _engines(gravity=(0, 0, 0))
+    O.dt = 0.25 * O.engines[3].stableDt()["combined"]
+    touched = False
+    for _ in range(4000):
+        O.step()
+        n = O.engines[3].world.core.contactCounts["sphere"]
+        touched = touched or n > 0
+        if touched and n == 0:
+            break
+    assert touched and n == 0
+    assert 0.3 < O.bodies[sid].state.vel[2] <= 1.0
+    assert np.array_equal(slab._nodes("pos"), x0) and slab.asleep and not slab.dynamic
