@@ -11,6 +11,7 @@ Typical use inside a YADE script::
 """
 from . import _core
 from ._core import StabilityError
+from . import modes
 from .material import QdemMat
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface
 from .piece import Piece
