@@ -16,6 +16,7 @@ from .material import QdemMat
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface
 from .piece import Piece
 from .restart import loadState, saveState
+from .shapes import ballMesh
 from .world import World, addPiece, defaultWorld, reset, stableDt
 
 __version__ = "0.1.0"
@@ -30,4 +31,4 @@ else:
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "defaultWorld", "reset",
-           "stableDt", "saveState", "loadState"]
+           "stableDt", "saveState", "loadState", "ballMesh"]
