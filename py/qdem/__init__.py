@@ -26,9 +26,12 @@ try:  # the YADE-facing parts need a running YADE
 except ImportError:
     pass
 else:
+    from . import lifecycle as _lifecycle
     from .engine import QdemEngine
     from .recorder import VtkRecorder
+    from .setupcheck import SetupError
+    _lifecycle.install()  # O.save/O.load/O.reset carry QDEM; QDEM errors reach scripts as themselves
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "defaultWorld", "reset",
-           "stableDt", "saveState", "loadState", "ballMesh"]
+           "stableDt", "saveState", "loadState", "ballMesh", "SetupError"]

@@ -26,6 +26,25 @@ class Attr:
         obj.__dict__[self.name] = value
 
 
+def _showDefault(v):
+    return repr(v)
+
+
+def documented(cls):
+    """Appends the attribute list, each with its default, to the class docstring
+    (what help() shows first, as YADE's help lists attributes with defaults)."""
+    rows = []
+    for name in AttrObject.attrNames.__func__(cls):
+        a = None
+        for klass in cls.__mro__:
+            if isinstance(vars(klass).get(name), Attr):
+                a = vars(klass)[name]
+                break
+        rows.append("    %s (= %s)\n        %s" % (name, _showDefault(a.default), a.doc))
+    cls.__doc__ = (cls.__doc__ or "").rstrip() + "\n\n    Attributes (default):\n\n" + "\n".join(rows) + "\n"
+    return cls
+
+
 class AttrObject:
     """Base class: ``Cls(a=1, b=2)`` sets documented attributes, rejects unknown ones."""
 
@@ -37,6 +56,10 @@ class AttrObject:
                 if isinstance(v, Attr) and k not in names:
                     names.append(k)
         return names
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        documented(cls)
 
     def __init__(self, **kw):
         known = self.attrNames()

@@ -9,18 +9,19 @@ QDEM nodes with the same leapfrog as NewtonIntegrator (so both advance on one
 clock), writes the walls' reactions into O.forces and the QDEM energies into
 O.energy (when O.trackEnergy is on).  It is a PyRunner: the per-step cost of
 the Python glue is a few microseconds plus a few per obstacle."""
-import sys
+import math
 import time
+import warnings
 
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, yadeglue
+from . import _core, lifecycle, setupcheck, yadeglue
 from .spheres import SphereCoupling
-from .attrs import Attr, AttrObject
+from .attrs import Attr, AttrObject, documented
+from .yadeclass import EngineMeta
 from .world import defaultWorld
 
-_engines = {}
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
 FRICTION_MODELS = {"spring": 0, "regularized": 1}
@@ -32,10 +33,14 @@ ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "q
 
 
 
-class QdemEngine(PyRunner):
+@documented
+class QdemEngine(PyRunner, metaclass=EngineMeta):
     """Steps the QDEM world each YADE iteration.  Keyword construction as for any
     YADE engine: ``QdemEngine(label='qe', progressPeriod=1000)``; ``world=`` picks
-    a qdem.World other than qdem.defaultWorld()."""
+    a qdem.World other than qdem.defaultWorld().  Place it after ForceResetter
+    (and after InsertionSortCollider/InteractionLoop when YADE spheres share the
+    scene) and before NewtonIntegrator, which it reads gravity from; wrong
+    orders are refused at the first step (doc/yade.md)."""
 
     couple = Attr(True, "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again "
                         "whenever the number of bodies changes).")
@@ -86,11 +91,15 @@ class QdemEngine(PyRunner):
     sleepTime = Attr(0.01, "How long [s] a piece must stay slower than sleepVelocity before it sleeps.",
                      lambda v: None if isinstance(v, (int, float)) and v >= 0 else "must be >= 0")
 
-    def __init__(self, world=None, **kw):
+    _yadeAttrs = ("label", "dead")   # YADE's own Engine attributes it takes as keywords
+    _public = ("stableDt", "stableTimeStep", "proxyIds", "bodiesChanged", "sphereCouplingTime", "stepOnce",
+               "dict")
+
+    def __init__(self, world=None, qdemId=None, **kw):
         PyRunner.__init__(self)
         known = AttrObject.attrNames.__func__(type(self))
         for k, v in kw.items():
-            if k in ("label", "dead") or k in known:
+            if k in self._yadeAttrs or k in known:
                 setattr(self, k, v)
             else:
                 raise TypeError("QdemEngine: unknown keyword %r; known: world, label, dead, %s"
@@ -98,9 +107,14 @@ class QdemEngine(PyRunner):
         self.world = world or defaultWorld()
         self.iterPeriod = 1
         self.initRun = True
-        key = len(_engines)
-        _engines[key] = self
-        self.command = "import qdem.engine; qdem.engine._step(%d)" % key
+        self.qdemId = qdemId or lifecycle.newId()
+        lifecycle.engines[self.qdemId] = self
+        # The command names the engine by an id that YADE saves with the scene:
+        # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
+        self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId
+        self._checkedSetup = None
+        self._warnedDamping = False
+        self._runStart = None
         self._nBodies = -1
         self._ids, self._states = [], None
         self._dtChecked = None
@@ -108,7 +122,14 @@ class QdemEngine(PyRunner):
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
 
+    def __repr__(self):
+        return "<QdemEngine%s at %#x>" % (" %r" % self.label if self.label else "", id(self))
+
     # -- public helpers --------------------------------------------------------
+    def dict(self):
+        """QDEM's settings of this engine as a plain dict (like YADE's Serializable.dict())."""
+        return {k: getattr(self, k) for k in AttrObject.attrNames.__func__(type(self))}
+
     def stableDt(self):
         """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
         current YADE obstacles included."""
@@ -116,6 +137,30 @@ class QdemEngine(PyRunner):
         if self._spheres is not None and self.spheres:
             self._spheres.listAll(O)  # any sphere may come near: bound them all
         return self.world.core.stableDt()
+
+    def stableTimeStep(self):
+        """The largest O.dt [s] QDEM accepts in this scene (a number, as YADE's
+        utils.PWaveTimeStep()): stableDt()['combined']."""
+        return float(self.stableDt()["combined"])
+
+    # -- save / load (lifecycle.py) ------------------------------------------------
+    def savedState(self):
+        """What O.save keeps of this engine besides its PyRunner fields."""
+        sp = self._spheres
+        return {"kind": "QdemEngine", "settings": self.dict(), "label": self.label, "dead": bool(self.dead),
+                "proxies": list(sp.proxies) if sp is not None else [],
+                "proxyBox": [[list(map(float, lo)), list(map(float, hi))] for lo, hi in sp.proxyBox]
+                if sp is not None else []}
+
+    @classmethod
+    def fromSaved(cls, qdemId, st, runner=None):
+        """The engine of a loaded scene, from savedState()."""
+        e = cls(qdemId=qdemId, **st["settings"])
+        e.label, e.dead = st.get("label", ""), st.get("dead", False)
+        if st.get("proxies"):
+            e._spheres = SphereCoupling(e.world, int(e.sphereMask), float(e.sphereMargin))
+            e._spheres.adopt(st["proxies"], st["proxyBox"])
+        return e
 
     def proxyIds(self):
         """Ids of the proxy bodies (one non-dynamic wire Tetra per piece) through which
@@ -164,10 +209,22 @@ class QdemEngine(PyRunner):
 
     def _run(self):
         core = self.world.core
+        if self._checkedSetup != O.iter:  # first step of a run, and every checkPeriod
+            if self._checkedSetup is None or (self.checkPeriod and O.iter % self.checkPeriod == 0) \
+                    or O.iter < (self._checkedSetup or 0):
+                setupcheck.check(self, O)
+            self._checkedSetup = O.iter
+        stop = O.stopAtIter  # a new O.run(n): remember where it started (progress share and ETA)
+        if self._runStart is None or self._runStart[1] != stop:
+            self._runStart = (O.iter, stop)
         if self.threads:
             _core.setThreads(int(self.threads))
         self._syncObstacles()
-        core.gravity = yadeglue.findGravity(O)
+        g = yadeglue.findGravity(O)
+        if not all(math.isfinite(x) for x in g):
+            raise ValueError("QdemEngine: NewtonIntegrator.gravity = %s is not finite: set a finite gravity "
+                             "vector" % (tuple(g),))
+        core.gravity = g
         core.trackEnergy = bool(O.trackEnergy)
         core.viscosityOn = bool(self.viscosity)
         core.localDamping = float(self.damping)
@@ -213,13 +270,22 @@ class QdemEngine(PyRunner):
 
     def _progress(self, core):
         # The QDEM clock (core.iter, core.time): it goes on across restarts,
-        # where O.iter and O.time start again from 0.
+        # where O.iter and O.time start again from 0.  The share done and the
+        # time left come from O.run's target (O.stopAtIter) when it has one.
         now = time.time()
         c = core.contactCounts
         line = "qdem: step %d  t=%.6g s" % (core.iter, core.time)
+        rate = None
         if self._lastProgress is not None and core.iter > self._lastProgress[0]:
-            line += "  %.0f steps/s" % ((core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9))
+            rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
+            line += "  %.0f steps/s" % rate
         self._lastProgress = (core.iter, now)
+        start, stop = self._runStart
+        if stop > 0 and stop > O.iter:
+            done = (O.iter + 1 - start) / max(stop - start, 1)
+            line += "  %3.0f%%" % (100 * min(done, 1.0))
+            if rate:
+                line += "  ETA %s" % _duration((stop - O.iter - 1) / rate)
         line += "  %d contacts" % (c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
         if core.sleepVelocity > 0:
             line += "  %d/%d pieces asleep" % (core.nAsleep, core.nPieces)
@@ -229,5 +295,18 @@ class QdemEngine(PyRunner):
         print(line, flush=True)
 
 
-def _step(key):
-    _engines[key]._run()
+def _duration(s):
+    s = int(round(s))
+    return "%dh%02dm%02ds" % (s // 3600, s // 60 % 60, s % 60) if s >= 3600 else "%dm%02ds" % (s // 60, s % 60)
+
+
+def _step(qdemId):
+    """Called by the PyRunner command of a QdemEngine: one QDEM step.  A QDEM
+    error is kept for the wrappers of O.run/O.step/O.wait, which hand it to the
+    script as itself (YADE would turn it into 'RuntimeError: PyRunner error.')."""
+    engine = lifecycle.engineFor(qdemId)
+    try:
+        engine._run()
+    except Exception as e:
+        lifecycle._pending.append(e)
+        raise

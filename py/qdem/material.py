@@ -41,6 +41,16 @@ class QdemMat(AttrObject):
                             "sets the contact dashpot.", _restitution)
     label = Attr("", "Free text label, as YADE materials have.")
 
+    def __setattr__(self, name, value):
+        # The compiled world copies a material when a piece first uses it
+        # (mass, stable step, contact constants are derived from it there):
+        # a later edit would be silently ignored, so it is refused.
+        if self.__dict__.get("_inUse") and name in type(self).attrNames() and name != "label":
+            raise ValueError("QdemMat: cannot change %s after addPiece used this material (the pieces keep the "
+                             "values they were built with). Make a new QdemMat for new pieces: "
+                             "qdem.QdemMat(**dict(mat.dict(), %s=%r))" % (name, name, value))
+        object.__setattr__(self, name, value)
+
     def coreArgs(self):
         """Arguments of the compiled World.addMaterial, in order."""
         return (float(self.young), float(self.poisson), float(self.density), float(self.viscosity),

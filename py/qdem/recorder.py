@@ -4,12 +4,12 @@ import os
 import numpy as np
 from yade import PyRunner
 
-from .attrs import Attr, AttrObject
+from . import lifecycle
+from .attrs import Attr, AttrObject, documented
 from .stress import vonMises
 from .vtu import writePvd, writeVtu
 from .world import defaultWorld
-
-_recorders = {}
+from .yadeclass import EngineMeta
 
 
 def writeFrame(world, path):
@@ -22,7 +22,8 @@ def writeFrame(world, path):
              cellData={"vonMises": vonMises(stress), "stress": stress, "piece": core.tetPiece})
 
 
-class VtkRecorder(PyRunner):
+@documented
+class VtkRecorder(PyRunner, metaclass=EngineMeta):
     """Writes ``<fileBase>NNNNNN.vtu`` every ``iterPeriod`` steps and keeps
     ``<fileBase>.pvd`` (open it in ParaView) up to date.  NNNNNN and the frame
     times are the QDEM world's step count and time; ``frames`` lists (time,
@@ -31,7 +32,9 @@ class VtkRecorder(PyRunner):
     fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + '.pvd', "
                                  "a trailing '-', '_' or '.' dropped (out/qdem-000100.vtu, out/qdem.pvd).")
 
-    def __init__(self, world=None, **kw):
+    _public = ("record", "pvdPath", "dict")
+
+    def __init__(self, world=None, qdemId=None, **kw):
         PyRunner.__init__(self)
         known = AttrObject.attrNames.__func__(type(self))
         for k, v in kw.items():
@@ -44,9 +47,31 @@ class VtkRecorder(PyRunner):
             self.iterPeriod = 1000
         self.world = world or defaultWorld()
         self.frames = []
-        key = len(_recorders)
-        _recorders[key] = self
-        self.command = "import qdem.recorder; qdem.recorder._record(%d)" % key
+        self.qdemId = qdemId or lifecycle.newId()
+        lifecycle.engines[self.qdemId] = self
+        self.command = "import qdem.recorder; qdem.recorder._record('%s')" % self.qdemId
+
+    def dict(self):
+        """The recorder's settings as a plain dict."""
+        return {k: getattr(self, k) for k in AttrObject.attrNames.__func__(type(self))}
+
+    def savedState(self):
+        """What O.save keeps of this recorder besides its PyRunner fields."""
+        return {"kind": "VtkRecorder", "settings": self.dict(), "frames": [list(f) for f in self.frames],
+                "label": self.label, "dead": bool(self.dead), "iterPeriod": self.iterPeriod,
+                "virtPeriod": self.virtPeriod, "realPeriod": self.realPeriod, "initRun": self.initRun,
+                "iterLast": self.iterLast, "virtLast": self.virtLast, "nDone": self.nDone, "nDo": self.nDo}
+
+    @classmethod
+    def fromSaved(cls, qdemId, st, runner=None):
+        r = cls(qdemId=qdemId, **st["settings"])
+        # nDone too: YADE's PeriodicEngine restarts its clock at its first call when nDone is 0
+        for k in ("label", "dead", "iterPeriod", "virtPeriod", "realPeriod", "initRun", "iterLast", "virtLast",
+                  "nDone", "nDo"):
+            if k in st:
+                setattr(r, k, st[k])
+        r.frames = [tuple(f) for f in st.get("frames", [])]
+        return r
 
     def record(self):
         """Write one frame now."""
@@ -67,5 +92,10 @@ class VtkRecorder(PyRunner):
         return base + ".pvd"
 
 
-def _record(key):
-    _recorders[key].record()
+def _record(qdemId):
+    rec = lifecycle.engineFor(qdemId)
+    try:
+        rec.record()
+    except Exception as e:
+        lifecycle._pending.append(e)
+        raise

@@ -107,6 +107,12 @@ class SphereCoupling:
         self.collider.doSort = True  # the collider sees the new bound at its next run
         self._dirty = True
 
+    def adopt(self, proxies, boxes):
+        """Take over the proxy bodies of a loaded scene (O.load keeps them in O.bodies)."""
+        self.proxies = [int(b) for b in proxies]
+        self.proxyBox = [(np.array(lo), np.array(hi)) for lo, hi in boxes]
+        self._dirty = True  # lists read again; safe boxes recomputed at the first step
+
     def ownsBody(self, bid):
         return bid in self.proxies
 

@@ -45,6 +45,7 @@ class World:
         key = id(mat)
         if key not in self._materialIndex:
             self._materialIndex[key] = (mat, self.core.addMaterial(*mat.coreArgs()))
+            mat._inUse = True  # later edits are refused (QdemMat.__setattr__)
         return self._materialIndex[key][1]
 
     def addPiece(self, mesh, material=None, pos=(0, 0, 0), ori=None, vel=(0, 0, 0), angVel=(0, 0, 0),

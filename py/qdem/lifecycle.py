@@ -1,0 +1,269 @@
+"""QDEM inside YADE's scene life cycle: O.save / O.load (every format YADE
+writes: .yade, .gz, .bz2, .xml), O.saveTmp / O.loadTmp, O.reset, and QDEM
+errors reaching the script as what they are.
+
+How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
+(the type of ``O``), calling YADE's own method inside each wrapper.
+
+- ``O.save(f)`` / ``O.saveTmp(name)`` first write the whole QDEM scene -
+  materials, meshes, the dynamic state that ``qdem.saveState`` writes, the
+  settings of every QdemEngine and the frame list of every VtkRecorder - into
+  ``O.tags['qdem']`` (compressed npz, base64), so it is *inside* YADE's saved
+  scene: one file, which saveTmp, mpy and yade-batch carry like any scene.
+- ``O.load(f)`` / ``O.loadTmp(name)`` rebuild the QDEM world from that tag,
+  or empty it when the loaded scene has none, and put QdemEngine and
+  VtkRecorder objects back in O.engines (YADE keeps them as plain PyRunners).
+  A scene whose engines step QDEM but that carries no QDEM tag is refused
+  with a message saying what to do.  A PyRunner that finds no engine object
+  for its command (a scene loaded some other way) rebuilds the world and the
+  engine from the same tag at its first call.
+- ``O.reset()`` (and resetThisScene, resetCurrentScene) empties the QDEM world.
+- A QDEM exception inside ``O.run``/``O.step``/``O.wait`` reaches the script as
+  itself (``except qdem.StabilityError`` works, message intact), where YADE
+  would give a generic ``RuntimeError: PyRunner error.``."""
+import base64
+import io
+import json
+import uuid
+import weakref
+
+import numpy as np
+
+FORMAT = 1
+TAG = "qdem"
+
+# Engine and recorder objects by their id (the id is in the PyRunner command,
+# which YADE saves with the scene); weak, so O.engines owns them.
+engines = weakref.WeakValueDictionary()
+_pending = []  # the QDEM exception of the step that failed, for the wrappers of O.run/O.step/O.wait
+
+
+def newId():
+    return uuid.uuid4().hex[:16]
+
+
+# ---------------------------------------------------------------------------
+# The QDEM scene as one string
+
+
+def _coreSettings(core):
+    return {k: getattr(core, k) for k in ("verletSkin", "edgeFeatureAngle", "edgeFadeAngle")}
+
+
+def sceneBlob(world, O):
+    """Everything needed to rebuild `world` and the QDEM engines of O.engines, as a string."""
+    from .material import QdemMat
+    core = world.core
+    meta = {"format": FORMAT, "settings": _coreSettings(core), "materials": [], "pieces": [], "engines": {}}
+    arrays = {}
+    mats = sorted(world._materialIndex.values(), key=lambda mi: mi[1])
+    for k, (mat, index) in enumerate(mats):
+        if index != k:
+            raise RuntimeError("qdem: material indices are not contiguous (internal error)")
+        meta["materials"].append({n: getattr(mat, n) for n in QdemMat.attrNames()})
+    for p in world.pieces:
+        i = len(meta["pieces"])
+        meta["pieces"].append({"material": world.materialIndex(p.material)})
+        arrays["refPos%d" % i] = np.array(p.refPos)
+        arrays["tets%d" % i] = np.array(p.tets, dtype=np.int32)
+        arrays["oldOf%d" % i] = np.asarray(p.originalNodeIds, dtype=np.int32)
+    for name, data in core.saveState().items():
+        arrays["state:" + name] = np.frombuffer(data, dtype=np.uint8)
+    for e in O.engines:
+        obj = engines.get(_idOf(e))
+        if obj is not None:
+            if obj.world is not world:
+                raise RuntimeError("O.save: engine %r steps a qdem.World other than the default one; only the "
+                                   "default world (qdem.addPiece) is saved with the scene" % obj)
+            meta["engines"][obj.qdemId] = obj.savedState()
+    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def restoreWorld(blob):
+    """A new default world built from a sceneBlob string; returns (world, engine states)."""
+    from . import world as worldModule
+    from .material import QdemMat
+    from .piece import Piece
+    try:
+        data = np.load(io.BytesIO(base64.b64decode(blob)))
+        meta = json.loads(data["meta"].tobytes().decode())
+    except Exception as e:  # a damaged tag: say so, never half-build a world
+        raise ValueError("O.load: the scene's QDEM state (O.tags['qdem']) is damaged: %s" % e) from None
+    if meta.get("format") != FORMAT:
+        raise ValueError("O.load: the scene's QDEM state has format %r, this qdem reads %d"
+                         % (meta.get("format"), FORMAT))
+    worldModule.reset()
+    w = worldModule.defaultWorld()
+    mats = [QdemMat(**m) for m in meta["materials"]]
+    for m in mats:
+        w.materialIndex(m)
+    for i, pm in enumerate(meta["pieces"]):
+        mat = mats[pm["material"]]
+        pid = w.core.addPiece(data["refPos%d" % i], data["tets%d" % i], w.materialIndex(mat))
+        w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
+        mat._inUse = True
+    for k, v in meta["settings"].items():
+        setattr(w.core, k, v)
+    w.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
+    return w, meta["engines"]
+
+
+# ---------------------------------------------------------------------------
+# Engines in O.engines
+
+
+def _blob(O):
+    """The QDEM scene string of O.tags, or None."""
+    return (O.tags[TAG] or None) if O.tags.has_key(TAG) else None
+
+
+def _idOf(e):
+    """The qdem id in a PyRunner's command ('' for any other engine)."""
+    cmd = getattr(e, "command", "")
+    if not isinstance(cmd, str) or not cmd.startswith("import qdem"):
+        return ""
+    i = cmd.find("('")
+    return cmd[i + 2:cmd.find("'", i + 2)] if i >= 0 else ""
+
+
+def _rebind(O, engineStates):
+    """Replace the plain PyRunners of QDEM engines in O.engines by the engine
+    objects, built from their saved settings; labels follow."""
+    from .engine import QdemEngine
+    from .recorder import VtkRecorder
+    kinds = {"QdemEngine": QdemEngine, "VtkRecorder": VtkRecorder}
+    out, changed = [], False
+    for e in O.engines:
+        qid = _idOf(e)
+        st = engineStates.get(qid) if qid else None
+        if st is None or isinstance(e, tuple(kinds.values())):
+            out.append(e)
+            continue
+        obj = kinds[st["kind"]].fromSaved(qid, st, e)
+        out.append(obj)
+        changed = True
+    if changed:
+        O.engines = out
+        import builtins
+        for obj in out:
+            lab = getattr(obj, "label", "")
+            if lab and _idOf(obj):
+                setattr(builtins, lab, obj)  # where YADE puts labels
+    return changed
+
+
+def afterLoad(O):
+    """Bring QDEM in line with a scene YADE has just loaded."""
+    from . import world as worldModule
+    blob = _blob(O)
+    qdemEngines = [e for e in O.engines if _idOf(e)]
+    if blob is None:
+        worldModule.reset()
+        if qdemEngines:
+            raise RuntimeError("O.load: this scene has QDEM engines but no QDEM state (O.tags['qdem']): it was "
+                               "saved by a script that did not import qdem before O.save. Re-run the script "
+                               "with 'import qdem' at its top, or rebuild the pieces and use qdem.loadState "
+                               "with a file written by qdem.saveState.")
+        return
+    _, states = restoreWorld(blob)
+    O.tags[TAG] = ""  # the live scene keeps no stale copy (YADE's tags cannot be deleted)
+    _rebind(O, states)
+
+
+def engineFor(qid):
+    """The engine object of a PyRunner command; rebuilt from O.tags when a
+    scene was loaded without qdem's wrappers (e.g. qdem imported after O.load)."""
+    obj = engines.get(qid)
+    if obj is not None:
+        return obj
+    from yade import O
+    if _blob(O):
+        afterLoad(O)
+        obj = engines.get(qid)
+        if obj is not None:
+            return obj
+    raise RuntimeError("qdem: no engine for command id %s: this scene was saved without its QDEM state. "
+                       "Re-run the script that built it with 'import qdem' before O.save." % qid)
+
+
+# ---------------------------------------------------------------------------
+# Wrapping Omega's methods
+
+
+def _wrapErrors(orig):
+    def wrapped(self, *a, **k):
+        if orig.__name__ != "wait":
+            del _pending[:]
+        try:
+            r = orig(self, *a, **k)
+        except RuntimeError as e:
+            if _pending and "PyRunner error" in str(e):
+                err = _pending.pop()
+                del _pending[:]
+                raise err.with_traceback(None) from None
+            raise
+        if _pending and (orig.__name__ != "run" or (a[1:2] or [k.get("wait", False)])[0]):
+            # O.step() logs an engine's error and returns: raise it here
+            err = _pending.pop()
+            del _pending[:]
+            raise err.with_traceback(None) from None
+        return r
+    wrapped.__doc__ = orig.__doc__
+    wrapped.__name__ = getattr(orig, "__name__", "wrapped")
+    wrapped._qdemOrig = orig
+    return wrapped
+
+
+def _wrapSave(orig):
+    def wrapped(self, *a, **k):
+        from .world import defaultWorld
+        w = defaultWorld()
+        if w.pieces or any(_idOf(e) for e in self.engines):
+            self.tags[TAG] = sceneBlob(w, self)
+        try:
+            return orig(self, *a, **k)
+        finally:
+            if _blob(self):
+                self.tags[TAG] = ""
+    wrapped.__doc__ = orig.__doc__
+    wrapped._qdemOrig = orig
+    return wrapped
+
+
+def _wrapLoad(orig):
+    def wrapped(self, *a, **k):
+        r = orig(self, *a, **k)
+        afterLoad(self)
+        return r
+    wrapped.__doc__ = orig.__doc__
+    wrapped._qdemOrig = orig
+    return wrapped
+
+
+def _wrapReset(orig):
+    def wrapped(self, *a, **k):
+        from . import world as worldModule
+        r = orig(self, *a, **k)
+        worldModule.reset()
+        return r
+    wrapped.__doc__ = orig.__doc__
+    wrapped._qdemOrig = orig
+    return wrapped
+
+
+def install():
+    """Wrap Omega's methods (once per process)."""
+    from yade import wrapper
+    Omega = wrapper.Omega
+    plan = {"run": _wrapErrors, "step": _wrapErrors, "wait": _wrapErrors,
+            "save": _wrapSave, "saveTmp": _wrapSave,
+            "load": _wrapLoad, "loadTmp": _wrapLoad,
+            "reset": _wrapReset, "resetThisScene": _wrapReset, "resetCurrentScene": _wrapReset}
+    for name, wrap in plan.items():
+        orig = getattr(Omega, name, None)
+        if orig is None or hasattr(orig, "_qdemOrig"):
+            continue
+        setattr(Omega, name, wrap(orig))

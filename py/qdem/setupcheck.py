@@ -1,0 +1,77 @@
+"""Set-up mistakes of a YADE scene with QDEM, caught at the first step (and
+every QdemEngine.checkPeriod steps) with a message that names the fix.
+
+Each of these runs without complaint in YADE and gives wrong physics:
+- QdemEngine after NewtonIntegrator: YADE bodies move before QDEM has added
+  its contact forces (a sphere falls through a block; wall reactions of
+  QDEM pieces are counted in the next step's forces, ~2000x the weight);
+- ForceResetter after QdemEngine: QDEM's reactions are wiped;
+- the collider after QdemEngine while spheres touch pieces: the lists QDEM
+  reads are a step old;
+- two QdemEngines stepping one world: QDEM time runs at twice O.time;
+- no NewtonIntegrator: QDEM reads gravity from it (it would silently be 0)
+  and YADE bodies would not move;
+- NewtonIntegrator.damping > 0 with QDEM pieces and dynamic YADE bodies:
+  YADE bodies are damped and QDEM nodes are not (a warning: the momentum
+  they exchange is no longer conserved)."""
+import warnings
+
+from . import lifecycle
+
+
+class SetupError(RuntimeError):
+    """A scene set up in a way that would silently give wrong physics."""
+
+
+def _kinds(O):
+    return [type(e).__name__ for e in O.engines]
+
+
+def check(engine, O):
+    engines = list(O.engines)
+    kinds = [type(e).__name__ for e in engines]
+    mine = [i for i, e in enumerate(engines) if lifecycle._idOf(e) == engine.qdemId]
+    if not mine:
+        return  # stepped by hand (stepOnce) or from outside O.engines: nothing to order
+    i = mine[0]
+    newton = [k for k, n in enumerate(kinds) if n == "NewtonIntegrator"]
+    if not newton:
+        raise SetupError("QdemEngine: no NewtonIntegrator in O.engines. QDEM reads gravity from it and YADE "
+                         "bodies need it to move: add NewtonIntegrator(gravity=(0, 0, -9.81)) (or gravity=(0, 0, 0))"
+                         " after QdemEngine.")
+    if newton[0] < i:
+        raise SetupError("QdemEngine is at O.engines[%d], after NewtonIntegrator (O.engines[%d]): YADE bodies would "
+                         "move before QDEM adds its contact forces, and QDEM's reactions would act a step late. "
+                         "Put QdemEngine before NewtonIntegrator: [ForceResetter(), ..., QdemEngine(), "
+                         "NewtonIntegrator(...)]." % (i, newton[0]))
+    resetters = [k for k, n in enumerate(kinds) if n == "ForceResetter"]
+    if resetters and resetters[-1] > i:
+        raise SetupError("ForceResetter is at O.engines[%d], after QdemEngine (O.engines[%d]): it would wipe the "
+                         "forces QDEM writes. Put ForceResetter first." % (resetters[-1], i))
+    colliders = [k for k, n in enumerate(kinds) if n == "InsertionSortCollider"]
+    loops = [k for k, n in enumerate(kinds) if n == "InteractionLoop"]
+    if engine.spheres and engine._spheres is not None and colliders and colliders[0] > i:
+        raise SetupError("InsertionSortCollider is at O.engines[%d], after QdemEngine (O.engines[%d]): QDEM "
+                         "finds the spheres near its pieces through the collider. Put QdemEngine after "
+                         "InsertionSortCollider and InteractionLoop." % (colliders[0], i))
+    if engine.spheres and engine._spheres is not None and loops and loops[0] > i:
+        raise SetupError("InteractionLoop is at O.engines[%d], after QdemEngine (O.engines[%d]): put QdemEngine "
+                         "after it so both add their forces in the same step." % (loops[0], i))
+    others = [e for k, e in enumerate(engines) if k != i and not getattr(e, "dead", False)
+              and lifecycle._idOf(e) and lifecycle.engines.get(lifecycle._idOf(e)) is not None
+              and type(lifecycle.engines.get(lifecycle._idOf(e))).__name__ == "QdemEngine"
+              and lifecycle.engines[lifecycle._idOf(e)].world is engine.world]
+    if others and not engine.dead:
+        raise SetupError("Two QdemEngines step the same QDEM world (O.engines[%d] and another): QDEM time would "
+                         "run at twice O.time. Keep one QdemEngine per world (set dead=True on the other)." % i)
+    damping = float(getattr(engines[newton[0]], "damping", 0.0))
+    if damping > 0 and engine.world.pieces and not engine._warnedDamping:
+        proxies = set(engine.proxyIds())
+        yadeBodies = any(b is not None and b.dynamic and b.id not in proxies for b in O.bodies)
+        if yadeBodies and abs(damping - float(engine.damping)) > 0:
+            engine._warnedDamping = True
+            warnings.warn("NewtonIntegrator.damping=%g damps YADE bodies but not QDEM nodes (QdemEngine.damping="
+                          "%g): momentum exchanged between spheres and pieces is not conserved and the two "
+                          "settle at different rates. Set NewtonIntegrator(damping=0) for dynamics, or "
+                          "QdemEngine(damping=%g) to damp both alike." % (damping, float(engine.damping), damping),
+                          RuntimeWarning, stacklevel=2)

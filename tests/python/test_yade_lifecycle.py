@@ -1,0 +1,215 @@
+"""QDEM in YADE's scene life cycle (issue 15): O.save/O.load in every format
+and O.saveTmp/O.loadTmp continue to the bit, O.reset empties the QDEM world,
+QDEM errors reach the script as themselves, set-up mistakes are refused at
+the first step, help() and dict() show QDEM's settings."""
+import io
+import contextlib
+import os
+import subprocess
+import textwrap
+
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+SCENE = """
+import sys, numpy as np, qdem
+from yade import O, ForceResetter, NewtonIntegrator, utils
+mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=20, radius=0.01)
+block = qdem.addPiece(qdem.boxMesh((0.4, 0.4, 0.4), (3, 3, 3)), mat, pos=(0, 0, 0.3), angVel=(0, 1, 0))
+other = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), mat, pos=(0.45, 0, 0.3), vel=(-1, 0, 0))
+O.bodies.append(utils.wall(0, axis=2, sense=1))
+O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"),
+             qdem.VtkRecorder(fileBase="frames/f-", iterPeriod=250), NewtonIntegrator(gravity=(0, 0, -9.81))]
+O.dt = 0.8 * qe.stableTimeStep()
+O.trackEnergy = True
+"""
+
+
+def _yade(tmp_path, code, name="s.py"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(code))
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    return subprocess.run(["timeout", "300", "yade", "-n", "-x", str(path)], cwd=str(tmp_path), env=env,
+                          capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("ext", ["yade", "yade.gz", "yade.bz2", "xml"])
+def test_save_and_load_in_a_new_process_continue_to_the_bit(tmp_path, ext):
+    r = _yade(tmp_path, SCENE + """
+O.run(600, True)
+O.save("scene.%s")
+O.run(500, True)
+np.save("ref.npy", np.concatenate([qdem.defaultWorld().core.pos, qdem.defaultWorld().core.vel]))
+""" % ext, "save.py")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    r = _yade(tmp_path, """
+import numpy as np, qdem
+from yade import O
+O.load("scene.%s")
+assert type(O.engines[1]).__name__ == "QdemEngine" and type(O.engines[2]).__name__ == "VtkRecorder"
+assert qe is O.engines[1]                       # the label points at the engine
+assert O.iter == 600 and qdem.defaultWorld().core.iter == 600
+O.run(500, True)
+ref = np.load("ref.npy")
+now = np.concatenate([qdem.defaultWorld().core.pos, qdem.defaultWorld().core.vel])
+print("MAXDIFF", np.abs(now - ref).max(), "FRAMES", len(O.engines[2].frames))
+""" % ext, "load.py")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    line = [x for x in r.stdout.splitlines() if x.startswith("MAXDIFF")][0].split()
+    assert float(line[1]) == 0.0
+    assert int(line[3]) == 5  # frames at 0, 250, 500 before the save; 750, 1000 after
+
+
+def test_save_tmp_and_load_tmp_in_one_process(scene):
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator, utils
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber(viscosity=10.0), pos=(0, 0, 0.2),
+                  angVel=(1, 2, 0))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.8 * O.engines[1].stableTimeStep()
+    O.run(300, True)
+    O.saveTmp("a")
+    O.run(400, True)
+    ref = qdem.defaultWorld().core.pos.copy()
+    O.loadTmp("a")
+    # YADE and QDEM rewound together: the same iteration and time, one world
+    core = qdem.defaultWorld().core
+    assert O.iter == 300 and core.iter == 300 and core.time == pytest.approx(O.time, rel=1e-12)
+    assert len(qdem.defaultWorld().pieces) == 1
+    O.run(400, True)
+    assert np.array_equal(qdem.defaultWorld().core.pos, ref)
+
+
+def test_reset_empties_the_world_and_loading_a_plain_scene_too(scene, tmp_path):
+    O = scene
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.reset()
+    assert len(qdem.defaultWorld().pieces) == 0
+    from yade import utils
+    O.bodies.append(utils.sphere((0, 0, 0), 1))
+    path = str(tmp_path / "plain.yade")
+    O.save(path)
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.load(path)  # a scene with no QDEM: the old pieces must not leak into it
+    assert len(qdem.defaultWorld().pieces) == 0
+
+
+def test_scene_with_qdem_engines_but_no_state_is_refused(scene, tmp_path):
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator, wrapper
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator()]
+    path = str(tmp_path / "nostate.yade")
+    wrapper.Omega.save._qdemOrig(O, path)  # YADE's own save, as a script without qdem's wrappers would
+    with pytest.raises(RuntimeError, match="no QDEM state"):
+        O.load(path)
+
+
+def test_qdem_errors_reach_the_script_as_themselves(scene):
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator()]
+    O.dt = 3 * O.engines[1].stableTimeStep()
+    with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+        O.step()
+    with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+        O.run(5, True)
+    O.run(5)
+    with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+        O.wait()
+
+
+def test_uncaught_error_ends_yade_with_a_nonzero_exit(tmp_path):
+    r = _yade(tmp_path, SCENE + "O.dt = 3 * qe.stableTimeStep()\nO.run(10, True)\nprint('NOT REACHED')\n")
+    assert r.returncode != 0
+    assert "NOT REACHED" not in r.stdout
+    assert "StabilityError" in r.stdout + r.stderr
+
+
+def _engines(order):
+    from yade import ForceResetter, NewtonIntegrator
+    made = {"F": ForceResetter, "Q": qdem.QdemEngine, "N": lambda: NewtonIntegrator(gravity=(0, 0, -9.81))}
+    return [made[c]() for c in order]
+
+
+@pytest.mark.parametrize("order,match", [("FNQ", "after NewtonIntegrator"), ("QFN", "ForceResetter is at"),
+                                         ("FQ", "no NewtonIntegrator"), ("FQQN", "Two QdemEngines")])
+def test_engine_order_mistakes_are_refused(scene, order, match):
+    O = scene
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = _engines(order)
+    O.dt = 1e-5
+    with pytest.raises(qdem.SetupError, match=match):
+        O.run(2, True)
+    assert qdem.defaultWorld().core.iter == 0  # refused before any QDEM step
+
+
+def test_non_finite_gravity_is_refused_at_the_first_step(scene):
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, float("nan")))]
+    O.dt = 1e-5
+    with pytest.raises(ValueError, match="gravity .* is not finite"):
+        O.run(1, True)
+
+
+def test_newton_damping_with_spheres_and_pieces_warns(scene):
+    O = scene
+    from yade import (ForceResetter, InsertionSortCollider, InteractionLoop, NewtonIntegrator, utils,
+                      Bo1_Sphere_Aabb, Ig2_Sphere_Sphere_ScGeom, Ip2_FrictMat_FrictMat_FrictPhys,
+                      Law2_ScGeom_FrictPhys_CundallStrack)
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.bodies.append(utils.sphere((0, 0, 0.3), 0.02))
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
+                                 [Law2_ScGeom_FrictPhys_CundallStrack()]),
+                 qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81), damping=0.2)]
+    O.dt = 1e-5
+    with pytest.warns(RuntimeWarning, match="damps YADE bodies but not QDEM nodes"):
+        O.run(2, True)
+
+
+def test_material_edit_after_add_piece_is_refused():
+    mat = rubber()
+    mat.young = 2e7  # before use: fine
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (1, 1, 1)), mat)
+    with pytest.raises(ValueError, match="cannot change young after addPiece"):
+        mat.young = 3e7
+    assert mat.young == 2e7
+
+
+def test_help_dict_and_stable_time_step_like_yade(scene):
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        help(qdem.QdemEngine)
+    text = buf.getvalue()
+    assert "checkPeriod (= 100)" in text and "sleepTime (= 0.01)" in text
+    assert "iterPeriod" not in text and "virtPeriod" not in text  # PyRunner's own attributes are not listed
+    e = qdem.QdemEngine(damping=0.1)
+    d = e.dict()
+    assert d["damping"] == 0.1 and "command" not in d and set(d) >= {"checkDt", "sleepVelocity", "friction"}
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    assert isinstance(e.stableTimeStep(), float)
+    assert e.stableTimeStep() == e.stableDt()["combined"]
+
+
+def test_progress_line_shows_share_done_and_time_left(scene):
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine(progressPeriod=100), NewtonIntegrator()]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        O.run(400, True)
+    lines = [x for x in buf.getvalue().splitlines() if x.startswith("qdem:")]
+    assert len(lines) == 4
+    assert "100%" in lines[-1] and " 50%" in lines[1]
+    assert "ETA" in lines[1]
