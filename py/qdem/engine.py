@@ -250,6 +250,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
+        if core.iter == 0:
+            from .recorder import initialFrames
+            initialFrames(self.world)  # the t = 0 frame, before the first step
         core.step(dt)
         if self._ids:
             yadeglue.applyReactions(O, self._ids, core.obstacleReactions())

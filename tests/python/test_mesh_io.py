@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 import qdem
-from qdem.vtu import writeVtu
 
 
 @pytest.mark.parametrize("ext", ["vtu", "msh", "mesh"])
@@ -56,25 +55,3 @@ def test_open_surface_is_rejected():
     v, tris = _cubeSurface()
     with pytest.raises(ValueError, match="closed|manifold"):
         qdem.meshSurface((v, tris[:-1]), cellSize=0.25)
-
-
-def test_vtu_frames_are_readable(tmp_path):
-    import meshio
-    w = qdem.World()
-    p = w.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), qdem.QdemMat(), vel=(1, 0, 0))
-    w.core.step(1e-7, 10)
-    from qdem.recorder import writeFrame
-    path = str(tmp_path / "f.vtu")
-    writeFrame(w, path)
-    m = meshio.read(path)
-    assert m.points.shape == (p.pos.shape[0], 3)
-    np.testing.assert_allclose(m.point_data["velocity"], p.vel)
-    assert "vonMises" in m.cell_data
-
-
-def test_vtu_refuses_nan_and_leaves_no_partial_file(tmp_path):
-    path = str(tmp_path / "nan.vtu")
-    pts = np.eye(4, 3)
-    with pytest.raises(ValueError, match="NaN"):
-        writeVtu(path, pts, [[0, 1, 2, 3]], pointData={"v": np.full(4, np.nan)})
-    assert not os.path.exists(path) and not os.path.exists(path + ".tmp")
