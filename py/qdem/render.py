@@ -1,30 +1,64 @@
-"""Headless PNG snapshots of QDEM pieces, surfaces coloured by von Mises stress
-(matplotlib, no display needed)."""
-import matplotlib
+"""PNG pictures of QDEM pieces: surfaces coloured by von Mises stress, drawn
+with VTK (real depth, lighting, a stress legend, a floor, a camera framed on
+what is shown), off screen.
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+VTK's OpenGL window needs an X display; without one (a batch job, CI) a
+private Xvfb is started for the process when the `Xvfb` program is there
+(Debian package xvfb, installed by `make deps`) and stopped at exit.  Where
+neither works, matplotlib's 3-D painter draws the same picture, less well,
+and a warning says why."""
+import atexit
+import os
+import shutil
+import subprocess
+import warnings
 
-from .stress import vonMises  # noqa: E402
+import numpy as np
+
+from .stress import vonMises
+
+_xvfb = None
 
 
-def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None):
+def _display():
+    """True when an X display is there (starting a private Xvfb if needed)."""
+    global _xvfb
+    if os.environ.get("DISPLAY"):
+        return True
+    if _xvfb is not None:
+        return _xvfb.poll() is None
+    exe = shutil.which("Xvfb")
+    if exe is None:
+        return False
+    r, w = os.pipe()
+    _xvfb = subprocess.Popen([exe, "-displayfd", str(w), "-screen", "0", "1600x1200x24", "-nolisten", "tcp"],
+                             pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(w)
+    with os.fdopen(r) as f:
+        num = f.readline().strip()
+    if not num:
+        _xvfb = None
+        return False
+    os.environ["DISPLAY"] = ":" + num
+    atexit.register(_xvfb.terminate)
+    return True
+
+
+def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None, size=(1280, 800)):
     """Write a PNG of every piece's surface (or only of the piece indices in
     `pieces`, framed on them: a close-up); each triangle takes the von Mises
-    stress of its tetrahedron.  vmax fixes the colour scale across frames."""
+    stress of its tetrahedron.  vmax fixes the colour scale across frames; a
+    floor height draws the floor.  Returns the vmax used."""
     core = world.core
-    X = core.pos
     vm = vonMises(core.stress())
     tris, colors = [], []
     shown = range(core.nPieces) if pieces is None else pieces
     for p in shown:
         s = core.pieceSurface(p)
         tris.append(s["triangles"])
-        colors.append(_faceStress(core, p, s, vm))
-    return surfacePlot(X, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor,
-                       fit=pieces is not None)
+        colors.append(vm[s["triTet"]])
+    return surfacePlot(core.pos, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor,
+                       fit=pieces is not None, size=size)
 
 
 def surfaceOfTets(tets):
@@ -39,11 +73,191 @@ def surfaceOfTets(tets):
     return faces[keep], owner[keep]
 
 
-def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None, fit=False):
+def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None, fit=False,
+                size=(1280, 800)):
     """Write a PNG of triangles `tris` over node positions X, coloured by the
-    per-triangle values `val` (von Mises stress), framed on the triangles (in
-    a cube, or with fit=True in a box shaped like them: close-ups)."""
-    vmax = vmax or max(float(val.max()), 1e-30)
+    per-triangle values `val` (von Mises stress [Pa]), the camera looking from
+    elevation `elev` and azimuth `azim` [deg] at the triangles and framed on
+    them (fit=True: tighter, for close-ups)."""
+    vmax = float(vmax or max(float(np.max(val)), 1e-30))
+    X, tris, val = np.asarray(X, float), np.asarray(tris), np.asarray(val, float)
+    ext = np.ptp(X[np.unique(tris)][:, :2], axis=0)
+    if size == (1280, 800) and max(ext) > 4 * max(min(ext), 1e-300):
+        size = (1600, 640)  # a long line of pieces: a wide picture
+    try:
+        ok = _display()
+        if ok:
+            _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size)
+            return vmax
+        why = "no X display and no Xvfb (apt-get install xvfb)"
+    except ImportError:
+        why = "VTK's Python module is missing (apt-get install python3-vtk9)"
+    warnings.warn("qdem.render: %s; drawing %s with matplotlib instead" % (why, path), RuntimeWarning)
+    _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit)
+    return vmax
+
+
+def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size):
+    from vtkmodules.util import numpy_support as ns
+    from vtkmodules.vtkCommonCore import vtkLookupTable, vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+    from vtkmodules.vtkFiltersSources import vtkPlaneSource
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+    from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
+    from vtkmodules.vtkRenderingCore import (vtkActor, vtkLight, vtkPolyDataMapper, vtkRenderer, vtkRenderWindow,
+                                             vtkTextActor, vtkWindowToImageFilter)
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401  (text)
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the OpenGL back end)
+
+    used = np.unique(tris)
+    lo, hi = X[used].min(axis=0), X[used].max(axis=0)
+    span = float(np.max(hi - lo)) or 1.0
+    poly = vtkPolyData()
+    pts = vtkPoints()
+    pts.SetData(ns.numpy_to_vtk(np.ascontiguousarray(X), deep=True))
+    poly.SetPoints(pts)
+    cells = vtkCellArray()
+    cells.SetData(ns.numpy_to_vtkIdTypeArray(np.arange(0, 3 * len(tris) + 1, 3, dtype=np.int64), deep=True),
+                  ns.numpy_to_vtkIdTypeArray(np.ascontiguousarray(tris, dtype=np.int64).ravel(), deep=True))
+    poly.SetPolys(cells)
+    s = ns.numpy_to_vtk(np.ascontiguousarray(val), deep=True)
+    s.SetName("von Mises")
+    poly.GetCellData().SetScalars(s)
+    normals = vtkPolyDataNormals()  # smooth shading across faces, sharp at the pieces' edges
+    normals.SetInputData(poly)
+    normals.SetFeatureAngle(40)
+    normals.SplittingOn()
+    normals.ConsistencyOn()
+    lut = vtkLookupTable()
+    lut.SetHueRange(0.667, 0.0)  # blue (no stress) to red (vmax)
+    lut.SetTableRange(0, vmax)
+    lut.Build()
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputConnection(normals.GetOutputPort())
+    mapper.SetLookupTable(lut)
+    mapper.SetScalarRange(0, vmax)
+    mapper.SetScalarModeToUseCellData()
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    prop = actor.GetProperty()
+    prop.SetAmbient(0.2)
+    prop.SetDiffuse(0.8)
+    prop.SetSpecular(0.25)
+    prop.SetSpecularPower(30)
+    ren = vtkRenderer()
+    ren.AddActor(actor)
+    ren.GradientBackgroundOn()
+    ren.SetBackground(0.93, 0.95, 0.98)
+    ren.SetBackground2(0.62, 0.70, 0.80)
+    if floor is not None:  # a floor around what is shown: its own size plus its height each way
+        pad = 0.1 * (hi - lo) + max(hi[2] - floor, 0.2 * span)
+        plane = vtkPlaneSource()
+        plane.SetOrigin(lo[0] - pad[0], lo[1] - pad[1], floor)
+        plane.SetPoint1(hi[0] + pad[0], lo[1] - pad[1], floor)
+        plane.SetPoint2(lo[0] - pad[0], hi[1] + pad[1], floor)
+        pm = vtkPolyDataMapper()
+        pm.SetInputConnection(plane.GetOutputPort())
+        pa = vtkActor()
+        pa.SetMapper(pm)
+        pa.GetProperty().SetColor(0.78, 0.76, 0.72)
+        pa.GetProperty().SetAmbient(0.3)
+        ren.AddActor(pa)
+    bar = vtkScalarBarActor()
+    bar.SetLookupTable(lut)
+    bar.SetTitle(" ")  # the title sits left of the bar (vtkScalarBarActor puts it over the labels)
+    bar.SetLabelFormat("%.3g")
+    bar.SetNumberOfLabels(5)
+    bar.SetOrientationToHorizontal()  # along the bottom edge: the pieces keep the width
+    bar.SetWidth(0.5)
+    bar.SetHeight(0.11)
+    bar.SetPosition(0.25, 0.015)
+    bar.SetTextPositionToSucceedScalarBar()  # labels and title above the bar, apart
+    bar.UnconstrainedFontSizeOn()
+    for t, fs in ((bar.GetTitleTextProperty(), 16), (bar.GetLabelTextProperty(), 15)):
+        t.SetColor(0.1, 0.1, 0.1)
+        t.SetFontSize(fs)
+        t.ShadowOff()
+        t.ItalicOff()
+        t.BoldOff()
+    ren.AddActor2D(bar)
+    legend = vtkTextActor()
+    legend.SetInput("von Mises stress [Pa]")
+    legend.GetTextProperty().SetFontSize(17)
+    legend.GetTextProperty().SetColor(0.1, 0.1, 0.1)
+    legend.GetTextProperty().SetJustificationToRight()
+    legend.SetDisplayPosition(int(0.24 * size[0]), int(0.03 * size[1]))
+    ren.AddActor2D(legend)
+    if title:
+        text = vtkTextActor()
+        text.SetInput(title)
+        text.GetTextProperty().SetFontSize(22)
+        text.GetTextProperty().SetColor(0.1, 0.1, 0.1)
+        text.SetDisplayPosition(20, size[1] - 40)
+        ren.AddActor2D(text)
+    for position, intensity in (((-1, 1, 1), 0.55), ((1, 0.3, 0.6), 0.35)):  # key and fill lights
+        light = vtkLight()
+        light.SetLightTypeToCameraLight()
+        light.SetPosition(*position)
+        light.SetIntensity(intensity)
+        ren.AddLight(light)
+    _frame(ren.GetActiveCamera(), X[used], elev, azim, size, 1.08 if fit else 1.15)
+    ren.ResetCameraClippingRange()
+    win = vtkRenderWindow()
+    win.SetOffScreenRendering(1)
+    win.SetMultiSamples(8)
+    win.AddRenderer(ren)
+    win.SetSize(*size)
+    win.Render()
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(win)
+    grab.Update()
+    png = vtkPNGWriter()
+    tmp = path + ".tmp.png"
+    png.SetFileName(tmp)
+    png.SetInputConnection(grab.GetOutputPort())
+    png.Write()
+    win.Finalize()
+    os.replace(tmp, path)
+
+
+def _frame(cam, P, elev, azim, size, margin, viewAngle=30.0):
+    """Point the camera at the points P from elevation/azimuth [deg] and set its
+    distance so that they fill the picture (with a margin): the bounding box
+    of P projected on the picture's axes.  An elongated set (a domino line) is
+    seen from across its long axis: the azimuth is taken relative to it."""
+    centre = 0.5 * (P.min(axis=0) + P.max(axis=0))
+    xy = P[:, :2] - centre[:2]
+    lengths = np.ptp(xy, axis=0)
+    if len(P) > 2 and max(lengths) > 3 * max(min(lengths), 1e-300):
+        w, V = np.linalg.eigh(np.cov(xy.T))
+        long_ = V[:, np.argmax(w)]
+        azim = azim + np.degrees(np.arctan2(long_[1], long_[0]))  # azim -60 = from 60 deg off the line's axis
+        elev = min(elev, 12.0)
+    e, a = np.radians(elev), np.radians(azim)
+    d = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])  # towards the camera
+    right = np.cross((0.0, 0.0, 1.0), d)
+    right /= np.linalg.norm(right)
+    up = np.cross(d, right)
+    rel = P - centre
+    half_w = 0.5 * np.ptp(rel @ right) * margin
+    half_h = 0.5 * np.ptp(rel @ up) * margin / 0.84  # the colour legend takes the bottom
+    depth = 0.5 * np.ptp(rel @ d)
+    tv = np.tan(np.radians(viewAngle) / 2)
+    th = tv * size[0] / size[1]
+    dist = max(half_w / th, half_h / tv) + depth
+    shift = 0.08 * half_h / margin * 0.84 * up / 0.84  # lift the picture's centre above the legend
+    cam.SetFocalPoint(*(centre - shift))
+    cam.SetPosition(*(centre - shift + dist * d))
+    cam.SetViewUp(*up)
+    cam.SetViewAngle(viewAngle)
+
+
+def _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
     fig = plt.figure(figsize=(9, 5.5))
     ax = fig.add_subplot(111, projection="3d")
     poly = Poly3DCollection(X[tris], linewidths=0.05, edgecolors=(0, 0, 0, 0.15))
@@ -54,20 +268,12 @@ def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floo
     used = X[np.unique(tris)]
     lo, hi = used.min(axis=0), used.max(axis=0)
     span = (hi - lo).max()
-    mid = 0.5 * (lo + hi)
-    if fit:  # equal scales, box shaped like what is shown
-        box0, box1 = lo - 0.05 * span, hi + 0.05 * span
-        if floor is not None:
-            box0[2] = min(box0[2], floor)
-    else:
-        box0 = np.array([mid[0] - span / 2, mid[1] - span / 2, max(lo[2], mid[2] - span / 2)])
-        box1 = box0 + span
+    box0, box1 = lo - 0.05 * span, hi + 0.05 * span
+    if floor is not None:
+        box0[2] = min(box0[2], floor)
     ax.set_xlim(box0[0], box1[0])
     ax.set_ylim(box0[1], box1[1])
     ax.set_zlim(box0[2], box1[2])
-    if floor is not None:
-        xx, yy = np.meshgrid([box0[0], box1[0]], [box0[1], box1[1]])
-        ax.plot_surface(xx, yy, np.full_like(xx, floor), color=(0.8, 0.8, 0.8, 0.3))
     ax.view_init(elev=elev, azim=azim)
     ax.set_box_aspect(tuple(box1 - box0))
     ax.set_axis_off()
@@ -76,9 +282,3 @@ def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floo
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
-    return vmax
-
-
-def _faceStress(core, piece, surf, vm):
-    """Stress of the tetrahedron owning each surface triangle."""
-    return vm[surf["triTet"]]

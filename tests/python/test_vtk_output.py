@@ -60,3 +60,27 @@ def test_vtu_refuses_nan_and_leaves_no_partial_file(tmp_path):
     with pytest.raises(ValueError, match="NaN"):
         writeVtu(path, np.eye(4, 3), [[0, 1, 2, 3]], pointData={"v": np.full(4, np.nan)})
     assert os.listdir(tmp_path) == []
+
+
+def test_snapshot_draws_with_vtk_off_screen(tmp_path):
+    """qdem.render draws with VTK (a private Xvfb when there is no display):
+    no fallback warning, a PNG of the asked size, the pieces coloured by stress
+    (red pixels where the compressed block is most stressed), a grey floor."""
+    import warnings
+    import matplotlib.image as mpimg
+    from qdem import render
+    w = qdem.World()
+    p = w.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), rubber(), pos=(0, 0, 0.105))
+    p.pos[:, 2] = 0.005 + 0.8 * (p.pos[:, 2] - 0.005)  # squeezed: stress to colour
+    path = str(tmp_path / "snap.png")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        vmax = render.snapshot(w, path, title="squeezed block", floor=0.0, size=(640, 400))
+    img = mpimg.imread(path)
+    assert img.shape[:2] == (400, 640)
+    assert vmax == pytest.approx(np.max(p.vonMises()), rel=1e-12)
+    rgb = img[..., :3]
+    red = (rgb[..., 0] > 0.6) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
+    grey = (np.abs(rgb[..., 0] - rgb[..., 1]) < 0.04) & (np.abs(rgb[..., 1] - rgb[..., 2]) < 0.06) & \
+        (rgb[..., 0] > 0.5) & (rgb[..., 0] < 0.8)
+    assert red.mean() > 0.005 and grey.mean() > 0.05
