@@ -94,7 +94,7 @@ def test_soft_cube_dropped_flat_comes_to_rest_flat(scene, E, tpc):
     # No energy locked in: only the static sag (Poisson and friction at the
     # base change it a little: within 30 %).
     assert O.energy["qdemElastic"] < 1.3 * _sagEnergy(E)
-    assert O.engines[1].invertedReport()["now"] == 0
+    assert O.engines[1].inverted["now"] == 0
 
 
 @pytest.mark.parametrize("tpc", [5, 6, 12])
@@ -106,7 +106,7 @@ def test_soft_cube_landing_on_a_corner_rests_on_a_face(scene, tpc):
     _checkRest(O, piece, floor, piece.material)
     assert _tiltFromAFace(piece) < 1.0
     assert O.energy["qdemElastic"] < 1.3 * _sagEnergy(E)
-    rep = O.engines[1].invertedReport()
+    rep = O.engines[1].inverted
     assert rep["now"] == 0  # a law that recovers may invert briefly: reported, never kept
     print("corner landing, %d tets per cell: at most %d inverted, for %.3g s" % (tpc, rep["max"], rep["time"]))
 
