@@ -26,7 +26,7 @@ def _scene(O, piece_args, dampingRatio, **engineKw):
     mat.viscosity = qdem.modes.viscosityForDamping(mesh, mat, dampingRatio)
     piece = qdem.addPiece(mesh, mat, pos=pos, ori=ori)
     floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
-    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50, **engineKw),
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50, threads=1, **engineKw),
                  NewtonIntegrator(gravity=(0, 0, -G))]
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     O.trackEnergy = True
@@ -145,7 +145,7 @@ def test_block_squeezed_to_half_returns_to_its_volume(scene):
     V0 = piece.volume
     O.bodies.append(utils.wall(0, axis=2, sense=1))
     top = O.bodies.append(utils.wall(h + 2 * mat.radius, axis=2, sense=-1))
-    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50), NewtonIntegrator(gravity=(0, 0, 0))]
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50, threads=1), NewtonIntegrator(gravity=(0, 0, 0))]
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     speed = 0.05 * h / 0.1  # slow against the wave speed (quasi-static)
     O.bodies[top].state.vel = (0, 0, -speed)
