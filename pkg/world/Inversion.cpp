@@ -23,7 +23,7 @@ InversionCount World::countInverted() const {
             // positively oriented reference tets addPiece accepts.
             const Mat3 Ds = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]);
             const double det = Ds.determinant();
-            if (det > 0) continue;
+            if (!(det <= 0)) continue;  // (NaN: checkFinite's business)
             ++r.count;
             if (!recovers) ++r.unrecoverable;
             const bool first = r.count == 1 || (!recovers && r.unrecoverable == 1);
