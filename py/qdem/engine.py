@@ -213,19 +213,19 @@ class QdemEngine(PyRunner):
                 if k in ENERGY_KEYS:
                     O.energy[ENERGY_KEYS[k]] = v
         if self.checkPeriod and core.iter % self.checkPeriod == 0:
-            self._checkInverted(core)  # first: an inverted element is named as inverted
+            self._checkInverted(core, dt)  # first: an inverted element is named as inverted
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
             self._progress(core)
 
-    def _checkInverted(self, core):
+    def _checkInverted(self, core, dt):
         # Raises StabilityError (naming piece, element, volume ratio, fix) for a law that
         # cannot push an inverted element back; counts them otherwise.
         r = core.checkInverted()
         inv, n = self.inverted, r["count"]
-        since = core.time - self._lastCheckTime if self._lastCheckTime is not None else 0.0
+        since = core.time - self._lastCheckTime if self._lastCheckTime is not None else self.checkPeriod * dt
         self._lastCheckTime = core.time
         if n:
             inv["time"] += since  # inverted at this check: counted for the whole period before it
