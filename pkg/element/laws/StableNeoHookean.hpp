@@ -22,7 +22,7 @@ struct StableNeoHookean {
     static constexpr MaterialLaw kTag = MaterialLaw::StableNeoHookean;
     static constexpr bool kRecoversFromInversion = true;
     // The log term of the energy is added after the SIMD loop (GCC does not
-    // vectorise log without -ffast-math).
+    // vectorise log1p without -ffast-math).
     static constexpr bool kEnergyFinish = true;
 
     double muS, lamS, alpha;  // mu', lambda', alpha
@@ -32,8 +32,8 @@ struct StableNeoHookean {
     StableNeoHookean(double lambda, double mu)
         : muS(4.0 / 3.0 * mu), lamS(lambda + 5.0 / 6.0 * mu), alpha(1.0 + 0.75 * muS / lamS) {}
 
-    // One SIMD lane: P = P_e(F) + F S_v.  w: the energy density without its
-    // log term, aux: the argument the log term needs (energyFinish).
+    // One SIMD lane: P = P_e(F) + F S_v.  w: the energy density W(F) - W(I)
+    // without its log term, aux: what the log term needs (energyFinish).
     template <bool Viscous, bool Energy>
     inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double (&P)[3][3], double& w,
                      double& aux) const {
@@ -63,14 +63,41 @@ struct StableNeoHookean {
                 if constexpr (Viscous) P[i][j] += F[i][0] * Sv[0][j] + F[i][1] * Sv[1][j] + F[i][2] * Sv[2][j];
             }
         if constexpr (Energy) {
-            // Psi(F) - Psi(I), the constant removed in factored form:
-            // (J - alpha)^2 - (1 - alpha)^2 = (J - 1)(J + 1 - 2 alpha).
-            const double x = Ic - 3.0;
-            w = 0.5 * muS * x + 0.5 * lamS * (J - 1.0) * (J + 1.0 - 2.0 * alpha);
-            aux = 0.25 * x;  // log(I_C + 1) - log 4 = log1p((I_C - 3)/4)
+            double h[3][3];  // F - I: exact near rest (Sterbenz)
+            #pragma GCC unroll 3
+            for (int i = 0; i < 3; ++i)
+                #pragma GCC unroll 3
+                for (int j = 0; j < 3; ++j) h[i][j] = F[i][j] - (i == j ? 1.0 : 0.0);
+            w = energyNoLog(h, aux);
         }
     }
-    double energyFinish(double aux) const { return -0.5 * muS * std::log1p(aux); }
+    // W(F) - W(I) without its log term, from H = F - I, written so that no
+    // first-order terms cancel (the energy of a strain eps is accurate to
+    // rounding relative to mu eps^2, not to mu times rounding):
+    //   I_C - 3 = 2 tr H + |H|^2,  J - 1 = tr H + I_2(H) + det H,
+    //   W = 3mu'/8 |H|^2 - 3mu'/4 (I_2(H) + det H) + lambda'/2 (J - 1)^2
+    //       - mu'/2 (log1p(y) - y),   y = (I_C - 3)/4,
+    // using 3mu'/4 = lambda'(alpha - 1) to cancel the linear terms exactly.
+    // aux = y for energyFinish.
+    inline double energyNoLog(const double (&h)[3][3], double& aux) const {
+        const double trH = h[0][0] + h[1][1] + h[2][2];
+        double hh = 0, hht = 0;
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i)
+            #pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) {
+                hh += h[i][j] * h[i][j];
+                hht += h[i][j] * h[j][i];
+            }
+        const double I2 = 0.5 * (trH * trH - hht);
+        const double detH = h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1]) -
+                            h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0]) +
+                            h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
+        const double Jm1 = trH + I2 + detH;
+        aux = 0.25 * (2.0 * trH + hh);
+        return 0.375 * muS * hh - 0.75 * muS * (I2 + detH) + 0.5 * lamS * Jm1 * Jm1;
+    }
+    double energyFinish(double y) const { return -0.5 * muS * (std::log1p(y) - y); }
 
     // ---- reference (Eigen) forms: output, stable step, tests --------------
     // Lame constants of tangent(I) (Hooke's law at small strain).
@@ -87,8 +114,11 @@ struct StableNeoHookean {
         return muS * (1.0 - 1.0 / (Ic + 1.0)) * F + lamS * (F.determinant() - alpha) * cofactor(F);
     }
     double energy(const Mat3& F) const {
-        const double x = F.squaredNorm() - 3.0, J = F.determinant();
-        return 0.5 * muS * x + 0.5 * lamS * (J - 1.0) * (J + 1.0 - 2.0 * alpha) - 0.5 * muS * std::log1p(0.25 * x);
+        double h[3][3], y;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) h[i][j] = F(i, j) - (i == j ? 1.0 : 0.0);
+        const double w = energyNoLog(h, y);
+        return w + energyFinish(y);
     }
     // dP/dF = mu'(1 - 1/(I_C+1)) I + 2 mu'/(I_C+1)^2 F (x) F
     //       + lambda' cof(F) (x) cof(F) + lambda' (J - alpha) d cof(F)/dF,
