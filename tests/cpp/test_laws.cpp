@@ -167,3 +167,82 @@ TEST(Laws, SaintVenantKirchhoffLimitPointAndMirrorState) {
     EXPECT_EQ(svk.piola(M).norm(), 0.0);
     EXPECT_EQ(svk.energy(M), 0.0);
 }
+
+namespace {
+
+// A 2x2x2-cell block whose corner node 0 (in one tet only, 5 tets per cell)
+// is mirrored through that tet's opposite face and pushed `depth` times as
+// far beyond it: the tet is inverted (volume ratio -depth).
+World invertedBlock(MaterialLaw law, double depth, int& badTet) {
+    World w;
+    Material m = material(law, 0.3);
+    m.viscosity = 0;
+    w.addPiece(boxMesh(2, 2, 2, 0.1, 0.1, 0.1, 5), w.addMaterial(m));
+    int node = -1;  // a node in exactly one tet
+    for (std::size_t n = 0; n < w.nNodes() && node < 0; ++n) {
+        int count = 0;
+        for (std::size_t t = 0; t < w.nTets(); ++t)
+            for (int k = 0; k < 4; ++k)
+                if (w.tetNodes[4 * t + k] == static_cast<int32_t>(n)) count++, badTet = static_cast<int>(t);
+        if (count == 1) node = static_cast<int>(n);
+    }
+    const int32_t* c = &w.tetNodes[4 * badTet];
+    int others[3], j = 0;
+    for (int k = 0; k < 4; ++k)
+        if (c[k] != node) others[j++] = c[k];
+    const Eigen::Map<const Vec3> a(&w.pos[3 * others[0]]), b(&w.pos[3 * others[1]]), d(&w.pos[3 * others[2]]);
+    Eigen::Map<Vec3> x(&w.pos[3 * node]);
+    const Vec3 n = (b - a).cross(d - a).normalized();
+    x -= (1 + depth) * (x - a).dot(n) * n;
+    return w;
+}
+
+}  // namespace
+
+TEST(Laws, InvertedElementsAreCountedAndSvkStops) {
+    int bad = -1;
+    World snh = invertedBlock(MaterialLaw::StableNeoHookean, 1.0, bad);
+    const InversionCount r = snh.checkInverted();
+    EXPECT_EQ(r.count, 1);
+    EXPECT_EQ(r.unrecoverable, 0);
+    EXPECT_EQ(r.piece, 0);
+    EXPECT_EQ(r.element, bad);
+    EXPECT_NEAR(r.volumeRatio, -1.0, 1e-12);
+    World svk = invertedBlock(MaterialLaw::SaintVenantKirchhoff, 1.0, bad);
+    EXPECT_EQ(svk.countInverted().unrecoverable, 1);
+    try {
+        svk.checkInverted();
+        FAIL() << "no exception";
+    } catch (const StabilityError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("tetrahedron " + std::to_string(bad) + " of piece 0 is inverted (volume ratio -1"),
+                  std::string::npos)
+            << msg;
+        EXPECT_NE(msg.find("law='stableNeoHookean'"), std::string::npos) << msg;
+    }
+    // The default law pushes it back: positive within a few steps.
+    const double dt = 0.5 * snh.stableDt().combined;
+    int steps = 0;
+    while (snh.countInverted().count > 0 && steps < 1000) snh.step(dt), ++steps;
+    EXPECT_LT(steps, 50);
+}
+
+TEST(Laws, CurrentStepCheckNamesAnInvertedElementAsInverted) {
+    // Inverted and stretched three times its height: stiffer than the
+    // reference step allows, for either law; the message says inverted.
+    for (MaterialLaw tag : kLaws) {
+        int bad = -1;
+        World w = invertedBlock(tag, 3.0, bad);
+        const double dt = 0.99 * w.stableDt().combined;
+        try {
+            w.checkCurrentDt(dt);
+            FAIL() << "no exception " << lawName(tag);
+        } catch (const StabilityError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find("tetrahedron " + std::to_string(bad) + " of piece 0 is inverted (volume ratio -3"),
+                      std::string::npos)
+                << msg;
+            EXPECT_EQ(msg.find("sliver"), std::string::npos) << msg;
+        }
+    }
+}
