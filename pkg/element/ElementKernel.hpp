@@ -24,7 +24,7 @@ struct BatchOut {
 // count are padded with the last tet and must be ignored by the caller.
 // Law: one of laws/*.hpp (its lane() is inlined: no virtual call).
 template <class Law, bool Viscous, bool Energy>
-inline void elementBatch(const Law& law, int32_t e0, int count, const int32_t* conn, const double* X,
+__attribute__((noinline)) void elementBatch(const Law& law, int32_t e0, int count, const int32_t* conn, const double* X,
                          const double* V, const double* Bs, const double* vol, const ElementParams& p,
                          BatchOut& out) {
     alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], B[9][kLanes], V0[kLanes], aux[kLanes];
@@ -62,7 +62,7 @@ inline void elementBatch(const Law& law, int32_t e0, int count, const int32_t* c
             }
         // Kelvin-Voigt: S_v = beta (2 mu dE/dt + lambda tr(dE/dt) I) on the
         // Green-Lagrange strain rate dE/dt = sym(F^T dF/dt), for every law.
-        double Sv[3][3];
+        double Sv[3][3] = {};  // (read by the laws only when Viscous)
         double dRate = 0;
         if constexpr (Viscous) {
             double Ed[3][3];
@@ -102,7 +102,7 @@ inline void elementBatch(const Law& law, int32_t e0, int count, const int32_t* c
         }
         out.wElastic[l] = V0[l] * wEl;
         out.diss[l] = V0[l] * dRate;
-        aux[l] = ax;
+        if constexpr (Energy && Law::kEnergyFinish) aux[l] = ax;
     }
     if constexpr (Energy && Law::kEnergyFinish)
         for (int l = 0; l < kLanes; ++l) out.wElastic[l] += V0[l] * law.energyFinish(aux[l]);
