@@ -22,6 +22,17 @@ void Material::validate() const {
     if (!std::isfinite(radius) || radius <= 0) bad("radius", radius, "must be > 0");
     if (!std::isfinite(restitution) || restitution <= 0 || restitution > 1)
         bad("restitution", restitution, "must lie in (0, 1]");
+    if (law != MaterialLaw::StableNeoHookean && law != MaterialLaw::SaintVenantKirchhoff)
+        throw InputError(cat("QdemMat: law=", static_cast<int>(law),
+                             " is invalid: must be 0 (stableNeoHookean) or 1 (saintVenantKirchhoff)"));
+}
+
+const char* lawName(MaterialLaw law) {
+    switch (law) {
+        case MaterialLaw::StableNeoHookean: return "stableNeoHookean";
+        case MaterialLaw::SaintVenantKirchhoff: return "saintVenantKirchhoff";
+    }
+    return "unknown";
 }
 
 double dampingRatioFromRestitution(double e) {

@@ -4,6 +4,15 @@
 
 namespace qdem {
 
+// Elastic law of the elements (pkg/element/laws/, doc/formulation.md "Material
+// laws").  Both equal Hooke's law with (young, poisson) at small strain.
+enum class MaterialLaw : int {
+    StableNeoHookean = 0,      // Smith, de Goes, Kim 2018: restoring for any F, inversion included
+    SaintVenantKirchhoff = 1,  // softens past stretch 1/sqrt(3) and can stay inverted
+};
+// The Python name of a law ("stableNeoHookean", "saintVenantKirchhoff").
+const char* lawName(MaterialLaw law);
+
 struct Material {
     double young = 5.0e8;        // Young's modulus E [Pa]
     double poisson = 0.4;        // Poisson's ratio nu
@@ -13,6 +22,7 @@ struct Material {
     double frictionWall = 0.5;   // kinetic friction against walls, boxes, facets
     double radius = 0.04;        // radius r of the surface particles [m]
     double restitution = 0.5;    // normal restitution of one particle contact
+    MaterialLaw law = MaterialLaw::StableNeoHookean;
 
     double lambda() const { return young * poisson / ((1 + poisson) * (1 - 2 * poisson)); }
     double mu() const { return young / (2 * (1 + poisson)); }

@@ -19,7 +19,7 @@
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
-#include "../element/SvkTetra.hpp"
+#include "../element/MaterialLaw.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -28,8 +28,9 @@ namespace {
 
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 
-// Linear (small-strain) stiffness of one element in the reference state.
-Mat12 elementStiffness(const Mat3& B, double V, double lambda, double mu) {
+// Small-strain stiffness of one element with Lame constants (lambda, mu),
+// in closed form.
+Mat12 hookeStiffness(const Mat3& B, double V, double lambda, double mu) {
     // grad N_a: rows of B for nodes 1..3, minus their sum for node 0.
     Eigen::Matrix<double, 4, 3> G;
     G.row(1) = B.row(0);
@@ -45,6 +46,30 @@ Mat12 elementStiffness(const Mat3& B, double V, double lambda, double mu) {
                     K(3 * a + i, 3 * b + j) =
                         V * (lambda * G(a, i) * G(b, j) + mu * G(a, j) * G(b, i) + (i == j ? mu * gg : 0.0));
         }
+    return K;
+}
+
+// Stiffness of one element from the law's tangent A = dP/dF at its current
+// F: K_(a i)(b k) = V sum_JL g_aJ A_(iJ)(kL) g_bL, with g_a the reference
+// gradients of the shape functions (rows of B for nodes 1..3, minus their sum
+// for node 0).  At F = I this is the small-strain (Hooke) stiffness, the same
+// for every law; on a strained shape it includes the geometric part.
+Mat12 elementStiffness(const Mat3& B, const Mat9& A, double V) {
+    Eigen::Matrix<double, 4, 3> G;
+    G.row(1) = B.row(0);
+    G.row(2) = B.row(1);
+    G.row(3) = B.row(2);
+    G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
+    Mat12 K;
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+            for (int i = 0; i < 3; ++i)
+                for (int k = 0; k < 3; ++k) {
+                    double s = 0;
+                    for (int J = 0; J < 3; ++J)
+                        for (int L = 0; L < 3; ++L) s += G(a, J) * A(3 * i + J, 3 * k + L) * G(b, L);
+                    K(3 * a + i, 3 * b + k) = V * s;
+                }
     return K;
 }
 
@@ -86,6 +111,11 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     // Structured meshes repeat a few element shapes thousands of times: the
     // eigenvalue depends only on B, so identical B are solved once.
     std::map<std::array<double, 9>, double> solved;
+    // The reference stiffness is the law's tangent at F = I, which every law
+    // makes Hooke's with the material's (lambda, mu) (lameAtRest; checked
+    // against tangent(I) in tests/cpp/test_laws.cpp): the closed form.
+    double lam0 = lam, mu0 = mu;
+    withLaw(m, [&](const auto& law) { law.lameAtRest(lam0, mu0); });
     for (int32_t k = 0; k < n && bound[order[k]] > best; ++k) {
         const int32_t e = p.tetBegin + order[k];
         std::array<double, 9> key;
@@ -95,37 +125,13 @@ double World::elementOmegaMax(const PieceInfo& p) const {
             continue;
         }
         const Mat3 B = loadRowMajor(&tetB[9 * e]);
-        const Mat12 K = elementStiffness(B, tetVol0[e], lam, mu);
+        const Mat12 K = hookeStiffness(B, tetVol0[e], lam0, mu0);
         const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
         solved[key] = w2;
         omega2Tet_[e] = w2;
         best = std::max(best, w2);
     }
     return std::sqrt(best);
-}
-
-// Tangent stiffness of a Saint-Venant-Kirchhoff element at deformation F
-// (reference gradients G, 2nd Piola stress S): the reference stiffness with
-// the current F, plus the geometric (initial-stress) part.
-static Mat12 currentStiffness(const Mat3& B, const Mat3& F, const Mat3& S, double V, double lambda, double mu) {
-    Eigen::Matrix<double, 4, 3> G;
-    G.row(1) = B.row(0);
-    G.row(2) = B.row(1);
-    G.row(3) = B.row(2);
-    G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
-    const Eigen::Matrix<double, 3, 4> FG = F * G.transpose();  // columns: F g_a
-    const Mat3 FFt = F * F.transpose();
-    Mat12 K;
-    for (int a = 0; a < 4; ++a)
-        for (int b = 0; b < 4; ++b) {
-            const double gg = G.row(a).dot(G.row(b));
-            const double gSg = G.row(a) * S * G.row(b).transpose();
-            for (int i = 0; i < 3; ++i)
-                for (int j = 0; j < 3; ++j)
-                    K(3 * a + i, 3 * b + j) = V * (lambda * FG(i, a) * FG(j, b) + mu * FFt(i, j) * gg +
-                                                   mu * FG(i, b) * FG(j, a) + (i == j ? gSg : 0.0));
-        }
-    return K;
 }
 
 void World::checkCurrentDt(double dt) const {
@@ -135,7 +141,6 @@ void World::checkCurrentDt(double dt) const {
         if (asleep(i)) continue;  // does not move: checked while it was awake, and again when it wakes
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
-        const double lam = m.lambda(), mu = m.mu();
         const double beta = viscosityOn ? m.beta() : 0.0;
         double wc = 0, xic = 0;
         contactMode(i, wc, xic);  // as in stableDt()
@@ -153,37 +158,35 @@ void World::checkCurrentDt(double dt) const {
             (limitAt(mid) >= dt ? lo : hi) = mid;
         }
         const double allow2 = lo * lo;
-        for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
-            const int32_t* c = &tetNodes[4 * e];
-            const Mat3 B = loadRowMajor(&tetB[9 * e]);
-            const Mat3 F = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]) * B;
-            const Mat3 C = F.transpose() * F;
-            Eigen::SelfAdjointEigenSolver<Mat3> ec;
-            ec.computeDirect(C, Eigen::EigenvaluesOnly);
-            const double s2 = ec.eigenvalues()(2);  // largest principal stretch, squared
-            // S = lambda tr(E) I + 2 mu E shares E's axes: its largest value.
-            const double trE = 0.5 * (C.trace() - 3);
-            const double sMax = lam * trE + mu * (s2 - 1);
-            // Estimate of the stiffening: exact for uniaxial strain
-            // ((3 s^2 - 1)/2), 1 for a rigid motion; the exact eigenvalue
-            // decides below.
-            const double grow = s2 + std::max(sMax, 0.0) / (lam + 2 * mu);
-            if (!(omega2Tet_[e] * grow * 1.1 > allow2)) continue;  // (NaN: checkFinite's business)
-            const Mat3 E = 0.5 * (C - Mat3::Identity());
-            Mat3 S = 2 * mu * E;
-            S.diagonal().array() += lam * trE;
-            const Mat12 K = currentStiffness(B, F, S, tetVol0[e], lam, mu);
-            const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
-            if (w2 > allow2) {
-                const double now = limitAt(std::sqrt(w2));
-                throw StabilityError(cat(
-                    "QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i,
-                    " is strained (largest stretch ", std::sqrt(s2), ", volume ratio ", F.determinant(),
-                    ") and has stiffened: the stable time step on the current shape is ", now, " s, below dt=", dt,
-                    " s by a factor ", dt / now, " (reference shape: ", limitAt(omegaCache_[i]),
-                    " s). Lower O.dt, or use a mesh without slivers."));
+        withLaw(m, [&](const auto& law) {
+            for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
+                const int32_t* c = &tetNodes[4 * e];
+                const Mat3 B = loadRowMajor(&tetB[9 * e]);
+                const Mat3 F = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]) * B;
+                const Mat3 C = F.transpose() * F;
+                Eigen::SelfAdjointEigenSolver<Mat3> ec;
+                ec.computeDirect(C, Eigen::EigenvaluesOnly);
+                const double s2 = ec.eigenvalues()(2);  // largest principal stretch, squared
+                // The law's estimate of the stiffening filters; the exact
+                // eigenvalue of its tangent stiffness decides.
+                if (!(omega2Tet_[e] * law.stiffening(C, s2) * 1.1 > allow2)) continue;  // (NaN: checkFinite's)
+                const Mat12 K = elementStiffness(B, law.tangent(F), tetVol0[e]);
+                const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
+                if (w2 <= allow2) continue;
+                const double now = limitAt(std::sqrt(w2)), J = F.determinant();
+                const std::string where = cat("QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i);
+                const std::string limit = cat("the stable time step on the current shape is ", now, " s, below dt=", dt,
+                                              " s by a factor ", dt / now, " (reference shape: ",
+                                              limitAt(omegaCache_[i]), " s)");
+                if (J <= 0)
+                    throw StabilityError(cat(
+                        where, " is inverted (volume ratio ", J, ", law ", lawName(m.law), ") and ", limit,
+                        ". The element was crushed through itself: use law='stableNeoHookean' (the default), a "
+                        "stiffer material or a smaller impact speed; or lower O.dt."));
+                throw StabilityError(cat(where, " is strained (largest stretch ", std::sqrt(s2), ", volume ratio ", J,
+                                         ") and has stiffened: ", limit, ". Lower O.dt, or use a mesh without slivers."));
             }
-        }
+        });
     }
 }
 

@@ -6,7 +6,7 @@
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
-#include "../element/SvkTetra.hpp"
+#include "../element/Tetra.hpp"
 
 namespace qdem {
 

@@ -45,6 +45,15 @@ struct StableDt {
     std::string limitedBy;
 };
 
+// Inverted elements found by World::countInverted.
+struct InversionCount {
+    int64_t count = 0;            // elements with J <= 0
+    int64_t unrecoverable = 0;    // of them, in pieces whose law cannot push them back
+    int piece = -1;               // the first one: piece, its local element, its J
+    int32_t element = -1;
+    double volumeRatio = 1;
+};
+
 class World {
 public:
     // ---- set-up -----------------------------------------------------------
@@ -78,6 +87,14 @@ public:
     void checkCurrentDt(double dt) const;
     // Throws StabilityError when a position or velocity became NaN/infinite.
     void checkFinite() const;
+    // Inverted elements (volume ratio J = det F <= 0) of the awake pieces:
+    // how many, and the first one (lowest piece, then element).  One pass of
+    // 3x3 determinants: cheap enough for every check period.
+    InversionCount countInverted() const;
+    // countInverted, and throws StabilityError naming the piece, element,
+    // volume ratio and the fix when an inverted element's law cannot push it
+    // back (Saint-Venant-Kirchhoff); returns the count otherwise.
+    InversionCount checkInverted() const;
 
     // ---- restarts (Checkpoint.cpp) ---------------------------------------
     // The dynamic state (positions, velocities, contact histories, sleeping
@@ -192,9 +209,9 @@ public:
     double maxPieceOverlap = 0;
 
 private:
-    template <bool Viscous, bool Energy>
-    void elementRange(int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo, double& wEl,
-                      double& diss) const;
+    template <class Law, bool Viscous, bool Energy>
+    void elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
+                      double& wEl, double& diss) const;
     void elementPhase(double dt);
     void obstaclePhase(double dt);
     void integratePhase(double dt);

@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "../contact/ContactLaw.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Threads.hpp"
-#include "../element/SvkBatch.hpp"
+#include "../element/ElementKernel.hpp"
+#include "../element/MaterialLaw.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -44,16 +46,17 @@ void World::step(double dt) {
 // ---------------------------------------------------------------------------
 // Element forces
 
-template <bool Viscous, bool Energy>
-void World::elementRange(int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo, double& wEl,
-                         double& diss) const {
+template <class Law, bool Viscous, bool Energy>
+void World::elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
+                         double& wEl, double& diss) const {
     const ElementParams prm{m.lambda(), m.mu(), Viscous ? m.beta() : 0.0};
     const int32_t* conn = tetNodes.data();
     double w = 0, d = 0;
     BatchOut out;
     for (int32_t e0 = t0; e0 < t1; e0 += kLanes) {
         const int count = std::min<int32_t>(kLanes, t1 - e0);
-        svkBatch<Viscous, Energy>(e0, count, conn, pos.data(), vel.data(), tetB.data(), tetVol0.data(), prm, out);
+        elementBatch<Law, Viscous, Energy>(law, e0, count, conn, pos.data(), vel.data(), tetB.data(), tetVol0.data(),
+                                           prm, out);
         for (int l = 0; l < count; ++l) {
             const int32_t* c = conn + 4 * (e0 + l);
             for (int k = 0; k < 4; ++k) {
@@ -88,10 +91,15 @@ void World::elementPhase(double dt) {
             const Material& m = materials[pieces[sg.piece].material];
             const bool visc = viscosityOn && m.viscosity > 0;
             double w = 0;
-            if (visc && energyOn) elementRange<true, true>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-            else if (visc) elementRange<true, false>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-            else if (energyOn) elementRange<false, true>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-            else elementRange<false, false>(sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            // The law is chosen once per segment (one piece's tets): the
+            // kernel below is compiled per law, with no call through a pointer.
+            withLaw(m, [&](const auto& law) {
+                using Law = std::decay_t<decltype(law)>;
+                if (visc && energyOn) elementRange<Law, true, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else if (visc) elementRange<Law, true, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else if (energyOn) elementRange<Law, false, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else elementRange<Law, false, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            });
             if (energyOn) pe[3 * sg.piece] += w;  // strain energy per piece (sleeping ones keep theirs)
         }
     }
@@ -346,8 +354,13 @@ void World::computeStress(double* out) const {
         const double* V = vel.data();
         const Mat3 F = edgeMatrix(X + 3 * c[0], X + 3 * c[1], X + 3 * c[2], X + 3 * c[3]) * B;
         const Mat3 Fd = edgeMatrix(V + 3 * c[0], V + 3 * c[1], V + 3 * c[2], V + 3 * c[3]) * B;
-        const TetStress st = svkStress<true, false>(F, Fd, prm);
-        const Mat3 sigma = (F * st.S * F.transpose()) / F.determinant();
+        const Mat3 P = withLaw(m, [&](const auto& law) {
+            using Law = std::decay_t<decltype(law)>;
+            return tetStress<Law, true, false>(law, F, Fd, prm).P;
+        });
+        // sigma = P F^T / J (for J <= 0 the element is inverted: the number
+        // is the law's, signs and all)
+        const Mat3 sigma = (P * F.transpose()) / F.determinant();
         double* o = out + 6 * e;
         o[0] = sigma(0, 0);
         o[1] = sigma(1, 1);

@@ -88,12 +88,14 @@ void bindWorld(py::module_& m) {
         .def(
             "addMaterial",
             [](World& w, double young, double poisson, double density, double viscosity, double frictionPiece,
-               double frictionWall, double radius, double restitution) {
+               double frictionWall, double radius, double restitution, int law) {
                 Material mat{young, poisson, density, viscosity, frictionPiece, frictionWall, radius, restitution};
+                mat.law = static_cast<MaterialLaw>(law);
                 return w.addMaterial(mat);
             },
             py::arg("young"), py::arg("poisson"), py::arg("density"), py::arg("viscosity"),
-            py::arg("frictionPiece"), py::arg("frictionWall"), py::arg("radius"), py::arg("restitution"))
+            py::arg("frictionPiece"), py::arg("frictionWall"), py::arg("radius"), py::arg("restitution"),
+            py::arg("law") = 0)
         .def(
             "addPiece",
             [](World& w, const Nodes& nodes, const Tets& tets, int material) {
@@ -138,6 +140,20 @@ void bindWorld(py::module_& m) {
             py::arg("dt"), py::arg("n") = 1)
         .def("checkDt", &World::checkDt, py::arg("dt"))
         .def("checkFinite", &World::checkFinite)
+        .def(
+            "checkInverted",
+            [](const World& w) {
+                const InversionCount r = w.checkInverted();
+                py::dict d;
+                d["count"] = r.count;
+                d["piece"] = r.piece;
+                d["element"] = r.element;
+                d["volumeRatio"] = r.volumeRatio;
+                return d;
+            },
+            "Inverted elements (volume ratio <= 0) of the awake pieces: dict of count and the first one's piece, "
+            "element and volumeRatio.  Raises StabilityError naming them when their law cannot push them back "
+            "(saintVenantKirchhoff).")
         .def("checkCurrentDt", &World::checkCurrentDt, py::arg("dt"),
              "Raise StabilityError when dt exceeds the stable step of the current (strained) shape.")
         .def("stableDt",

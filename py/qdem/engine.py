@@ -47,8 +47,8 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
     checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
                          "(raises qdem.StabilityError naming the limit).")
     checkPeriod = Attr(100, "Every this many steps, check that all node positions and velocities "
-                            "are finite, and (with checkDt) that O.dt is below the stable step of the "
-                            "current, strained shape (0 = never).")
+                            "are finite, count inverted elements (see inverted), and (with checkDt) that "
+                            "O.dt is below the stable step of the current, strained shape (0 = never).")
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
     viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
     damping = Attr(0.0, "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping "
@@ -119,6 +119,13 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         self._ids, self._states = [], None
         self._dtChecked = None
         self._lastProgress = None
+        #: Inverted elements (volume ratio <= 0), counted every checkPeriod: ``now`` (at the last
+        #: check), ``max`` (largest count seen), ``time`` [s] (time during which any element
+        #: was inverted, to one checkPeriod), ``first`` (piece, element, volume ratio) of the
+        #: latest episode.  Only laws that push inverted elements back get here: with
+        #: law='saintVenantKirchhoff' an inversion stops the run with qdem.StabilityError.
+        self.inverted = {"now": 0, "max": 0, "time": 0.0, "first": None}
+        self._lastCheckTime = None
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
 
@@ -265,11 +272,34 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
                 if k in ENERGY_KEYS:
                     O.energy[ENERGY_KEYS[k]] = v
         if self.checkPeriod and core.iter % self.checkPeriod == 0:
-            if self.checkDt:  # first: a strained, stiffened element is named before it blows up
+            self._checkInverted(core, dt)  # first: an inverted element is named as inverted
+            if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
             self._progress(core)
+
+    def _checkInverted(self, core, dt):
+        # Raises StabilityError (naming piece, element, volume ratio, fix) for a law that
+        # cannot push an inverted element back; counts them otherwise.
+        r = core.checkInverted()
+        inv, n = self.inverted, r["count"]
+        since = core.time - self._lastCheckTime if self._lastCheckTime is not None else self.checkPeriod * dt
+        self._lastCheckTime = core.time
+        if n:
+            inv["time"] += since  # inverted at this check: counted for the whole period before it
+            if not inv["now"]:
+                inv["first"] = (r["piece"], r["element"], r["volumeRatio"])
+                warnings.warn("qdem: at t=%.6g s (step %d) %d element(s) inverted, the first tetrahedron %d of "
+                              "piece %d (volume ratio %.3g); the material law pushes them back "
+                              "(QdemEngine.inverted counts them)."
+                              % (core.time, core.iter, n, r["element"], r["piece"], r["volumeRatio"]),
+                              RuntimeWarning, stacklevel=2)
+        elif inv["now"]:
+            print("qdem: at t=%.6g s (step %d) all inverted elements have recovered (at most %d, inverted for "
+                  "%.3g s in all)" % (core.time, core.iter, inv["max"], inv["time"]), flush=True)
+        inv["now"] = n
+        inv["max"] = max(inv["max"], n)
 
     def _progress(self, core):
         # The QDEM clock (core.iter, core.time): it goes on across restarts,
@@ -292,6 +322,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         line += "  %d contacts" % (c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
         if core.sleepVelocity > 0:
             line += "  %d/%d pieces asleep" % (core.nAsleep, core.nPieces)
+        if self.inverted["max"]:
+            line += "  %d inverted (max %d, for %.3g s)" % (self.inverted["now"], self.inverted["max"],
+                                                          self.inverted["time"])
         if core.trackEnergy:  # energies are only summed when O.trackEnergy is on
             e = core.energy
             line += "  E_kin=%.4g J  E_el=%.4g J" % (e["kinetic"], e["elastic"])

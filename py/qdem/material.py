@@ -10,6 +10,14 @@ def _poisson(v):
     return None if -1.0 < v < 0.5 else "must lie in (-1, 0.5)"
 
 
+# Elastic laws of the elements (pkg/element/laws/, doc/formulation.md "Material laws").
+LAWS = {"stableNeoHookean": 0, "saintVenantKirchhoff": 1}
+
+
+def _law(v):
+    return None if v in LAWS else "must be one of %s" % ", ".join(repr(k) for k in LAWS)
+
+
 def _restitution(v):
     try:
         v = float(v)
@@ -39,6 +47,13 @@ class QdemMat(AttrObject):
                         "stiffness kn = 2 E r (rigid wall).", positive)
     restitution = Attr(0.5, "Normal restitution coefficient of one particle contact, in (0, 1]; "
                             "sets the contact dashpot.", _restitution)
+    law = Attr("stableNeoHookean", "Elastic law of the tetrahedra; both equal Hooke's law with young and "
+                                   "poisson at small strain. 'stableNeoHookean' (default; Smith, de Goes and "
+                                   "Kim 2018): resists compression without softening and pushes an inverted "
+                                   "element back. 'saintVenantKirchhoff': the seed paper's law; its "
+                                   "compression response peaks at stretch 1/sqrt(3) and an element crushed "
+                                   "past it can stay inverted (QdemEngine then stops with an error). "
+                                   "doc/formulation.md compares them.", _law)
     label = Attr("", "Free text label, as YADE materials have.")
 
     def __setattr__(self, name, value):
@@ -55,4 +70,4 @@ class QdemMat(AttrObject):
         """Arguments of the compiled World.addMaterial, in order."""
         return (float(self.young), float(self.poisson), float(self.density), float(self.viscosity),
                 float(self.frictionPiece), float(self.frictionWall), float(self.radius),
-                float(self.restitution))
+                float(self.restitution), LAWS[self.law])

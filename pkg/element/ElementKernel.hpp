@@ -1,12 +1,14 @@
-// The element kernel of SvkTetra.hpp, evaluated for kLanes tetrahedra at
-// once.  Node data are gathered into lane arrays, the arithmetic runs as one
-// straight-line loop over lanes (which the compiler turns into SIMD code), and
-// forces are scattered back.  Same formulas as svkStress/nodalForces; the
-// unit tests compare the two.
+// The element kernel, generic over the material law: gather node data,
+// F = Ds * B, the law's first Piola stress (and strain energy), the
+// law-independent Kelvin-Voigt viscous stress, scatter nodal forces.
+// elementBatch evaluates kLanes tetrahedra at once: node data are gathered
+// into lane arrays, the arithmetic runs as one straight-line loop over lanes
+// (which the compiler turns into SIMD code), forces are scattered back.
+// tetStress is the scalar (Eigen) reference; the unit tests compare the two.
 #pragma once
 #include <cstdint>
 
-#include "SvkTetra.hpp"
+#include "Tetra.hpp"
 
 namespace qdem {
 
@@ -20,10 +22,12 @@ struct BatchOut {
 
 // Computes forces for tets e0 .. e0+count-1 (count <= kLanes).  Lanes beyond
 // count are padded with the last tet and must be ignored by the caller.
-template <bool Viscous, bool Energy>
-inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X, const double* V,
-                     const double* Bs, const double* vol, const ElementParams& p, BatchOut& out) {
-    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], B[9][kLanes], V0[kLanes];
+// Law: one of laws/*.hpp (its lane() is inlined: no virtual call).
+template <class Law, bool Viscous, bool Energy>
+__attribute__((noinline)) void elementBatch(const Law& law, int32_t e0, int count, const int32_t* conn, const double* X,
+                         const double* V, const double* Bs, const double* vol, const ElementParams& p,
+                         BatchOut& out) {
+    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], B[9][kLanes], V0[kLanes], aux[kLanes];
     for (int l = 0; l < kLanes; ++l) {
         const int32_t e = e0 + (l < count ? l : count - 1);
         const int32_t* c = conn + 4 * e;
@@ -42,7 +46,7 @@ inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X
         for (int m = 0; m < 9; ++m) B[m][l] = Bs[9 * e + m];
         V0[l] = vol[e];
     }
-    const double lam = p.lambda, mu2 = 2 * p.mu, blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
+    const double blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
         // F = Ds * B  (Ds columns are the edge vectors)
@@ -56,32 +60,11 @@ inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X
                     Fd[i][j] =
                         dv[0][i][l] * B[0 * 3 + j][l] + dv[1][i][l] * B[1 * 3 + j][l] + dv[2][i][l] * B[2 * 3 + j][l];
             }
-        // Green-Lagrange strain E = (F^T F - I)/2 (symmetric: 6 entries)
-        double E[3][3];
-        #pragma GCC unroll 3
-        for (int a = 0; a < 3; ++a)
-            #pragma GCC unroll 3
-            for (int b = a; b < 3; ++b) {
-                E[a][b] = 0.5 * (F[0][a] * F[0][b] + F[1][a] * F[1][b] + F[2][a] * F[2][b] - (a == b ? 1.0 : 0.0));
-                E[b][a] = E[a][b];
-            }
-        const double trE = E[0][0] + E[1][1] + E[2][2];
-        double S[3][3];
-        #pragma GCC unroll 3
-        for (int a = 0; a < 3; ++a)
-            #pragma GCC unroll 3
-            for (int b = 0; b < 3; ++b) S[a][b] = mu2 * E[a][b] + (a == b ? lam * trE : 0.0);
-        double wEl = 0, dRate = 0;
-        if constexpr (Energy) {
-            double ee = 0;
-            #pragma GCC unroll 3
-            for (int a = 0; a < 3; ++a)
-                #pragma GCC unroll 3
-                for (int b = 0; b < 3; ++b) ee += E[a][b] * E[a][b];
-            wEl = 0.5 * lam * trE * trE + 0.5 * mu2 * ee;
-        }
+        // Kelvin-Voigt: S_v = beta (2 mu dE/dt + lambda tr(dE/dt) I) on the
+        // Green-Lagrange strain rate dE/dt = sym(F^T dF/dt), for every law.
+        double Sv[3][3] = {};  // (read by the laws only when Viscous)
+        double dRate = 0;
         if constexpr (Viscous) {
-            // Green-Lagrange strain rate dE/dt = sym(F^T dF/dt)
             double Ed[3][3];
             #pragma GCC unroll 3
             for (int a = 0; a < 3; ++a)
@@ -97,17 +80,14 @@ inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X
             for (int a = 0; a < 3; ++a)
                 #pragma GCC unroll 3
                 for (int b = 0; b < 3; ++b) {
-                    const double sv = bmu2 * Ed[a][b] + (a == b ? blam * trEd : 0.0);
-                    S[a][b] += sv;
-                    if constexpr (Energy) dRate += sv * Ed[a][b];
+                    Sv[a][b] = bmu2 * Ed[a][b] + (a == b ? blam * trEd : 0.0);
+                    if constexpr (Energy) dRate += Sv[a][b] * Ed[a][b];
                 }
         }
-        // P = F S ;  H = -V0 P B^T : forces on nodes 1..3 as columns
         double P[3][3];
-        #pragma GCC unroll 3
-        for (int i = 0; i < 3; ++i)
-            #pragma GCC unroll 3
-            for (int j = 0; j < 3; ++j) P[i][j] = F[i][0] * S[0][j] + F[i][1] * S[1][j] + F[i][2] * S[2][j];
+        double wEl = 0, ax = 0;
+        law.template lane<Viscous, Energy>(F, Sv, P, wEl, ax);
+        // H = -V0 P B^T : forces on nodes 1..3 as columns
         #pragma GCC unroll 3
         for (int i = 0; i < 3; ++i) {
             double sum = 0;
@@ -122,7 +102,35 @@ inline void svkBatch(int32_t e0, int count, const int32_t* conn, const double* X
         }
         out.wElastic[l] = V0[l] * wEl;
         out.diss[l] = V0[l] * dRate;
+        if constexpr (Energy && Law::kEnergyFinish) aux[l] = ax;
     }
+    if constexpr (Energy && Law::kEnergyFinish)
+        for (int l = 0; l < kLanes; ++l) out.wElastic[l] += V0[l] * law.energyFinish(aux[l]);
+}
+
+// Stress of one element (elastic + viscous) and the pieces of it that the
+// energy bookkeeping needs: the scalar reference of elementBatch.
+struct TetStress {
+    Mat3 F;            // deformation gradient
+    Mat3 P;            // total first Piola-Kirchhoff stress
+    double wElastic;   // strain energy density
+    double dissRate;   // viscous dissipation density rate  S_v : dE/dt
+};
+
+template <class Law, bool Viscous, bool Energy>
+inline TetStress tetStress(const Law& law, const Mat3& F, const Mat3& Fdot, const ElementParams& p) {
+    TetStress r;
+    r.F = F;
+    r.P = law.piola(F);
+    r.wElastic = Energy ? law.energy(F) : 0.0;
+    r.dissRate = 0;
+    if constexpr (Viscous) {
+        Mat3 Ed;
+        const Mat3 Sv = viscousStress(F, Fdot, p, &Ed);
+        r.P += F * Sv;
+        if constexpr (Energy) r.dissRate = (Sv.array() * Ed.array()).sum();
+    }
+    return r;
 }
 
 }  // namespace qdem

@@ -1,0 +1,103 @@
+// Saint-Venant-Kirchhoff: S = lambda tr(E) I + 2 mu E on the Green-Lagrange
+// strain E = (F^T F - I)/2, P = F S.  Objective and exact Hooke at small
+// strain, but its compression response peaks at stretch 1/sqrt(3) (uniaxial
+// strain) and falls to zero at the mirror state F = diag(-1, 1, 1): an
+// element pushed past the peak snaps through and stays inverted
+// (doc/formulation.md, "Material laws").  Kept by name:
+// QdemMat(law='saintVenantKirchhoff').
+#pragma once
+#include <cmath>
+
+#include "../../material/Material.hpp"
+#include "../Tetra.hpp"
+
+namespace qdem {
+
+struct SaintVenantKirchhoff {
+    static constexpr MaterialLaw kTag = MaterialLaw::SaintVenantKirchhoff;
+    static constexpr bool kRecoversFromInversion = false;
+    static constexpr bool kEnergyFinish = false;  // no per-lane scalar energy term
+
+    double lam, mu, mu2;
+    SaintVenantKirchhoff(double lambda, double mu_) : lam(lambda), mu(mu_), mu2(2 * mu_) {}
+
+    // One SIMD lane: P = F (S_e + S_v), the viscous stress S_v added before
+    // the push-forward (the original kernel's order, so results are
+    // bit-identical to it).  w: strain energy density; aux unused.
+    template <bool Viscous, bool Energy>
+    inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double (&P)[3][3], double& w,
+                     double& /*aux*/) const {
+        double E[3][3];
+        #pragma GCC unroll 3
+        for (int a = 0; a < 3; ++a)
+            #pragma GCC unroll 3
+            for (int b = a; b < 3; ++b) {
+                E[a][b] = 0.5 * (F[0][a] * F[0][b] + F[1][a] * F[1][b] + F[2][a] * F[2][b] - (a == b ? 1.0 : 0.0));
+                E[b][a] = E[a][b];
+            }
+        const double trE = E[0][0] + E[1][1] + E[2][2];
+        double S[3][3];
+        #pragma GCC unroll 3
+        for (int a = 0; a < 3; ++a)
+            #pragma GCC unroll 3
+            for (int b = 0; b < 3; ++b) S[a][b] = mu2 * E[a][b] + (a == b ? lam * trE : 0.0);
+        if constexpr (Energy) {
+            double ee = 0;
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = 0; b < 3; ++b) ee += E[a][b] * E[a][b];
+            w = 0.5 * lam * trE * trE + 0.5 * mu2 * ee;
+        }
+        if constexpr (Viscous) {
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = 0; b < 3; ++b) S[a][b] += Sv[a][b];
+        }
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i)
+            #pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) P[i][j] = F[i][0] * S[0][j] + F[i][1] * S[1][j] + F[i][2] * S[2][j];
+    }
+    double energyFinish(double /*aux*/) const { return 0.0; }
+
+    // ---- reference (Eigen) forms: output, stable step, tests --------------
+    // Lame constants of tangent(I) (Hooke's law at small strain).
+    void lameAtRest(double& lambda, double& mu_) const { lambda = lam, mu_ = mu; }
+    Mat3 secondPiola(const Mat3& F) const {
+        const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
+        Mat3 S = 2 * mu * E;
+        S.diagonal().array() += lam * E.trace();
+        return S;
+    }
+    Mat3 piola(const Mat3& F) const { return F * secondPiola(F); }
+    double energy(const Mat3& F) const {
+        const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
+        const double trE = E.trace();
+        return 0.5 * lam * trE * trE + mu * E.squaredNorm();
+    }
+    // dP_iJ/dF_kL = delta_ik S_JL + lambda F_iJ F_kL + mu (F_iM F_kM delta_JL + F_iL F_kJ)
+    Mat9 tangent(const Mat3& F) const {
+        const Mat3 S = secondPiola(F), FFt = F * F.transpose();
+        Mat9 A;
+        for (int i = 0; i < 3; ++i)
+            for (int J = 0; J < 3; ++J)
+                for (int k = 0; k < 3; ++k)
+                    for (int L = 0; L < 3; ++L)
+                        A(3 * i + J, 3 * k + L) = (i == k ? S(J, L) : 0.0) + lam * F(i, J) * F(k, L) +
+                                                  mu * ((J == L ? FFt(i, k) : 0.0) + F(i, L) * F(k, J));
+        return A;
+    }
+    // Estimate of how much the element's highest frequency squared has grown
+    // from the reference shape (s2: largest eigenvalue of C = F^T F): exact
+    // for uniaxial strain ((3 s^2 - 1)/2), 1 for a rigid motion.  Only a
+    // filter: the exact eigenvalue decides (StableDt.cpp).
+    double stiffening(const Mat3& C, double s2) const {
+        const double trE = 0.5 * (C.trace() - 3);
+        const double sMax = lam * trE + mu * (s2 - 1);  // largest principal value of S (shares E's axes)
+        return s2 + std::max(sMax, 0.0) / (lam + 2 * mu);
+    }
+};
+
+}  // namespace qdem
