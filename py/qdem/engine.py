@@ -40,7 +40,13 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
     a qdem.World other than qdem.defaultWorld().  Place it after ForceResetter
     (and after InsertionSortCollider/InteractionLoop when YADE spheres share the
     scene) and before NewtonIntegrator, which it reads gravity from; wrong
-    orders are refused at the first step (doc/yade.md)."""
+    orders are refused at the first step (doc/yade.md).
+
+    ``engine.inverted`` counts inverted elements (volume ratio <= 0), checked
+    every checkPeriod steps: ``now``, ``max`` (the largest count seen), ``time``
+    (how long any element was inverted [s]), ``first`` (piece, element, volume
+    ratio of the latest episode).  A law that cannot push an inverted element
+    back (law='saintVenantKirchhoff') stops the run with qdem.StabilityError."""
 
     couple = Attr(True, "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again "
                         "whenever the number of bodies changes).")
@@ -155,6 +161,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         """What O.save keeps of this engine besides its PyRunner fields."""
         sp = self._spheres
         return {"kind": "QdemEngine", "settings": self.dict(), "label": self.label, "dead": bool(self.dead),
+                "inverted": dict(self.inverted), "lastCheckTime": self._lastCheckTime,
                 "proxies": list(sp.proxies) if sp is not None else [],
                 "proxyBox": [[list(map(float, lo)), list(map(float, hi))] for lo, hi in sp.proxyBox]
                 if sp is not None else []}
@@ -164,6 +171,10 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         """The engine of a loaded scene, from savedState()."""
         e = cls(qdemId=qdemId, **st["settings"])
         e.label, e.dead = st.get("label", ""), st.get("dead", False)
+        if st.get("inverted"):
+            e.inverted = dict(st["inverted"])
+            e.inverted["first"] = tuple(e.inverted["first"]) if e.inverted.get("first") else None
+        e._lastCheckTime = st.get("lastCheckTime")
         if st.get("proxies"):
             e._spheres = SphereCoupling(e.world, int(e.sphereMask), float(e.sphereMargin))
             e._spheres.adopt(st["proxies"], st["proxyBox"])
