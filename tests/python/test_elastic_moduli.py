@@ -35,13 +35,17 @@ def test_uniaxial_compression_gives_young_and_poisson():
     dt = 0.5 * w.stableDt()["combined"]
     # Dynamic relaxation by kinetic damping: velocities are zeroed whenever the
     # kinetic energy passes a peak (physical viscosity would only slow this).
+    # Its rate depends on the mesh (the symmetric 6-tet split needs ~3,500
+    # cycles of 20 steps): stop once the column is still.
     last = 0.0
-    for _ in range(1500):
+    for _ in range(5000):
         w.core.step(dt, 20)
         ke = (p.mass[:, None] * p.vel**2).sum()
         if ke < last:
             p.vel[:] = 0
         last = ke
+        if np.abs(p.vel).max() < 1e-8:
+            break
     w.core.step(dt, 100)
     assert np.abs(p.vel).max() < 1e-6              # at rest
     d = p.displacement
