@@ -19,6 +19,10 @@ struct ContactParams {
     double ct;        // tangential dashpot [N s/m] (damps stick oscillations)
     double friction;  // Coulomb coefficient; 0 = no tangential force at all
     double vReg = 0;  // regularised law only: slip speed at which the full mu*Fn is reached [m/s]
+    // Regularised law only: the mass the tangential force moves, the reduced
+    // mass of the two contact points [kg] (its drag is integrated implicitly
+    // against it); <= 0: infinite (the explicit drag).
+    double mEff = 0;
 };
 
 // The part of a particle pair's law that depends on the two materials only
@@ -44,7 +48,14 @@ struct ContactResult {
 // elongation carried from step to step (updated in place).
 // Regularized: instead of the spring, viscous-regularised Coulomb sliding
 // Ft = -mu Fn vt / max(|vt|, vReg): mu Fn against the slip above vReg, a
-// viscous drag below it, no history (shear is zeroed).
+// viscous drag below it, no spring.  The drag c = mu Fn /
+// vReg is far too stiff for the explicit step (c dt / m >> 2 at any useful
+// vReg), so it is taken implicitly: backward Euler of the slip speed under
+// this force alone, u' = u - dt |Ft| / m with |Ft| = mu Fn min(1, u'/vReg),
+// gives |Ft| = min(mu Fn, c u / (1 + c dt / m)) (doc/contacts.md,
+// "Regularised friction, implicit").  It never reverses the slip within a
+// step.  `shear` carries the previous step's friction force (for the energy
+// booking below), not a spring.
 template <bool Friction, bool Regularized = false>
 inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d& n, double overlap,
                                   const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
@@ -57,11 +68,25 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
     r.force = fn * n;
     r.elastic = 0.5 * fnSpring * overlap;
     if constexpr (Friction && Regularized) {
-        shear.setZero();
         const Eigen::Vector3d vt = vRel - vn * n;
-        const Eigen::Vector3d ft = (-p.friction * fn / std::max(vt.norm(), p.vReg)) * vt;
+        const double u = vt.norm();
+        const double cap = p.friction * fn;
+        const double c = cap / p.vReg;
+        const double cEff = p.mEff > 0 ? c / (1 + c * dt / p.mEff) : c;
+        const double f = std::min(cap, cEff * u);
+        const Eigen::Vector3d ft = u > 0 ? Eigen::Vector3d((-f / u) * vt) : Eigen::Vector3d::Zero();
         r.force += ft;
-        r.slipWork = -ft.dot(vt) * dt;  // nothing is stored: all of it is dissipated
+        // Work of the friction force f_n of step n: -f_n . (v_{n-1/2} + v_{n+1/2}) / 2 dt,
+        // the velocity at the force's time level (where the ledger's kinetic
+        // energy is taken).  v_{n+1/2} is known only at the next step, so
+        // each step books half of its own force's work and half of the
+        // previous one's, both with the current slip; the previous force
+        // rides in `shear` (unused by this law).  Exact for the drag alone,
+        // and it stays right when other forces re-accelerate the node every
+        // step (a stuck node pushed by its element), where booking with the
+        // old velocity alone would err by up to 2x one way or the other.
+        r.slipWork = -0.5 * dt * (ft + shear).dot(vt);
+        shear = ft;
     } else if constexpr (Friction) {
         // Carry the spring onto the current tangent plane, keeping its length,
         // so a rotating contact does not create or lose tangential force.

@@ -118,8 +118,16 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
                                           ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
-                    const ContactParams cp{w * law.kn, w * law.cn, w * law.kt, w * law.ct, law.mu,
-                                           frictionRegVelocity};
+                    // Area weight (doc/contacts.md, "Area weights"): the mean of
+                    // the two crossing points' weights, each interpolated along
+                    // its edge, so it varies continuously as the crossing slides
+                    // and meets the end node's point-polygon weight at the ends.
+                    const double* sw = surfWeight.data();
+                    const double aw = 0.5 * ((1 - sp.s) * sw[S.surfIndexOfNode[a0]] + sp.s * sw[S.surfIndexOfNode[a1]] +
+                                             (1 - sp.t) * sw[S.surfIndexOfNode[b0]] + sp.t * sw[S.surfIndexOfNode[b1]]);
+                    const double saw = std::sqrt(aw);
+                    const ContactParams cp{w * aw * law.kn, w * saw * law.cn, w * aw * law.kt, w * saw * law.ct, law.mu,
+                                           frictionRegVelocity, m1 * m2 / (m1 + m2)};
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                                   reach, vRel.dot(n), dt);
                     const ContactResult r =

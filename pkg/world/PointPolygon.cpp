@@ -257,7 +257,9 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     usedOld[slot] = true;
                     sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                 }
-                const ContactParams cp{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity};
+                const double w = surfWeight[s], sw = std::sqrt(w);  // the query node's area weight
+                const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, frictionRegVelocity,
+                                       mass[node] * mT / (mass[node] + mT)};
                 const Vector3d vRel = at(vel, node) - vT;
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
                                               vRel.dot(n), dt);

@@ -318,7 +318,11 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                         usedOld[slot] = true;
                         sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     }
-                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity};
+                    // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
+                    // (a clump's is larger: this errs towards less drag, never towards reversing the slip).
+                    const double mBall = 2.0 / 7.0 * S.mass[i];
+                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity,
+                                            std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT};
                     const Vector3d vRel = v + w.cross(arm) - vT;
                     // A contact found deep on a sphere already watched was missed,
                     // not made: it stores no energy it was not given (ContactDetail.hpp).

@@ -190,8 +190,9 @@ void World::checkCurrentDt(double dt) const {
     }
 }
 
-// Stiffest contact spring on the lightest surface node of piece i: its
-// angular frequency wc and damping ratio xic (0, 0 when nothing can touch it).
+// Stiffest contact spring of piece i over its surface nodes (largest
+// w_i kn / m_i; YADE spheres' springs are not area-weighted: lightest node):
+// its angular frequency wc and damping ratio xic (0, 0 when nothing can touch it).
 void World::contactMode(std::size_t i, double& wc, double& xic) const {
     const PieceInfo& p = pieces[i];
     const Material& m = materials[p.material];
@@ -207,7 +208,9 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
         const double kn = (rigid || pieces.size() > 1)
                               ? 2 * m.young * m.radius
                               : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
-        wc = std::sqrt(kn / p.minSurfaceNodeMass);
+        // Each node's springs are scaled by its area weight w (surfWeight):
+        // the stiffest mode is the largest w kn / m over the surface nodes.
+        wc = std::sqrt(kn / p.minSurfaceMassPerWeight);
         xic = dampingRatioFromRestitution(m.restitution);
     }
     if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {

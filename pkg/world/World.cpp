@@ -85,13 +85,33 @@ int World::addPiece(const TetMesh& mesh, int material) {
     for (auto& v : s.tets) v += t0;
     p.surfBegin = static_cast<int32_t>(surfNodes.size());
     surfNodes.resize(surfNodes.size() + s.nodes.size());
-    double mmin = std::numeric_limits<double>::infinity();
+    surfWeight.resize(surfNodes.size(), 1.0);
+    // Area share of each surface node (a third of each reference triangle's
+    // area), normalised by the mean: surfWeight (World.hpp).
+    std::vector<double> share(nn, 0.0);
+    for (std::size_t t = 0; t < s.nTriangles(); ++t) {
+        const int32_t* v = &s.triangles[3 * t];
+        auto x = [&](int32_t g) { return Eigen::Vector3d(refPos[3 * g], refPos[3 * g + 1], refPos[3 * g + 2]); };
+        const Eigen::Vector3d a = x(v[0]), b = x(v[1]), c = x(v[2]);
+        const double third = (b - a).cross(c - a).norm() / 6.0;
+        for (int k = 0; k < 3; ++k) share[v[k] - n0] += third;
+    }
+    double shareSum = 0;
+    for (const int32_t v : s.nodes) shareSum += share[v - n0];
+    const double meanShare = shareSum / static_cast<double>(s.nodes.size());
+    double mmin = std::numeric_limits<double>::infinity(), mwmin = mmin;
     for (std::size_t i = 0; i < s.nodes.size(); ++i) {
         surfNodes[p.surfBegin + i] = s.nodes[i];
         mmin = std::min(mmin, mass[s.nodes[i]]);
+        // > 0: every surface node is a corner of a surface face of a checked
+        // (non-flat) tetrahedron.
+        const double w = share[s.nodes[i] - n0] / meanShare;
+        surfWeight[p.surfBegin + i] = w;
+        mwmin = std::min(mwmin, mass[s.nodes[i]] / w);
     }
     p.surfEnd = static_cast<int32_t>(surfNodes.size());
     p.minSurfaceNodeMass = mmin;
+    p.minSurfaceMassPerWeight = mwmin;
     p.surface = std::move(s);
 
     slotBody_.resize(kSlots * surfNodes.size(), -1);

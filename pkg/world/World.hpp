@@ -34,13 +34,16 @@ struct PieceInfo {
     Surface surface;             // in global node / tet ids
     double volume = 0, mass = 0;
     double minSurfaceNodeMass = 0;
+    // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
+    // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.
+    double minSurfaceMassPerWeight = 0;
 };
 
 // Stable time step and which limit sets it.
 struct StableDt {
     double elastic;   // undamped P-wave limit of the stiffest element
     double viscous;   // the same mode with its Kelvin-Voigt damping
-    double contact;   // node-obstacle spring-dashpot on the lightest surface node
+    double contact;   // node-obstacle spring-dashpot, stiffest w kn / m over the surface nodes
     double combined;  // all of the above acting on one node: the step we enforce
     std::string limitedBy;
 };
@@ -114,6 +117,13 @@ public:
     Column<int32_t> tetNodes, tetPiece;
     Column<double> tetB, tetVol0;   // inverse reference edge matrix (row-major), volume
     Column<int32_t> surfNodes;      // global ids of the surface nodes of all pieces
+    // Contact weight of each surface node (same index as surfNodes): its share
+    // of the piece's surface area over the mean share, A_i / mean(A) with A_i
+    // a third of the reference areas of the surface triangles around it.
+    // Contact stiffness kn, kt on a node is scaled by w_i (dashpots follow
+    // from the scaled k), so a uniform pressure gives a reaction centred on
+    // the area centre whatever the mesh: doc/contacts.md, "Area weights".
+    Column<double> surfWeight;
     std::vector<PieceInfo> pieces;
     std::vector<Material> materials;
     std::vector<Obstacle> obstacles;

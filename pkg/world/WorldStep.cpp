@@ -204,13 +204,15 @@ void World::obstaclePhase(double dt) {
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
-                const double kn = o.young > 0 ? 2 * m.young * o.young * m.radius / (m.young + o.young)
-                                              : 2 * m.young * m.radius;
+                // Scaled by the node's share of the surface area (surfWeight,
+                // World.hpp); the dashpots keep their damping ratio.
+                const double kn = surfWeight[s] * (o.young > 0 ? 2 * m.young * o.young * m.radius / (m.young + o.young)
+                                                               : 2 * m.young * m.radius);
                 const double xi = dampingRatioFromRestitution(m.restitution);
                 const double mu = o.friction >= 0 ? o.friction : m.frictionWall;
                 const double kt = kn * 2 * (1 - m.poisson) / (2 - m.poisson);  // Mindlin's ratio
                 ContactParams cp{kn, 2 * xi * std::sqrt(kn * mass[node]), kt, 2 * xi * std::sqrt(kt * mass[node]),
-                                 mu, frictionRegVelocity};
+                                 mu, frictionRegVelocity, mass[node]};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);

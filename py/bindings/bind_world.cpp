@@ -314,6 +314,18 @@ void bindWorld(py::module_& m) {
                                [](World& w) { return columnView(w.extForce, 0, {py::ssize_t(w.nNodes()), 3}); })
         .def_property_readonly("mass", [](World& w) { return columnView(w.mass, 0, {py::ssize_t(w.nNodes())}, false); })
         .def_property_readonly("blocked", [](World& w) { return columnView(w.blocked, 0, {py::ssize_t(w.nNodes())}); })
+        .def_property_readonly(
+            "contactWeight",
+            [](const World& w) {
+                // Per node (a copy): the area weight of its contact stiffness, 0 inside.
+                py::array_t<double> a(py::ssize_t(w.nNodes()));
+                auto r = a.mutable_unchecked<1>();
+                for (py::ssize_t i = 0; i < r.shape(0); ++i) r(i) = 0.0;
+                for (std::size_t s = 0; s < w.surfNodes.size(); ++s) r(w.surfNodes[s]) = w.surfWeight[s];
+                return a;
+            },
+            "Per node: the area weight w = A_i / mean(A) scaling its contact stiffness (0 for interior "
+            "nodes; doc/contacts.md, 'Area weights').")
         .def_property_readonly("nodePiece",
                                [](World& w) { return columnView(w.nodePiece, 0, {py::ssize_t(w.nNodes())}, false); })
         .def_property_readonly("tets",

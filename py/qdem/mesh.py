@@ -83,7 +83,18 @@ class Mesh:
 def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     """Structured mesh of a box of ``size`` centred on the origin with ``cells``
     cells per axis.  tetsPerCell: 5, 6 (Kuhn) or 12 (body-centre node, the seed
-    paper's cubes: cells=(8,8,8) gives 1,241 nodes and 6,144 tets)."""
+    paper's cubes: cells=(8,8,8) gives 1,241 nodes and 6,144 tets).
+
+    With even cell counts the mesh is the mirror image of itself about the
+    box's three mid-planes for every tetsPerCell (mirror-image nodes carry
+    equal lumped masses: a box dropped flat gets no torque from its mesh).
+    An odd count along an axis cannot be mirror-symmetric about that axis's
+    mid-plane: the middle layer of cells has no symmetric split into these
+    tets.  With 6 and 12 the asymmetry is confined to that layer; with 5 the
+    alternating split makes the whole mesh differ from its mirror image
+    (though equal odd counts keep each face's mass centre at its centre by
+    the half-turn symmetry).  Offsets of the bottom face's mass centre for
+    2..9 cells: doc/hard_cases.md.  Prefer even counts for drop tests."""
     size = np.broadcast_to(np.asarray(size, dtype=float), (3,))
     cells = np.broadcast_to(np.asarray(cells, dtype=int), (3,))
     nodes, tets = _core.boxMesh(int(cells[0]), int(cells[1]), int(cells[2]),

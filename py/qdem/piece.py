@@ -88,6 +88,13 @@ class Piece:
         return self.world.core.mass[self.nodeSlice]
 
     @property
+    def contactWeight(self):
+        """Per node (n,): the factor on its contact stiffness, its share of the
+        surface area over the piece's mean share (0 for interior nodes;
+        doc/contacts.md, "Area weights")."""
+        return self.world.core.contactWeight[self.nodeSlice]
+
+    @property
     def blocked(self):
         """Per node bit mask of prescribed DOFs (1=x, 2=y, 4=z): those keep
         their velocity, like YADE's blockedDOFs.  Writable view."""

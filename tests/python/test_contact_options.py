@@ -38,15 +38,16 @@ def _apexForce(regions, apex, direction):
     stylus.blocked[:] = 7
     w.core.pointPolygonRegions = regions
     w.core.step(1e-7, 1)
-    return stylus.force[0].copy(), w.core.contactCounts["pointPolygon"], mat
+    # The apex's contact stiffness carries its area weight (doc/contacts.md).
+    return stylus.force[0].copy(), w.core.contactCounts["pointPolygon"], mat, stylus.contactWeight[0]
 
 
 def test_seed_inside_test_drops_edge_region_contacts_only():
     # Over the face interior: the same force, to the bit, with or without regions.
     above = [0.013, 0.027, 3e-3]
-    f1, n1, mat = _apexForce(True, above, (0, 0, 1))
-    f0, n0, _ = _apexForce(False, above, (0, 0, 1))
-    kn = mat.young * mat.radius
+    f1, n1, mat, wA = _apexForce(True, above, (0, 0, 1))
+    f0, n0, _, _ = _apexForce(False, above, (0, 0, 1))
+    kn = wA * mat.young * mat.radius
     assert n1 == n0 == 1
     assert np.array_equal(f1, f0)
     assert f1 == pytest.approx([0, 0, kn * (2 * mat.radius - 3e-3)], abs=1e-9 * kn * 1e-3)
@@ -55,8 +56,8 @@ def test_seed_inside_test_drops_edge_region_contacts_only():
     dist = 3e-3
     n = np.array([1.0, 0, 1.0]) / math.sqrt(2)
     apex = np.array([0.15, 0.025, 0.0]) + dist * n
-    f1, n1, _ = _apexForce(True, apex, n)
-    f0, n0, _ = _apexForce(False, apex, n)
+    f1, n1, _, _ = _apexForce(True, apex, n)
+    f0, n0, _, _ = _apexForce(False, apex, n)
     assert n1 == 1 and n0 == 0
     assert np.abs(f0).max() < 1e-9 * kn * dist    # rounding of the stylus' own element force
     assert f1 == pytest.approx(kn * (2 * mat.radius - dist) * n, rel=1e-6)
@@ -92,7 +93,9 @@ def test_regularized_friction_creeps_on_a_slope_the_spring_holds():
     creep = {}
     for model in ("spring", "regularized"):
         w, block, dt = _block(model, slope=theta, mu=mu, vReg=vReg)
-        w.core.step(dt, int(0.08 / dt))
+        # Past the landing's elastic rocking (its up-and-down-slope swing is
+        # still +-1.5e-5 m/s at 0.1 s, and its phase depends on the mesh).
+        w.core.step(dt, int(0.16 / dt))
         x0, t0 = block.centroid()[0], w.core.time
         w.core.step(dt, int(0.1 / dt))
         creep[model] = (block.centroid()[0] - x0) / (w.core.time - t0)

@@ -40,8 +40,10 @@ def test_uniaxial_compression_gives_young_and_poisson(law):
     dt = 0.5 * w.stableDt()["combined"]
     # Dynamic relaxation by kinetic damping: velocities are zeroed whenever the
     # kinetic energy passes a peak (physical viscosity would only slow this).
+    # Its rate depends on the mesh (the symmetric 6-tet split needs ~3,500
+    # cycles of 20 steps): stop once the column is still.
     last = 0.0
-    for k in range(4000):                          # until at rest (SVK ~1500 rounds, SNH ~2500)
+    for k in range(6000):                          # until at rest (a few thousand rounds, by mesh and law)
         w.core.step(dt, 20)
         ke = (p.mass[:, None] * p.vel**2).sum()
         if ke < last:
@@ -51,6 +53,21 @@ def test_uniaxial_compression_gives_young_and_poisson(law):
             w.core.step(dt, 100)                   # undamped: is it at rest?
             if np.abs(p.vel).max() < 1e-7:
                 break
+        w.core.step(dt, 20)
+        ke = (p.mass[:, None] * p.vel**2).sum()
+        if ke < last:
+            p.vel[:] = 0
+        last = ke
+<<<<<<< HEAD
+        if k % 250 == 249:
+            w.core.step(dt, 100)                   # undamped: is it at rest?
+            if np.abs(p.vel).max() < 1e-7:
+                break
+=======
+        if np.abs(p.vel).max() < 1e-8:
+            break
+    w.core.step(dt, 100)
+>>>>>>> issue12-mesh
     assert np.abs(p.vel).max() < 1e-6              # at rest
     d = p.displacement
     epsZ = (d[top, 2].mean() - d[bottom, 2].mean()) / H

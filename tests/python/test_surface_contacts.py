@@ -110,7 +110,17 @@ def test_crossed_bars_touch_edge_on_without_tunnelling():
             if ke < lastKe:
                 top.vel[:] = 0
             lastKe = ke
-    load = -bot.force[:, 2].sum()
+    # Kinetic damping leaves the top bar creeping back from its overshoot (it
+    # kills the slow rigid motion with each bending peak): the load it reads at
+    # one instant depends on the contact's stiffness history (3 % off with
+    # the area-weighted edge-edge springs).  Its mean over a free stretch is
+    # the static load (to the top bar's momentum change over that stretch).
+    loads = []
+    for i in range(4000):
+        w.core.step(dt, 1)
+        loads.append(-bot.force[:, 2].sum())
+        minGap = min(minGap, top.pos[nearT, 2].min() - bot.pos[nearB, 2].max())
+    load = np.mean(loads)
     assert edgeContacts > 0
     kn = mat.young * mat.radius
     static = F / kn                                 # overlap one edge-edge spring needs to carry F
@@ -147,7 +157,7 @@ def test_node_sliding_across_triangle_edges_feels_a_continuous_force(y):
     jumps = np.abs(np.diff(fz)) / fz.mean()
     assert jumps.max() < 0.01
     if y != 0:  # away from slab nodes only the apex touches: the law's kn * overlap
-        kn = mat.young * mat.radius
+        kn = stylus.contactWeight[0] * mat.young * mat.radius   # with the apex's area weight
         assert np.median(fz) == pytest.approx(kn * depth, rel=1e-6)
 
 
