@@ -12,7 +12,7 @@ Typical use inside a YADE script::
 from . import _core
 from ._core import StabilityError
 from .material import QdemMat
-from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface
+from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
 from .piece import Piece
 from .restart import loadState, saveState
 from .world import World, addPiece, defaultWorld, reset, stableDt
@@ -28,5 +28,5 @@ else:
     from .recorder import VtkRecorder
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
-           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "defaultWorld", "reset",
+           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "splitMesh", "defaultWorld", "reset",
            "stableDt", "saveState", "loadState"]
