@@ -35,10 +35,14 @@ def _stopping(speed, mat, piece):
     return speed * math.sqrt(m / (mat.young * mat.radius))
 
 
-def _inside(p, q):
-    """Nodes of p inside q's (convex) bounding box shrunk by q's radius."""
-    lo, hi = q.pos.min(axis=0), q.pos.max(axis=0)
-    return np.all((p.pos > lo + 2e-3) & (p.pos < hi - 2e-3), axis=1).sum()
+def _inside(p, q, margin=2e-3):
+    """Nodes of p more than `margin` inside q, q taken as the convex solid of
+    its surface triangles' planes (the cubes stay nearly convex)."""
+    tri = q.pos[q.surface()["triangles"]]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    h = np.einsum("tj,nj->nt", n, p.pos) - np.einsum("tj,tj->t", n, tri[:, 0])[None, :]
+    return int((h.max(axis=1) < -margin).sum())
 
 
 @pytest.mark.parametrize("speed, young", [(5.0, 1e7), (25.0, 1e7), (50.0, 1e8)])
