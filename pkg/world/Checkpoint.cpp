@@ -109,6 +109,9 @@ void World::loadState(const WorldState& s) {
     updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
     pc_.listValid = false;      // Verlet lists: rebuilt from the loaded positions
     contactsActive_ = false;
+    // A loaded state continues a run: its contacts with obstacles are not a
+    // set-up mistake (a new obstacle list still gets checked: setObstacles).
+    startChecked_.assign(pieces.size(), 1);
     // Sleeping pieces rest in the obstacles and gravity the state was saved
     // with (frozen reactions are by obstacle index): if this world gets others
     // (or the file predates these fields) they are woken at the next step.

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
+#include "../core/Errors.hpp"
 #include "ContactDetail.hpp"
 #include "TouchSelection.hpp"
 #include "World.hpp"
@@ -15,6 +17,20 @@ namespace qdem {
 
 using Eigen::Vector3d;
 using namespace contact_detail;
+
+namespace {
+// A point behind a triangle's plane (h < 0) is inside the other piece when it
+// lies straight behind the triangle: its closest point is inside the face, or
+// on the face's boundary with the point straight below it (dist = |h|, to
+// rounding).  The second case is a node right behind an edge or corner shared
+// by coplanar triangles of a flat face - every adjacent triangle then reports
+// an edge or corner closest point.  Without it such a node (common: meshes of
+// equal cells meet node under edge) was taken as outside, dropped its contact
+// and let pieces pass through each other (issue 12, doc/hard_cases.md).
+inline bool straightBehind(bool faceFeature, double dist, double h) {
+    return faceFeature || dist + h <= 1e-9 * dist;
+}
+}  // namespace
 // ---------------------------------------------------------------------------
 // Point-polygon: every surface node against the surface triangles of the
 // other pieces.  One thread per surface node (seed §4.1).
@@ -40,6 +56,10 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
     const int32_t* tri = S.tri.data();
     const double* normal = pc_.triNormal.data();
     const double* X = pos.data();
+    struct Tunnel {
+        int32_t node = -1, pa = -1, pb = -1;
+        double depth = 0, speed = 0, mass = 0, kn = 0;
+    } tunnel;
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
@@ -65,9 +85,11 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                 for (int k = 0; k < K; ++k) key[k] = -1;
             pc_.ppStamp[s] = stamp;
             const bool useList = pc_.listValid && listCount[s] >= 0;
-            if (!active[pa] || (useList && listCount[s] == 0)) {
+            if (!active[pa] || (useList && listCount[s] == 0 && key[0] < 0)) {
                 // Nothing can touch this node: its slots are empty (slots
-                // after the first empty one are empty too).
+                // after the first empty one are empty too).  A node with a
+                // contact carried from the last step goes on: it may be deep
+                // behind that face, beyond the list's range (side memory below).
                 if (key[0] >= 0)
                     for (int k = 0; k < K; ++k) key[k] = -1;
                 continue;
@@ -99,7 +121,7 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                 // Behind the face (inside the other piece) can only be told for
                 // a face-interior closest point; an edge or corner closest point
                 // means the node is outside, in that feature's region.
-                const bool behind = h < 0 && cp.feature == TriFeature::Face;
+                const bool behind = h < 0 && straightBehind(cp.feature == TriFeature::Face, dist, h);
                 if (!behind && dist >= reach) return;
                 anyBehind = anyBehind || behind;
                 cand[nc++] = Candidate{t, cp, dist, behind};
@@ -131,7 +153,8 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                         if (h > reach) continue;
                         const double dist = std::sqrt(near.dist2[l]);
                         if (!regions && dist - std::abs(h) > 1e-9 * reach) continue;  // seed's inside test
-                        const bool behind = h < 0 && near.feature[l] == static_cast<int32_t>(TriFeature::Face);
+                        const bool behind =
+                            h < 0 && straightBehind(near.feature[l] == static_cast<int32_t>(TriFeature::Face), dist, h);
                         if (!behind && dist >= reach) continue;
                         anyBehind = anyBehind || behind;
                         Candidate& cd = cand[nc++];
@@ -185,6 +208,32 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     }
                 });
             }
+            // Side memory (issue 12): a contact carried from the last step keeps
+            // its triangle while the node stays behind that face, however deep.
+            // The search only reaches the triangle's bounding sphere grown by
+            // the reach (and skin): a fast impact pushed nodes deeper than that
+            // (29 mm for 33 mm triangles), the contact was lost and two cubes
+            // at 25 m/s passed through each other (doc/hard_cases.md).
+            if (watched)
+                for (int k = 0; k < K && key[k] >= 0 && nc < kCandidates; ++k) {
+                    const int32_t t = key[k] >> 3;
+                    bool found = false;
+                    for (int i = 0; i < nc && !found; ++i) found = cand[i].tri == t;
+                    if (found || !active[triPiece[t]]) continue;
+                    const int32_t* c = tri + 3 * t;
+                    const Vector3d a = at(pos, c[0]);
+                    if ((A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t)) >= 0) continue;  // in front: ends as usual
+                    const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                    const double dist = (A - cp.point).norm();
+                    const double h = (A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t));
+                    // Behind the plane and at most a reach beside the triangle
+                    // (its neighbours, folded by the impact, may hold the node's
+                    // projection now): still the face it went in through.
+                    const double reachT = ma.radius + radius[triPiece[t]];
+                    if (dist * dist - h * h > reachT * reachT) continue;
+                    anyBehind = true;
+                    cand[nc++] = Candidate{t, cp, dist, true};
+                }
             // Inside test for behind candidates (rare: deep penetration): the
             // node is inside a piece only if no front-facing point of that
             // piece's surface is nearer.  An outside point's nearest surface
@@ -199,6 +248,7 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     const double db = cand[i].dist;
                     const int32_t i0 = pc_.itemStart[pb];
                     const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
+                    int32_t killedBy = -1;  // the front face found nearer
                     auto witness = [&](int32_t id) {
                         if (!keep[i]) return;
                         for (int k = 0; k < (tets ? 4 : 1); ++k) {
@@ -209,8 +259,12 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                             const double h = (A - a).dot(Eigen::Map<const Vector3d>(&pc_.triNormal[3 * t]));
                             if (h >= db) continue;  // cannot be nearer
                             const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
-                            const bool behind = h < 0 && cp.feature == TriFeature::Face;
-                            if (!behind && (A - cp.point).norm() < db) keep[i] = false;
+                            const double dw = (A - cp.point).norm();
+                            const bool behind = h < 0 && straightBehind(cp.feature == TriFeature::Face, dw, h);
+                            if (!behind && dw < db) {
+                                keep[i] = false;
+                                killedBy = t;
+                            }
                         }
                     };
                     if (useList) {
@@ -220,6 +274,31 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     } else {
                         pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(),
                                                   [&](int32_t local) { witness(pc_.items[i0 + local]); });
+                    }
+                    // Side memory (issue 12): a contact carried from the last step
+                    // whose node is still behind its face came from the front - the
+                    // node went in through that face - and keeps pushing it back out,
+                    // whatever nearer face the other piece's own deformation (faces
+                    // folded by a deep impact) now shows it.  Only the far side of the
+                    // piece (a face facing back across it) ends it: the node then
+                    // crossed the middle, the law did not stop the impact, and the
+                    // run stops (below) rather than push the node on through.
+                    if (!keep[i] && watched) {
+                        bool carried = false;
+                        for (int k = 0; k < K && key[k] >= 0; ++k) carried = carried || (key[k] >> 3) == cand[i].tri;
+                        const bool farSide = killedBy >= 0 && Eigen::Map<const Vector3d>(normal + 3 * killedBy)
+                                                                      .dot(Eigen::Map<const Vector3d>(
+                                                                          normal + 3 * cand[i].tri)) < -0.5;
+                        if (carried && !farSide) {
+                            keep[i] = true;
+                        } else if (carried && db > ma.radius + radius[pb]) {
+                            double mT;
+                            Vector3d vT;
+                            trianglePointState(cand[i], tri + 3 * cand[i].tri, mass, vel, mT, vT);
+                            const double speed = (at(vel, node) - vT).norm();
+#pragma omp critical(qdemTunnel)
+                            if (tunnel.node < 0) tunnel = Tunnel{node, pa, pb, db, speed, mass[node], lawOf(pb).kn};
+                        }
                     }
                 }
 
@@ -291,6 +370,21 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
     }
     contactCounts.interiorFaceTests = interiorTests;
     contactCounts.interiorFaceNear = interiorNear;
+    if (tunnel.node >= 0) {
+        // Stopping distance of a node of mass m at speed v on a spring kn:
+        // v sqrt(m / kn) (doc/hard_cases.md, "Tunnelling").
+        const double stop = tunnel.speed * std::sqrt(tunnel.mass / tunnel.kn);
+        std::ostringstream m;
+        m.precision(3);
+        m << "QDEM: piece " << tunnel.pa << " went through piece " << tunnel.pb << " at step " << iter << ": node "
+          << tunnel.node << " is " << tunnel.depth << " m behind a face of piece " << tunnel.pb
+          << " and past its middle, at a relative speed of " << tunnel.speed
+          << " m/s. The contact is too soft to stop this impact: stopping distance v sqrt(m_node/kn) = " << stop
+          << " m (node mass " << tunnel.mass << " kg, kn " << tunnel.kn
+          << " N/m) against the piece's half thickness. Make the contact stiffer (kn = E r: a larger QdemMat young "
+             "or radius; 4x kn halves the stopping distance), the impact slower or the pieces thicker";
+        throw StabilityError(m.str());
+    }
 }
 
 template void World::pointPolygon<true>(double, double&, double&, long&, double&);

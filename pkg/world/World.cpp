@@ -7,6 +7,7 @@
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
 #include "../element/Tetra.hpp"
+#include "../mesh/Components.hpp"
 
 namespace qdem {
 
@@ -21,6 +22,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     if (material < 0 || material >= static_cast<int>(materials.size()))
         throw InputError(cat("addPiece: unknown material index ", material));
     checkMesh(mesh);
+    checkOnePart(mesh);  // parts of one piece would pass through each other
     const Material& mat = materials[material];
 
     PieceInfo p;
@@ -129,6 +131,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     pieceSpeed2_.push_back(0);
     sleepMoved2_.push_back(0);
     held_.push_back(0);
+    startChecked_.resize(pieces.size(), 0);
     frozenReaction_.emplace_back();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
@@ -147,7 +150,10 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
     obstaclesPending_ = false;
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
-    if (!same) wakeAll();  // frozen reactions are kept by obstacle index
+    if (!same) {
+        wakeAll();  // frozen reactions are kept by obstacle index
+        startChecked_.assign(pieces.size(), 0);  // a new list: every piece is checked against it once
+    }
     omegaCache_.clear();
 }
 

@@ -248,6 +248,10 @@ private:
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
+    // Refuses (InputError) a piece whose nodes start inside a wall, box or
+    // facet, once per piece and obstacle list (StartOverlap.cpp).
+    void checkStartOverlaps();
+    std::vector<uint8_t> startChecked_;  // per piece: start overlap checked for this obstacle list
 
     ThreadLayout layout_;
     // Sleeping: per piece flags and clocks (sized in addPiece).

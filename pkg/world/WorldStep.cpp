@@ -153,6 +153,7 @@ void World::obstaclePhase(double dt) {
         }
         pieceObstacleBegin_[ip + 1] = static_cast<int>(pieceObstacles_.size());
     }
+    checkStartOverlaps();
     if (pieceObstacles_.empty()) return;
 
     beginContactForces();

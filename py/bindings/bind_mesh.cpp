@@ -5,6 +5,7 @@
 
 #include "Arrays.hpp"
 #include "mesh/BoxMesh.hpp"
+#include "mesh/Components.hpp"
 #include "mesh/Hilbert.hpp"
 #include "mesh/Surface.hpp"
 #include "mesh/TetMesh.hpp"
@@ -47,6 +48,14 @@ void bindMesh(py::module_& m) {
     m.def(
         "checkMesh", [](const Nodes& n, const Tets& t) { checkMesh(toMesh(n, t)); }, py::arg("nodes"),
         py::arg("tets"), "Raise ValueError naming the first defect (NaN, bad index, inverted or zero-volume tet).");
+    m.def(
+        "meshParts",
+        [](const Nodes& n, const Tets& t) {
+            const MeshParts p = meshParts(toMesh(n, t));
+            return toArray(p.tetPart, 1).reshape({-1});
+        },
+        py::arg("nodes"), py::arg("tets"),
+        "Part of each tet (tets sharing a node are in one part; parts numbered by their first tet).");
     m.def(
         "orientPositive",
         [](const Nodes& n, const Tets& t) {

@@ -80,6 +80,28 @@ class Mesh:
         return "Mesh(%d nodes, %d tets)" % (self.nNodes, self.nTets)
 
 
+def splitMesh(mesh):
+    """The connected parts of a mesh, one Mesh each (nodes renumbered, in their
+    original order), ordered by their first tetrahedron.  Tetrahedra sharing a
+    node are one part; for a mesh that passes the manifold check this is the
+    same as sharing faces.  addPiece refuses a mesh of several parts (its parts
+    would not touch each other): add each part as its own piece::
+
+        for part in qdem.splitMesh(mesh):
+            qdem.addPiece(part, mat)
+    """
+    mesh = asMesh(mesh)
+    label = _core.meshParts(mesh.nodes, mesh.tets)
+    parts = []
+    for k in range(int(label.max()) + 1 if len(label) else 0):
+        tets = mesh.tets[label == k]
+        used = np.unique(tets)
+        remap = -np.ones(len(mesh.nodes), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        parts.append(Mesh(mesh.nodes[used], remap[tets].astype(np.int32), check=False))
+    return parts
+
+
 def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     """Structured mesh of a box of ``size`` centred on the origin with ``cells``
     cells per axis.  tetsPerCell: 5, 6 (Kuhn) or 12 (body-centre node, the seed

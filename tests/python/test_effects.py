@@ -24,10 +24,50 @@ def _run(matKw=None, coreKw=None, steps=1500):
 @pytest.mark.parametrize("zero, off", [
     ({"matKw": {"viscosity": 0.0}}, {"matKw": {"viscosity": 300.0}, "coreKw": {"viscosityOn": False}}),
     ({"matKw": {"frictionPiece": 0.0}}, {"matKw": {"frictionPiece": 0.4}, "coreKw": {"frictionOn": False}}),
-    ({"coreKw": {"edgeFeatureAngle": 3.2}}, {"coreKw": {"edgeEdgeOn": False}}),
 ])
 def test_switched_off_equals_zero_valued(zero, off):
     assert np.array_equal(_run(**zero), _run(**off))
+
+
+def _crossedBars(coreKw, steps=250):
+    """Two square bars turned 45 degrees about their axes and crossed, ridge
+    over ridge, the top one falling at 0.3 m/s: their only touch is edge-edge
+    (the crossing is inside a segment of both ridges).  Returns the top bar's
+    lowest ridge height and the most edge-edge contacts seen."""
+    import math
+    mat = rubber(radius=1e-3, viscosity=200.0)
+    w = qdem.World()
+    h = 0.01 * math.sqrt(2)
+    top = w.addPiece(qdem.boxMesh((0.22, 0.02, 0.02), (11, 1, 1)), mat, pos=(0, 0, h + 1.5e-3),
+                     ori=((1, 0, 0), math.pi / 4), vel=(0, 0, -0.3))
+    bot = w.addPiece(qdem.boxMesh((0.02, 0.22, 0.02), (1, 11, 1)), mat, pos=(0, 0, -h - 1e-3),
+                     ori=((0, 1, 0), math.pi / 4))
+    bot.blocked[:] = 7
+    top.blocked[:] = 3
+    for k, v in coreKw.items():
+        setattr(w.core, k, v)
+    dt = 0.5 * w.stableDt()["combined"]
+    most, low = 0, np.inf
+    mid = np.abs(top.refPos[:, 0]) < 0.011
+    for _ in range(steps):
+        w.core.step(dt, 10)
+        most = max(most, w.core.contactCounts["edgeEdge"])
+        low = min(low, top.pos[mid, 2].min())
+    return low, most, np.vstack([top.pos, top.vel])
+
+
+def test_edge_edge_switched_off_equals_no_feature_edges_and_differs_from_on():
+    """Before, this case ran a scene with no edge-edge contact at all, so off,
+    zero and on were trivially equal.  Here the touch is edge-edge only: with
+    it on the ridges meet and the top bar stops on the crossing; off (or with
+    no feature edges) nothing holds the ridge and it sinks through it."""
+    lowOn, nOn, _ = _crossedBars({})
+    lowOff, nOff, off = _crossedBars({"edgeEdgeOn": False})
+    lowZero, nZero, zero = _crossedBars({"edgeFeatureAngle": 3.2})
+    assert nOn > 0 and nOff == 0 and nZero == 0
+    assert np.array_equal(off, zero)
+    assert lowOn > -1e-3                       # stopped on the lower ridge (top at 0, within the reach)
+    assert lowOff < lowOn - 2e-3               # not stopped: sank past it
 
 
 def test_energy_tracking_does_not_change_the_dynamics():

@@ -118,11 +118,29 @@ def test_rigid_rotation_gives_no_stress(angle):
     p = w.addPiece(qdem.boxMesh((0.3, 0.2, 0.1), (3, 2, 2), tetsPerCell=12), mat, pos=(1, 2, 3))
     X = p.refPos - (1, 2, 3)
     axis = np.array([1.0, -2.0, 0.5]) / np.linalg.norm([1.0, -2.0, 0.5])
+    omega = 40.0 * axis                            # rad/s: spinning while it turns
     for k in range(1, 11):
         R = qdem.world.rotationMatrix((axis, angle * k / 10))
         p.pos[:] = X @ R.T + (1, 2, 3)
-        p.vel[:] = 0
+        # a rigid spin: the viscous stress (on the strain rate, sym(F^T dF/dt))
+        # must vanish too; a law damping dF/dt itself would not
+        p.vel[:] = np.cross(omega, p.pos - (1, 2, 3))
         assert np.abs(p.stress()).max() < 1e-12 * mat.young
+    # and the viscous term is live: the same spin plus a stretch rate gives the
+    # Kelvin-Voigt stress (viscosity is the solid's shear viscosity eta: a
+    # uniaxial stretch rate d gives sigma_xx = eta (lam/mu + 2) d for the
+    # viscous part, the elastic part being zero at the reference shape)
+    p.pos[:] = X @ R.T + (1, 2, 3)
+    d = 2.0                                          # 1/s along the body's x axis
+    ex = R[:, 0]
+    rel = p.pos - (1, 2, 3)
+    p.vel[:] = np.cross(omega, rel) + d * np.outer(rel @ ex, ex)
+    sig = p.stress()                                 # xx yy zz yz xz xy, world frame
+    S = np.array([[sig[:, 0], sig[:, 5], sig[:, 4]], [sig[:, 5], sig[:, 1], sig[:, 3]],
+                  [sig[:, 4], sig[:, 3], sig[:, 2]]]).transpose(2, 0, 1)
+    along = np.einsum("i,tij,j->t", ex, S, ex)
+    lam, mu = lame(mat)
+    assert along == pytest.approx(np.full(len(along), mat.viscosity * (lam / mu + 2) * d), rel=1e-6)
 
 
 def test_free_flight_energy_is_conserved_without_viscosity():
@@ -146,20 +164,32 @@ def test_free_flight_energy_is_conserved_without_viscosity():
 
 
 def test_viscous_energy_decays_monotonically():
+    """Started unstrained with a known velocity field (no external force): the
+    energy is the kinetic energy computed here from masses and velocities.
+    Strain and motion decay, and what was lost is what the viscous ledger
+    booked: kinetic + elastic + viscous stays that initial energy (before, the
+    test compared energy["total"] with the sum of its own terms)."""
     mat = rubber(viscosity=50.0)
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((0.2, 0.1, 0.1), (4, 2, 2), tetsPerCell=6), mat)
-    p.pos[:] += 2e-3 * np.sin(37.0 * p.refPos)
+    X = p.refPos                                   # the first bending and stretching modes' shapes
+    v = np.zeros_like(X)
+    v[:, 0] = 0.5 * np.sin(np.pi * X[:, 0] / 0.2)
+    v[:, 1] = 0.5 * np.cos(np.pi * X[:, 0] / 0.2)
+    v -= (p.mass[:, None] * v).sum(axis=0) / p.mass.sum()        # no net momentum
+    p.vel[:] = v
+    e0 = 0.5 * (p.mass[:, None] * v**2).sum()
     w.core.trackEnergy = True
-    dt = 0.5 * w.stableDt()["combined"]
+    dt = 0.25 * w.stableDt()["combined"]
     last = None
     for _ in range(200):
-        w.core.step(dt, 50)
+        w.core.step(dt, 100)
         e = w.core.energy
         mech = e["kinetic"] + e["elastic"]
         if last is not None:
             assert mech <= last * (1 + 1e-9)
         last = mech
-        # what was lost is exactly what viscosity dissipated (to the scheme's accuracy)
-    assert e["viscous"] > 0
-    assert abs(e["kinetic"] + e["elastic"] + e["viscous"] - e["total"]) < 1e-12 * e["viscous"] + 1e-15
+    assert e["viscous"] > 0.5 * e0                                # viscosity took most of it
+    # the ledger against the independent start value, to the scheme's O(dt^2)
+    # accuracy (measured: +0.04 % at 0.25 of the stable step, +0.7 % at 0.5)
+    assert e["kinetic"] + e["elastic"] + e["viscous"] == pytest.approx(e0, rel=3e-3)

@@ -36,20 +36,30 @@ def _watch(w, dtFraction, chunks, n):
 def test_fast_impact_on_the_floor(speed):
     w = qdem.World()
     mat = rubber(radius=2e-3, viscosity=100.0)
-    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.06), vel=(0, 0, -speed))
+    p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.06), vel=(0, 0, -speed))
     _floor(w)
     w.core.gravity = (0, 0, -9.81)
     e0, worst = _watch(w, 0.8, 40, 50)
     assert worst <= 1e-3 * e0
+    # the floor acted: the cube bounced back up and no node is below it
+    assert p.velocity()[2] > 0.1 * speed
+    assert p.pos[:, 2].min() > 0
 
 
 def test_fast_impact_between_pieces():
+    """Two cubes head-on at 25 m/s each: they rebound on their own sides
+    (before side memory they passed through each other, ending at x = +-2.69 m
+    on swapped sides; energy alone did not show it)."""
     w = qdem.World()
     mat = rubber(radius=2e-3, viscosity=100.0)
-    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0, 0), vel=(25.0, 0, 0))
-    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, 0.01, 0), vel=(-25.0, 0, 0))
+    a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0, 0), vel=(25.0, 0, 0))
+    b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, 0.01, 0), vel=(-25.0, 0, 0))
     e0, worst = _watch(w, 0.8, 40, 50)
     assert worst <= 1e-3 * e0
+    assert a.centroid()[0] < b.centroid()[0]
+    assert a.velocity()[0] < 0 < b.velocity()[0]
+    assert a.pos[:, 0].max() < b.pos[:, 0].min() + 0.01          # no node deep in the other cube
+    assert np.abs(a.momentum() + b.momentum()).max() < 1e-9 * a.totalMass * 25.0
 
 
 @pytest.mark.parametrize("kw", [{"poisson": 0.49}, {"young": 1e11, "density": 7800.0}])
@@ -62,6 +72,11 @@ def test_nearly_incompressible_and_stiff_materials(kw):
     w.core.gravity = (0, 0, -9.81)
     e0, worst = _watch(w, 0.99, 40, 50)             # at 0.99 of the stable step
     assert worst <= 1e-3 * abs(e0) + 1e-9
+    # the floor acted: it reversed the 1 m/s fall (free fall would end >= 1 m/s
+    # downwards and far below it) and holds every node above its plane
+    p = w.pieces[0]
+    assert p.velocity()[2] > -0.5
+    assert p.pos[:, 2].min() > -mat.radius
 
 
 def test_needle_and_sliver_tetrahedra_in_one_piece():

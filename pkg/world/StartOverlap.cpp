@@ -1,0 +1,90 @@
+// A piece that starts inside a YADE wall, box or facet is refused (issue 12):
+// the contact spring would meet an overlap of many radii at once and throw the
+// piece out (a one-sided floor launched a cube at 2.9 m/s), or a two-sided
+// wall would hold the nodes past it on the wrong side.
+//
+// The check runs once per piece and obstacle list: the first step after the
+// piece is added or the obstacle list changes (by kind, body or shape), on
+// the obstacles the piece can reach.  Contacts that grow during the run are
+// the contact law's business, and a loaded state keeps its contacts: both are
+// never refused here.  A piece resting on an obstacle overlaps it by less than
+// the particle radius (its node centres are outside): it passes.
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "../core/Errors.hpp"
+#include "World.hpp"
+
+namespace qdem {
+
+namespace {
+
+const char* kindName(const Obstacle& o) {
+    switch (o.kind) {
+        case ObstacleKind::Wall: return o.sense == 0 ? "two-sided wall" : "one-sided wall";
+        case ObstacleKind::Box: return "box";
+        case ObstacleKind::Facet: return "facet";
+    }
+    return "obstacle";
+}
+
+}  // namespace
+
+void World::checkStartOverlaps() {
+    startChecked_.resize(pieces.size(), 0);
+    for (std::size_t ip = 0; ip < pieces.size(); ++ip) {
+        if (startChecked_[ip]) continue;
+        startChecked_[ip] = 1;  // checked now; a refused piece is refused once (the script stops)
+        const PieceInfo& p = pieces[ip];
+        const double r = materials[p.material].radius;
+        // The side of two-sided walls and facets the piece is on: that of its centroid.
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) c += Eigen::Map<const Eigen::Vector3d>(&pos[3 * n]);
+        c /= double(p.nodeEnd - p.nodeBegin);
+        for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
+            const Obstacle& o = obstacles[pieceObstacles_[j]];
+            int side = 0;
+            if (o.kind == ObstacleKind::Wall && o.sense == 0) {
+                side = c[o.axis] >= o.pos[o.axis] ? 1 : -1;
+            } else if (o.kind == ObstacleKind::Facet) {
+                const Eigen::Vector3d nf =
+                    (o.worldVerts[1] - o.worldVerts[0]).cross(o.worldVerts[2] - o.worldVerts[0]);
+                side = nf.dot(c - o.worldVerts[0]) >= 0 ? 1 : -1;
+            }
+            double depth = 0;  // how far the deepest node centre is past the obstacle's surface
+            int nPast = 0;
+            Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+            for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
+                const Eigen::Map<const Eigen::Vector3d> x(&pos[3 * surfNodes[s]]);
+                ObstacleHit hit;
+                if (!touchObstacle(o, x, r, side, hit)) continue;
+                const double d = hit.overlap - r;
+                if (!(d > 1e-9 * r)) continue;
+                ++nPast;
+                if (d > depth) {
+                    depth = d;
+                    normal = hit.normal;
+                }
+            }
+            if (nPast == 0) continue;
+            std::ostringstream m;
+            m.precision(3);
+            m << "piece " << ip << " starts inside obstacle body " << o.bodyId << " (" << kindName(o)
+              << "): " << nPast << " of its " << (p.surfEnd - p.surfBegin)
+              << " surface nodes are past its surface, the deepest by " << depth
+              << " m; the contact would throw the piece out (or hold it across the obstacle) instead of "
+                 "letting it rest. Move the piece out: ";
+            const double clear = depth + r;  // node centres out, and their radius r clear of the surface
+            if (std::fabs(normal[2]) > 0.999)  // straight up or down: say so
+                m << "start it at least " << clear << " m " << (normal[2] > 0 ? "higher" : "lower");
+            else
+                m << "move it at least " << clear << " m along (" << normal[0] << ", " << normal[1] << ", "
+                  << normal[2] << ")";
+            m << " (depth + node radius " << r << " m), or move the obstacle";
+            throw InputError(m.str());
+        }
+    }
+}
+
+}  // namespace qdem

@@ -1,0 +1,184 @@
+"""Set-up mistakes are refused with a message naming the fix (issue 12, item 4):
+a mesh of parts that share no node (its parts would pass through each other)
+and a piece started inside a YADE wall, box or facet (it would be launched,
+or held across a two-sided wall).  Each case is also run the way that must
+still work: each part its own piece, a piece resting on the obstacle, a
+restarted run whose contacts are deep."""
+import numpy as np
+import pytest
+
+import qdem
+from conftest import rubber
+
+L, R = 0.1, 0.005
+
+
+def _cube(cells=3):
+    return qdem.boxMesh((L, L, L), (cells,) * 3)
+
+
+# --- disconnected meshes ------------------------------------------------------
+
+def _twoBlocks():
+    m = _cube()
+    return np.vstack([m.nodes, m.nodes + (0.3, 0, 0)]), np.vstack([m.tets, m.tets + m.nNodes])
+
+
+def _cutBlock():
+    """A 4x2x2-cell bar cut across its middle by duplicating the nodes of the
+    plane x = 0 for the tets on its +x side: geometrically one block, two parts."""
+    m = qdem.boxMesh((0.2, 0.1, 0.1), (4, 2, 2))
+    nodes, tets = m.nodes.copy(), m.tets.copy()
+    onCut = np.where(np.isclose(nodes[:, 0], 0.0))[0]
+    twin = {int(n): len(nodes) + k for k, n in enumerate(onCut)}
+    nodes = np.vstack([nodes, nodes[onCut]])
+    right = nodes[tets].mean(axis=1)[:, 0] > 0
+    tets[right] = np.vectorize(lambda n: twin.get(int(n), int(n)))(tets[right])
+    return nodes, tets
+
+
+@pytest.mark.parametrize("make, sizes", [(_twoBlocks, "162 tets/64 nodes, 162 tets/64 nodes"),
+                                         (_cutBlock, "48 tets/27 nodes, 48 tets/27 nodes")])
+def test_a_mesh_of_disconnected_parts_is_refused_naming_the_parts_and_the_fix(make, sizes):
+    nodes, tets = make()
+    w = qdem.World()
+    with pytest.raises(ValueError, match=r"mesh: 2 parts that share no node \(sizes: %s\).*"
+                                         r"qdem.splitMesh\(mesh\) and add each part with qdem.addPiece" % sizes):
+        w.addPiece((nodes, tets), rubber())
+    assert w.core.nPieces == 0
+    parts = qdem.splitMesh((nodes, tets))
+    assert [p.nTets for p in parts] == [len(tets) // 2] * 2
+    assert sum(p.volumes().sum() for p in parts) == pytest.approx(qdem._core.tetVolumes(nodes, tets).sum())
+    for p in parts:
+        w.addPiece(p, rubber())
+    assert w.core.nPieces == 2
+
+
+def test_the_halves_of_a_cut_block_added_as_pieces_do_not_pass_through_each_other():
+    """The issue's case: the two halves of a cut bar pushed together at 1 m/s.
+    As two pieces they touch and stay on their own sides."""
+    w = qdem.World()
+    a, b = (w.addPiece(p, rubber(radius=2e-3, viscosity=50.0)) for p in qdem.splitMesh(_cutBlock()))
+    if a.centroid()[0] > b.centroid()[0]:
+        a, b = b, a
+    a.pos[:, 0] -= 0.004                      # just apart: the reach of two 2 mm radii
+    a.vel[:, 0], b.vel[:, 0] = 1.0, -1.0
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, int(0.02 / dt))
+    assert w.core.contactCounts["pointPolygon"] >= 0
+    assert a.pos[:, 0].max() < b.pos[:, 0].min() + 2e-3      # no node of one past the other's face
+    assert a.velocity()[0] < 0 < b.velocity()[0]             # they bounced apart
+
+
+# --- pieces started inside obstacles (core) ---------------------------------
+
+def _set(w, obstacle, state):
+    w.core.setObstacles([obstacle])
+    w.core.setObstacleStates(np.array([state], dtype=float))
+
+
+def _wall(sense, bodyId=3):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId, o.axis, o.sense = 0, bodyId, 2, sense
+    return o, [0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]
+
+
+def _box(bodyId=4):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId, o.halfExtents = 1, bodyId, (1.0, 1.0, 0.1)
+    return o, [0, 0, -0.1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]     # top face at z = 0
+
+
+def _facet(bodyId=5):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId = 2, bodyId
+    o.setVertices((-1, -1, 0), (1, -1, 0), (0, 1.5, 0))
+    return o, [0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]
+
+
+@pytest.mark.parametrize("make, kind", [(lambda: _wall(1), "one-sided wall"), (lambda: _wall(0), "two-sided wall"),
+                                        (_box, "box"), (_facet, "facet")])
+def test_a_piece_started_inside_an_obstacle_is_refused_naming_depth_and_fix(make, kind):
+    """The cube's bottom 2 cm start below the obstacle's surface at z = 0."""
+    w = qdem.World()
+    w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 - 0.02))
+    o, state = make()
+    _set(w, o, state)
+    before = w.core.pos.copy()
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d \(%s\): 16 of its 56 surface "
+                                         r"nodes are past its surface, the deepest by 0.02 m.*start it at least "
+                                         r"0.025 m higher" % (o.bodyId, kind)):
+        w.core.step(1e-6, 1)
+    assert np.array_equal(w.core.pos, before)            # refused before anything moved
+
+
+@pytest.mark.parametrize("make", [lambda: _wall(1), lambda: _wall(0), _box, _facet])
+def test_a_piece_resting_on_an_obstacle_is_not_refused(make):
+    """Placed with the overlap it has at rest (node centres outside): accepted,
+    and the cube stays on the obstacle instead of being thrown up."""
+    w = qdem.World()
+    p = w.addPiece(_cube(), rubber(radius=R, viscosity=50.0), pos=(0, 0, L / 2 + R - 5e-6))
+    _set(w, *make())
+    w.core.gravity = (0, 0, -9.81)
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, int(0.05 / dt))
+    assert np.abs(p.velocity()).max() < 0.05                  # not launched (a launch is metres per second)
+    assert p.pos[:, 2].min() > 0                               # and on the obstacle's top side
+
+
+def test_a_restarted_run_with_deep_contacts_is_not_refused(tmp_path):
+    """A cube saved mid-impact with a node past the floor: loaded into a fresh
+    world with the same floor, it goes on (only set-ups are checked)."""
+    def scene():
+        w = qdem.World()
+        p = w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 + R), vel=(0, 0, -20.0))
+        _set(w, *_wall(1))
+        return w, p
+    w, p = scene()
+    dt = 0.8 * w.stableDt()["combined"]
+    for _ in range(2000):                                      # until a node centre is past the floor
+        w.core.step(dt, 1)
+        if p.pos[:, 2].min() < -1e-4:
+            break
+    assert p.pos[:, 2].min() < -1e-4
+    path = str(tmp_path / "deep.qdem")
+    qdem.saveState(path, world=w)
+    w.core.step(dt, 10)
+    w2, p2 = scene()
+    qdem.loadState(path, world=w2)
+    w2.core.step(dt, 10)
+    assert np.array_equal(w2.core.pos, w.core.pos)
+
+
+def test_a_new_piece_or_a_new_obstacle_list_is_checked_again():
+    w = qdem.World()
+    w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.5))
+    _set(w, *_wall(1))
+    w.core.step(1e-6, 1)
+    w.addPiece(_cube(), rubber(radius=R), pos=(0.5, 0, 0.0))          # half below the floor
+    with pytest.raises(ValueError, match=r"piece 1 starts inside .* deepest by 0.05 m"):
+        w.core.step(1e-6, 1)
+    w = qdem.World()
+    w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.0))
+    w.core.step(1e-6, 1)                                               # no obstacle yet
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body 4 \(box\)"):
+        _set(w, *_box())
+        w.core.step(1e-6, 1)
+
+
+# --- through QdemEngine in YADE ---------------------------------------------
+
+@pytest.mark.parametrize("what", ["floor", "wall", "box", "facet"])
+def test_yade_obstacles_overlapping_a_new_piece_stop_the_run_with_the_fix(scene, what):
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O = scene
+    qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 - 0.03))
+    body = {"floor": lambda: utils.wall(0, axis=2, sense=1), "wall": lambda: utils.wall(0, axis=2),
+            "box": lambda: utils.box((0, 0, -0.1), (1, 1, 0.1), fixed=True),
+            "facet": lambda: utils.facet([(-1, -1, 0), (1, -1, 0), (0, 1.5, 0)], fixed=True)}[what]()
+    bid = O.bodies.append(body)
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * O.engines[1].stableDt()["combined"]
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d .*deepest by 0.03 m.*"
+                                         r"start it at least 0.035 m higher" % bid):
+        O.engines[1].stepOnce()
