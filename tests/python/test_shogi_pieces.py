@@ -25,10 +25,19 @@ def test_outline_has_the_shogi_angles_and_size(kind):
     assert p[:, 1].max() == pytest.approx(h) and np.ptp(p[:, 0]) == pytest.approx(w)
 
 
+# The seed paper's pieces (its §5), stated here, not taken from the generator:
+# king 32.0 x 28.7 x 9.7 mm, pawn 27.0 x 22.5 x 7.75 mm (height x width x base
+# thickness), interior angles 81, 81, 117, 117, 144 degrees, about 797 nodes and
+# 2,566 tetrahedra per piece.
+PAPER = {"king": (32.0, 28.7, 9.7), "pawn": (27.0, 22.5, 7.75)}
+
+
 def test_sizes_run_from_king_to_pawn():
-    assert shogi.KINDS["king"] == pytest.approx((32.0, 28.7, 9.7))
-    assert shogi.KINDS["pawn"] == pytest.approx((27.0, 22.5, 7.75))
-    heights = [shogi.KINDS[k][0] for k in shogi.ORDER]
+    """Measured on the generated meshes: bounding box = the paper's sizes."""
+    for kind, (h, w, t) in PAPER.items():
+        lo, hi = shogi.mesh(kind).bounds()
+        assert (hi - lo) * 1e3 == pytest.approx([w, h, t], rel=0.01)
+    heights = [np.ptp(shogi.surface(k)[0][:, 1]) for k in shogi.ORDER]
     assert heights == sorted(heights, reverse=True)
     assert len(shogi.SET) == 20 and shogi.SET.count("pawn") == 9
 
@@ -42,10 +51,11 @@ def test_meshed_pieces_are_valid_with_the_seeds_counts(kind):
     assert m.nTets == pytest.approx(2566, rel=0.10)
     assert m.volumes().sum() == pytest.approx(shogi.volume(kind), rel=0.01)
     lo, hi = m.bounds()
+    if kind in PAPER:                                    # the paper's sizes, measured
+        h, w, t = PAPER[kind]
+        assert (hi - lo) * 1e3 == pytest.approx([w, h, t], rel=0.01)
     h, w, t = (v * 1e-3 for v in shogi.KINDS[kind])
-    assert hi - lo == pytest.approx([w, h, t], rel=0.01)   # proportions of the kind
-    # thinner at the top: thickness near the apex vs near the base
-    top = m.nodes[:, 1] > 0.95 * h
+    top = m.nodes[:, 1] > 0.95 * h                       # thinner at the top
     base = m.nodes[:, 1] < 0.05 * h
     assert np.ptp(m.nodes[top, 2]) < 0.8 * np.ptp(m.nodes[base, 2])
 
