@@ -54,8 +54,8 @@ struct ContactResult {
 // this force alone, u' = u - dt |Ft| / m with |Ft| = mu Fn min(1, u'/vReg),
 // gives |Ft| = min(mu Fn, c u / (1 + c dt / m)) (doc/contacts.md,
 // "Regularised friction, implicit").  It never reverses the slip within a
-// step.  `shear` carries the previous step's friction force (for the energy
-// booking below), not a spring.
+// step.  `shear` carries the slip this force alone would have left (to
+// estimate the other forces, below), not a spring.
 template <bool Friction, bool Regularized = false>
 inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d& n, double overlap,
                                   const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
@@ -69,24 +69,28 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
     r.elastic = 0.5 * fnSpring * overlap;
     if constexpr (Friction && Regularized) {
         const Eigen::Vector3d vt = vRel - vn * n;
-        const double u = vt.norm();
         const double cap = p.friction * fn;
         const double c = cap / p.vReg;
-        const double cEff = p.mEff > 0 ? c / (1 + c * dt / p.mEff) : c;
-        const double f = std::min(cap, cEff * u);
-        const Eigen::Vector3d ft = u > 0 ? Eigen::Vector3d((-f / u) * vt) : Eigen::Vector3d::Zero();
+        const double hm = p.mEff > 0 ? dt / p.mEff : 0.0;  // velocity change per unit force
+        // Slip the step would end with without this force: the current slip
+        // plus what the other forces added over the last step, v_n - p_{n-1}
+        // (p: the slip this force alone would have left, kept in `shear`;
+        // an exact zero there is a new contact, assumed unpushed).  Lagging
+        // the other forces by one step is what makes a steadily pushed
+        // contact creep at F/c, as the law says, not F/c + dt F/m.
+        Eigen::Vector3d vFree = shear.isZero(0.0) ? vt : Eigen::Vector3d(2 * vt - shear);
+        vFree -= vFree.dot(n) * n;  // on the current tangent plane
+        const double u = vFree.norm();
+        const double f = std::min(cap, c / (1 + c * hm) * u);
+        const Eigen::Vector3d ft = u > 0 ? Eigen::Vector3d((-f / u) * vFree) : Eigen::Vector3d::Zero();
         r.force += ft;
-        // Work of the friction force f_n of step n: -f_n . (v_{n-1/2} + v_{n+1/2}) / 2 dt,
-        // the velocity at the force's time level (where the ledger's kinetic
-        // energy is taken).  v_{n+1/2} is known only at the next step, so
-        // each step books half of its own force's work and half of the
-        // previous one's, both with the current slip; the previous force
-        // rides in `shear` (unused by this law).  Exact for the drag alone,
-        // and it stays right when other forces re-accelerate the node every
-        // step (a stuck node pushed by its element), where booking with the
-        // old velocity alone would err by up to 2x one way or the other.
-        r.slipWork = -0.5 * dt * (ft + shear).dot(vt);
-        shear = ft;
+        // Work at the force's time level: -ft . (v_{n-1/2} + v_{n+1/2}) / 2 dt
+        // (where the ledger takes kinetic energy), with the predicted
+        // v_{n+1/2} = vFree + ft dt / m: exact for the drag alone, and for a
+        // steadily pushed contact.
+        r.slipWork = -0.5 * dt * ft.dot(vt + vFree + hm * ft);
+        shear = vt + hm * ft;
+        if (shear.isZero(0.0)) shear = Eigen::Vector3d(0, 0, 1e-300);  // keep "not new"
     } else if constexpr (Friction) {
         // Carry the spring onto the current tangent plane, keeping its length,
         // so a rotating contact does not create or lose tangential force.

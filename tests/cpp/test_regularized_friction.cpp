@@ -127,14 +127,13 @@ TEST(RegularizedFriction, LandingKeepsTheLedgerAndTheRebound) {
     // doc/hard_cases.md) is the yardstick; 2 % of m g h on top of it.
     EXPECT_LT(g.ledgerError, s.ledgerError + 0.02 * s.scale)
         << "regularized " << g.ledgerError << " J, spring " << s.ledgerError << " J";
-    // What it books is real: the ledger closes (above), and the rebound is
-    // lower by about what it books.  The regularised law has no elastic
-    // stick: the tangential vibration of the stuck bottom nodes is damped
-    // instead of stored, 2.3 J of the 63 J (4.6 % lower rebound, measured);
-    // before the implicit drag it booked 72 J in the README's drop.
-    EXPECT_GT(g.friction, s.friction);
-    EXPECT_LT(g.friction, 0.1 * s.scale);
-    EXPECT_NEAR(g.reboundHeight, s.reboundHeight, 0.07 * s.reboundHeight);
+    // What it books is real: the ledger closes (above), and it rebounds as
+    // the spring law does (measured: 0.9 % higher; with the drag implicit
+    // but the other forces not lagged in, stuck nodes crept and it booked
+    // 2.3 J and rebounded 4.6 % lower; fully explicit it booked 19.5 J with a
+    // 17.7 J ledger error).
+    EXPECT_LT(g.friction, 0.01 * s.scale);
+    EXPECT_NEAR(g.reboundHeight, s.reboundHeight, 0.03 * s.reboundHeight);
     EXPECT_GT(s.reboundHeight, 0.0);
     std::printf("spring: rebound %.5f m, friction %.4f J, ledger %.4f J; regularized: %.5f m, %.4f J, %.4f J; mgh %.3f J\n",
                 s.reboundHeight, s.friction, s.ledgerError, g.reboundHeight, g.friction, g.ledgerError, s.scale);

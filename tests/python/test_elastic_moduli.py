@@ -40,8 +40,8 @@ def test_uniaxial_compression_gives_young_and_poisson(law):
     dt = 0.5 * w.stableDt()["combined"]
     # Dynamic relaxation by kinetic damping: velocities are zeroed whenever the
     # kinetic energy passes a peak (physical viscosity would only slow this).
-    # Its rate depends on the mesh (the symmetric 6-tet split needs ~3,500
-    # cycles of 20 steps): stop once the column is still.
+    # Its rate depends on the mesh: the symmetric 6-tet split needs ~3,500
+    # cycles of 20 steps (1,500 were enough for the old one-diagonal split).
     last = 0.0
     for k in range(6000):                          # until at rest (a few thousand rounds, by mesh and law)
         w.core.step(dt, 20)
