@@ -208,6 +208,7 @@ public:
     struct ContactCounts {
         long pointPolygon = 0, edgeEdge = 0;
         long sphere = 0;  // YADE sphere - QDEM surface contacts
+        long wall = 0;    // surface node - YADE wall/box/facet contacts (awake pieces)
         long interiorFaceTests = 0;  // cases A/B: interior faces tested for nothing
         long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
     } contactCounts;

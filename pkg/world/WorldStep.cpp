@@ -128,6 +128,7 @@ void World::obstaclePhase(double dt) {
     pieceObstacles_.clear();
     pieceObstacleBegin_.clear();
     pairReaction_.clear();
+    contactCounts.wall = 0;
     if (nObs == 0 || surfNodes.size() == 0) return;
 
     // Which obstacles can each piece reach this step (bounding boxes + radius)?
@@ -170,7 +171,8 @@ void World::obstaclePhase(double dt) {
     const auto nSurf = all ? static_cast<int32_t>(surfNodes.size()) : static_cast<int32_t>(awakeSurf_.size());
     const int32_t* awakeSurf = awakeSurf_.data();
 
-#pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound)
+    long nWall = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
     {
         const int th = omp_get_thread_num();
         double* react = obstacleReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
@@ -224,6 +226,7 @@ void World::obstaclePhase(double dt) {
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;
                 ++used;
+                ++nWall;
                 fNode += r.force;
                 double* R = react + 6 * j;
                 const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
@@ -247,6 +250,7 @@ void World::obstaclePhase(double dt) {
             for (int d = 0; d < 3; ++d) contactForce_[3 * node + d] += fNode[d];
         }
     }
+    contactCounts.wall = nWall;
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)

@@ -272,6 +272,7 @@ void bindWorld(py::module_& m) {
                                    d["pointPolygon"] = w.contactCounts.pointPolygon;
                                    d["edgeEdge"] = w.contactCounts.edgeEdge;
                                    d["sphere"] = w.contactCounts.sphere;
+                                   d["wall"] = w.contactCounts.wall;
                                    d["interiorFaceTests"] = w.contactCounts.interiorFaceTests;
                                    d["interiorFaceNear"] = w.contactCounts.interiorFaceNear;
                                    return d;

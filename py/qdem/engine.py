@@ -330,7 +330,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             line += "  %3.0f%%" % (100 * min(done, 1.0))
             if rate:
                 line += "  ETA %s" % _duration((stop - O.iter - 1) / rate)
-        line += "  %d contacts" % (c["pointPolygon"] + c["edgeEdge"] + c["sphere"])
+        line += "  %d contacts (%d piece-piece, %d sphere, %d wall)" % (
+            c["pointPolygon"] + c["edgeEdge"] + c["sphere"] + c["wall"], c["pointPolygon"] + c["edgeEdge"],
+            c["sphere"], c["wall"])
         if core.sleepVelocity > 0:
             line += "  %d/%d pieces asleep" % (core.nAsleep, core.nPieces)
         if self.inverted["max"]:

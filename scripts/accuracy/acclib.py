@@ -12,6 +12,8 @@ import qdem
 from qdem import _core
 
 G = 9.81
+# The study's material-law knob: QdemMat.law values and their labels.
+LAW_LABELS = {"stableNeoHookean": "stable Neo-Hookean", "saintVenantKirchhoff": "Saint-Venant-Kirchhoff"}
 
 
 def oneThread():

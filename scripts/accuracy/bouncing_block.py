@@ -14,13 +14,13 @@ rebound), relative to the energy brought to the floor, E_kin0 + m g * 2 cm."""
 import numpy as np
 
 import qdem
-from acclib import G, Stepper, floor
+from acclib import G, LAW_LABELS, Stepper, floor
 
 V0, DROP, L = 1.0, 0.02, 0.1
 
 
-def run(cells=3, dtFraction=0.8, tetsPerCell=6):
-    mat = qdem.QdemMat(young=1e7, poisson=0.3, density=1000.0, viscosity=0.0, radius=2e-3, restitution=1.0,
+def run(cells=3, dtFraction=0.8, tetsPerCell=6, law="stableNeoHookean"):
+    mat = qdem.QdemMat(young=1e7, poisson=0.3, density=1000.0, viscosity=0.0, radius=2e-3, restitution=1.0, law=law,
                        frictionWall=0.5)
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((L, L, L), (cells,) * 3, tetsPerCell=tetsPerCell), mat,
@@ -48,9 +48,11 @@ def cases(short):
     if not short:
         out += [("element size", "0.1/%d m" % n, dict(cells=n)) for n in (2, 3, 4, 6, 8)]
         out += [("tetsPerCell", "%d" % t, dict(tetsPerCell=t)) for t in (5, 6, 12)]
+    out += [("material law", LAW_LABELS[l], dict(law=l)) for l in LAW_LABELS]
     return out
 
 
-DEFAULTS = {"time step": "0.80 dt_stable", "element size": "0.1/3 m", "tetsPerCell": "6"}
+DEFAULTS = {"time step": "0.80 dt_stable", "element size": "0.1/3 m", "tetsPerCell": "6",
+            "material law": "stable Neo-Hookean"}
 TITLE = "Elastic block bouncing on the floor (energy balance)"
 ERROR = "max |energy ledger drift| / energy brought in"

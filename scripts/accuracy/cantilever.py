@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 import qdem
-from acclib import G, Stepper
+from acclib import G, LAW_LABELS, Stepper
 
 E, NU, RHO = 1e8, 0.3, 1000.0
 L, B = 0.2, 0.02
@@ -29,8 +29,8 @@ def reference():
     return w * L ** 4 / (8 * E * I) + w * L ** 2 / (2 * kappa * Gs * A)
 
 
-def run(n=2, tetsPerCell=6, dtFraction=0.9):
-    mat = qdem.QdemMat(young=E, poisson=NU, density=RHO, viscosity=0.0, radius=B / n / 4)
+def run(n=2, tetsPerCell=6, dtFraction=0.9, law="stableNeoHookean"):
+    mat = qdem.QdemMat(young=E, poisson=NU, density=RHO, viscosity=0.0, radius=B / n / 4, law=law)
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((L, B, B), (10 * n, n, n), tetsPerCell=tetsPerCell), mat, pos=(L / 2, 0, 0))
     X = p.refPos
@@ -62,9 +62,10 @@ def cases(short):
     out = [("element size", "b/%d" % n, dict(n=n)) for n in ns]
     nt = 2 if short else 4
     out += [("tetsPerCell", "%d (b/%d)" % (t, nt), dict(n=nt, tetsPerCell=t)) for t in (5, 6, 12)]
+    out += [("material law", "%s (b/%d)" % (LAW_LABELS[l], nt), dict(n=nt, law=l)) for l in LAW_LABELS]
     return out
 
 
-DEFAULTS = {"element size": None, "tetsPerCell": "6"}
+DEFAULTS = {"element size": None, "tetsPerCell": "6", "material law": "stable Neo-Hookean"}
 TITLE = "Cantilever tip deflection under gravity"
 ERROR = "tip deflection / Timoshenko beam - 1"

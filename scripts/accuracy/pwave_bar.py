@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 import qdem
-from acclib import Stepper, lame
+from acclib import LAW_LABELS, Stepper, lame
 
 E, NU, RHO = 1e7, 0.3, 1000.0
 LZ = 1.0
@@ -29,9 +29,9 @@ def cP():
     return math.sqrt((lam + 2 * mu) / RHO)
 
 
-def run(cells=100, dtFraction=0.9, tetsPerCell=6):
+def run(cells=100, dtFraction=0.9, tetsPerCell=6, law="stableNeoHookean"):
     h = LZ / cells
-    mat = qdem.QdemMat(young=E, poisson=NU, density=RHO, viscosity=0.0, radius=h / 4)
+    mat = qdem.QdemMat(young=E, poisson=NU, density=RHO, viscosity=0.0, radius=h / 4, law=law)
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((h, h, LZ), (1, 1, cells), tetsPerCell=tetsPerCell), mat, reorder=False)
     X = p.refPos
@@ -67,9 +67,11 @@ def cases(short):
     out = [("element size", "1/%d m" % n, dict(cells=n)) for n in cs]
     out += [("time step", "%.2f dt_stable" % f, dict(cells=100, dtFraction=f)) for f in (0.25, 0.5, 0.9, 0.99)]
     out += [("tetsPerCell", "%d" % t, dict(cells=100, tetsPerCell=t)) for t in (5, 6, 12)]
+    out += [("material law", LAW_LABELS[l], dict(cells=100, law=l)) for l in LAW_LABELS]
     return out
 
 
-DEFAULTS = {"element size": None, "time step": "0.90 dt_stable", "tetsPerCell": "6"}
+DEFAULTS = {"element size": None, "time step": "0.90 dt_stable", "tetsPerCell": "6",
+            "material law": "stable Neo-Hookean"}
 TITLE = "P-wave arrival in a confined bar"
 ERROR = "front speed / c_P - 1"

@@ -68,6 +68,9 @@ def _readmeDrop(r):
     assert p["inverted"] == 0
     assert abs(p["centroid"][0]) < 0.01 and abs(p["centroid"][1]) < 0.01
     assert p["upAxis"] > 0.9998   # a face up within ~1 degree
+    assert p["vmax"] < 1e-3       # at rest
+    (F,) = r["wallForces"]
+    assert -F[2] == pytest.approx(p["mass"] * 9.81, rel=0.01) and abs(F[0]) + abs(F[1]) < 0.01 * p["mass"] * 9.81
 
 
 def _spheresOnBlock(r):
@@ -100,3 +103,20 @@ def test_example_runs_as_written(tmp_path, path, index, code):
     if check:
         check(res)
     sys.stdout.write("%s#%d: %s\n" % (rel, index, json.dumps(res)[:300]))
+
+
+def test_default_demo_block_comes_to_rest_on_the_floor(tmp_path):
+    """`make demo`'s scene (scripts/demo.py): the tilted soft block lands on an
+    edge, settles on a face, and the floor carries its weight (1 %), with no
+    element inverted; it writes its VTU series, energy plot and picture."""
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    r = subprocess.run(["timeout", "600", "yade", "-n", "-x", os.path.join(ROOT, "scripts", "demo.py"), "4.0"],
+                       cwd=str(tmp_path), env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    line = [x for x in r.stdout.splitlines() if "the floor carries" in x][0]
+    ratio = float(re.search(r"ratio ([0-9.]+)", line).group(1))
+    contacts = int(re.search(r"through (\d+) node-wall contacts", line).group(1))
+    inverted = int(re.search(r"(\d+) elements inverted at most", line).group(1))
+    assert ratio == pytest.approx(1.0, abs=0.01) and contacts >= 70 and inverted == 0
+    out = tmp_path / "out" / "demo"
+    assert (out / "block.png").stat().st_size > 10000 and (out / "energy.png").exists() and (out / "block.pvd").exists()

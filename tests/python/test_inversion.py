@@ -39,9 +39,11 @@ def test_inverted_element_recovers_and_is_reported(scene, capsys):
     p = _invertedBlock("stableNeoHookean")
     v0 = _volumes(p)
     assert (v0 < 0).sum() == 1
-    scene.engines = [qdem.QdemEngine(label="qe", checkPeriod=1, progressPeriod=1)]
+    from yade import ForceResetter, NewtonIntegrator
+    scene.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=1, progressPeriod=1),
+                     NewtonIntegrator(gravity=(0, 0, 0))]
     scene.dt = 0.5 * qdem.stableDt()["combined"]
-    engine = scene.engines[0]
+    engine = scene.engines[1]
     with pytest.warns(RuntimeWarning, match=r"1 element\(s\) inverted, the first tetrahedron \d+ of piece 0 "
                                              r"\(volume ratio -"):
         scene.run(200, True)
@@ -64,8 +66,9 @@ def test_inverted_element_recovers_and_is_reported(scene, capsys):
 def test_saint_venant_kirchhoff_inversion_stops_naming_piece_and_element(scene):
     p = _invertedBlock("saintVenantKirchhoff")
     bad = int(np.argmin(_volumes(p)))
+    from yade import ForceResetter, NewtonIntegrator
     engine = qdem.QdemEngine(checkPeriod=5)
-    scene.engines = [engine]
+    scene.engines = [ForceResetter(), engine, NewtonIntegrator(gravity=(0, 0, 0))]
     scene.dt = 0.5 * qdem.stableDt()["combined"]
     with pytest.raises(qdem.StabilityError,
                        match=r"tetrahedron %d of piece 0 is inverted \(volume ratio -1; 1 inverted" % bad) as err:
