@@ -30,13 +30,19 @@ using Mat12 = Eigen::Matrix<double, 12, 12>;
 
 // Small-strain stiffness of one element with Lame constants (lambda, mu),
 // in closed form.
-Mat12 hookeStiffness(const Mat3& B, double V, double lambda, double mu) {
-    // grad N_a: rows of B for nodes 1..3, minus their sum for node 0.
+// Reference gradients of the four shape functions: rows of B for nodes
+// 1..3, minus their sum for node 0.
+Eigen::Matrix<double, 4, 3> shapeGradients(const Mat3& B) {
     Eigen::Matrix<double, 4, 3> G;
     G.row(1) = B.row(0);
     G.row(2) = B.row(1);
     G.row(3) = B.row(2);
     G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
+    return G;
+}
+
+Mat12 hookeStiffness(const Mat3& B, double V, double lambda, double mu) {
+    const Eigen::Matrix<double, 4, 3> G = shapeGradients(B);
     Mat12 K;
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) {
@@ -55,11 +61,7 @@ Mat12 hookeStiffness(const Mat3& B, double V, double lambda, double mu) {
 // for node 0).  At F = I this is the small-strain (Hooke) stiffness, the same
 // for every law; on a strained shape it includes the geometric part.
 Mat12 elementStiffness(const Mat3& B, const Mat9& A, double V) {
-    Eigen::Matrix<double, 4, 3> G;
-    G.row(1) = B.row(0);
-    G.row(2) = B.row(1);
-    G.row(3) = B.row(2);
-    G.row(0) = -(B.row(0) + B.row(1) + B.row(2));
+    const Eigen::Matrix<double, 4, 3> G = shapeGradients(B);
     Mat12 K;
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b)

@@ -63,32 +63,9 @@ def setOptions(world, regions=True, edgeEdge=True, friction="spring", vReg=1e-3,
 
 
 def icosphere(R, subdivisions):
-    """Closed triangulated sphere of radius R: the icosahedron, each triangle
-    split in four `subdivisions` times, vertices pushed onto the sphere."""
-    t = (1 + 5 ** 0.5) / 2
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
-         (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    v = [np.array(x, float) / np.linalg.norm(x) for x in v]
-    for _ in range(subdivisions):
-        mid = {}
-
-        def m(a, b):
-            k = (min(a, b), max(a, b))
-            if k not in mid:
-                x = v[a] + v[b]
-                v.append(x / np.linalg.norm(x))
-                mid[k] = len(v) - 1
-            return mid[k]
-
-        nf = []
-        for a, b, c in f:
-            ab, bc, ca = m(a, b), m(b, c), m(c, a)
-            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = nf
-    return R * np.array(v), np.array(f, dtype=np.int32)
+    """Closed triangulated sphere of radius R (qdem.shapes.icosphere)."""
+    from qdem.shapes import icosphere as _icosphere
+    return _icosphere(R, subdivisions)
 
 
 def fitOrder(h, err):

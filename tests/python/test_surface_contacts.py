@@ -227,26 +227,79 @@ def test_27_cubes_stack_reaches_static_equilibrium(scene):
     assert qdem.defaultWorld().core.maxPieceOverlap < 0.1 * mat.radius
 
 
+def _tumblingCubes(mode, steps=2000):
+    """Two cubes meeting in a tumbling, frictional collision (point-polygon)."""
+    mat = rubber(radius=2e-3, restitution=0.6, frictionPiece=0.3)
+    w = qdem.World()
+    a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0.02, 0), vel=(0.5, 0, 0),
+                   angVel=(0, 3, 5))
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, -0.01, 0.01),
+               ori=((1, 2, 3), 0.5), vel=(-0.5, 0, 0))
+    return w, mat, a
+
+
+def _crossingBars(mode):
+    """A square bar turned 45 degrees about its axis falls, drifting and
+    spinning, ridge first onto a fixed bar crossing it: edge-edge contacts."""
+    mat = rubber(radius=1e-3, restitution=0.6, frictionPiece=0.3)
+    w = qdem.World()
+    h, reach = 0.01 * math.sqrt(2), 2e-3
+    top = w.addPiece(qdem.boxMesh((0.22, 0.02, 0.02), (11, 1, 1)), mat, pos=(0, 0, h + reach + 0.004),
+                     ori=((1, 0, 0), math.pi / 4), vel=(0.05, 0.02, -0.3), angVel=(0, 0, 1.0))
+    bot = w.addPiece(qdem.boxMesh((0.02, 0.22, 0.02), (1, 11, 1)), mat, pos=(0, 0, -h - reach / 2),
+                     ori=((0, 1, 0), math.pi / 4))
+    bot.blocked[:] = 7
+    return w, mat, top
+
+
+def _trace(scene, mode, steps):
+    w, mat, moving = scene(mode)
+    w.core.broadPhase = mode
+    dt = 0.5 * w.stableDt()["combined"]
+    counts, listDisp = [], []
+    surf = moving.surface()["nodes"] + moving.nodeSlice.start
+    ref = None
+    for _ in range(steps):
+        before, built = w.core.pos[surf].copy(), w.core.verletRebuilds
+        w.core.step(dt, 1)
+        c = w.core.contactCounts
+        counts.append((c["pointPolygon"], c["edgeEdge"]))
+        rebuilt = w.core.verletRebuilds > built
+        # lists are built from the positions at the start of the step
+        moved = np.sqrt(((before - ref) ** 2).sum(axis=1)).max() if ref is not None else np.inf
+        listDisp.append((rebuilt, moved))
+        if rebuilt:
+            ref = before
+    return np.array(w.core.pos), np.array(counts), listDisp, w.core.verletSkin * mat.radius
+
+
 @pytest.mark.parametrize("mode", [1, 2, 3])
-def test_broad_phase_modes_give_the_same_trajectories(mode):
+@pytest.mark.parametrize("scene", [_tumblingCubes, _crossingBars])
+def test_broad_phase_modes_find_the_same_contacts(mode, scene):
     """The seed's cases A, B, C and our Verlet-listed surface triangles find the
-    same contacts: a tumbling collision with friction ends in the same state."""
-    def run(m):
-        mat = rubber(radius=2e-3, restitution=0.6, frictionPiece=0.3)
-        w = qdem.World()
-        a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0.02, 0), vel=(0.5, 0, 0),
-                       angVel=(0, 3, 5))
-        b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, -0.01, 0.01),
-                       ori=((1, 2, 3), 0.5), vel=(-0.5, 0, 0))
-        w.core.broadPhase = m
-        dt = 0.5 * w.stableDt()["combined"]
-        hits = 0
-        for _ in range(100):
-            w.core.step(dt, 20)
-            hits += w.core.contactCounts["pointPolygon"]
-        return np.vstack([a.pos, b.pos]), hits, w.core.verletRebuilds
-    ours, hits, rebuilds = run(0)
-    seed, _, _ = run(mode)
-    assert hits > 0
-    assert 1 < rebuilds < 2000                   # lists were reused between rebuilds
+    same contacts, step by step (point-polygon and edge-edge counts), and end in
+    the same state."""
+    ours, countsOurs, _, _ = _trace(scene, 0, 2000)
+    seed, countsSeed, _, _ = _trace(scene, mode, 2000)
+    kind = 1 if scene is _crossingBars else 0
+    assert (countsOurs[:, kind] > 0).sum() > 50        # the kind this scene is about really happens
+    np.testing.assert_array_equal(countsOurs, countsSeed)
     assert np.abs(ours - seed).max() < 1e-9
+
+
+def test_verlet_lists_are_rebuilt_when_a_node_has_moved_half_the_skin():
+    """The lists are reused until a surface node has moved half the skin since
+    they were built, and rebuilt then: no step without a rebuild lets a node
+    move further, and (beyond the first builds, when the pieces come near)
+    every rebuild follows such a move."""
+    _, counts, listDisp, skin = _trace(_crossingBars, 0, 3000)
+    assert (counts[:, 1] > 0).sum() > 50
+    # While the bars are near each other the lists live: from their first build
+    # to their last (after the bounce the pieces part and no lists are kept).
+    steps = [i for i, (rebuilt, _) in enumerate(listDisp) if rebuilt]
+    window = listDisp[steps[0]:steps[-1] + 1]
+    rebuilds = [moved for rebuilt, moved in window if rebuilt][1:]   # the first build: the pieces came near
+    reused = [moved for rebuilt, moved in window if not rebuilt]
+    assert len(rebuilds) >= 10 and len(reused) > 10 * len(rebuilds)
+    assert max(reused) <= 0.5 * skin * (1 + 1e-12)    # no node went past half the skin on old lists
+    assert min(rebuilds) > 0.5 * skin                  # and none was rebuilt before one did
