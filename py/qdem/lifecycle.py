@@ -233,25 +233,26 @@ def _wrapSave(orig):
     return wrapped
 
 
-def _wrapLoad(orig):
-    def wrapped(self, *a, **k):
-        r = orig(self, *a, **k)
-        afterLoad(self)
-        return r
-    wrapped.__doc__ = orig.__doc__
-    wrapped._qdemOrig = orig
-    return wrapped
+def _wrapAfter(after):
+    """A wrapper that calls YADE's method, then after(O)."""
+    def wrap(orig):
+        def wrapped(self, *a, **k):
+            r = orig(self, *a, **k)
+            after(self)
+            return r
+        wrapped.__doc__ = orig.__doc__
+        wrapped._qdemOrig = orig
+        return wrapped
+    return wrap
 
 
-def _wrapReset(orig):
-    def wrapped(self, *a, **k):
-        from . import world as worldModule
-        r = orig(self, *a, **k)
-        worldModule.reset()
-        return r
-    wrapped.__doc__ = orig.__doc__
-    wrapped._qdemOrig = orig
-    return wrapped
+def _resetWorld(O):
+    from . import world as worldModule
+    worldModule.reset()
+
+
+_wrapLoad = _wrapAfter(afterLoad)      # load, loadTmp: QDEM follows the loaded scene
+_wrapReset = _wrapAfter(_resetWorld)   # reset, resetThisScene, resetCurrentScene: QDEM emptied too
 
 
 def install():

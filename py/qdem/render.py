@@ -40,8 +40,17 @@ def _display():
         _xvfb = None
         return False
     os.environ["DISPLAY"] = ":" + num
-    atexit.register(_xvfb.terminate)
+    atexit.register(_stopXvfb)
     return True
+
+
+def _stopXvfb():
+    if _xvfb is not None and _xvfb.poll() is None:
+        _xvfb.terminate()
+        try:
+            _xvfb.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            _xvfb.kill()
 
 
 def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None, size=(1280, 800)):
