@@ -14,6 +14,7 @@
 
 #include "mesh/BoxMesh.hpp"
 #include "world/World.hpp"
+#include "BenchStats.hpp"
 
 using namespace qdem;
 
@@ -63,15 +64,6 @@ Figures run(World& w, int threads, int steps, bool viscous) {
     return {el * perTetStep, in * perTetStep, total * perTetStep};
 }
 
-struct Stats {
-    std::vector<double> v;
-    double min() const { return *std::min_element(v.begin(), v.end()); }
-    double median() const {
-        std::vector<double> s = v;
-        std::sort(s.begin(), s.end());
-        return s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
-    }
-};
 
 }  // namespace
 

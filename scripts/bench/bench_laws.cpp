@@ -18,6 +18,7 @@
 #include "element/MaterialLaw.hpp"
 #include "mesh/BoxMesh.hpp"
 #include "world/World.hpp"
+#include "BenchStats.hpp"
 
 using namespace qdem;
 
@@ -45,15 +46,6 @@ double timeKernel(const Law& law, const World& w, const ElementParams& p, std::v
     return 1e9 * t / T;
 }
 
-struct Stats {
-    std::vector<double> v;
-    double min() const { return *std::min_element(v.begin(), v.end()); }
-    double median() const {
-        std::vector<double> s = v;
-        std::sort(s.begin(), s.end());
-        return s[s.size() / 2];
-    }
-};
 
 }  // namespace
 
