@@ -9,17 +9,9 @@
 #include "ContactLaw.hpp"
 #include "CellGrid.hpp"
 #include "SurfaceIndex.hpp"
+#include "../world/Settings.hpp"
 
 namespace qdem {
-
-// How surface elements are registered in the cell list.  The seed paper's
-// Figure 6 compares A, B and C; Triangles is ours and the default.
-enum class BroadPhase : int {
-    Triangles = 0,    // surface triangles only, binned by their own size
-    AllTets = 1,      // A: every tetrahedron, all four faces tested
-    SurfaceTets = 2,  // B: surface tetrahedra only, all four faces tested
-    SurfaceFaces = 3  // C: surface tetrahedra only, interior faces skipped
-};
 
 struct PieceContactState {
     SurfaceIndex surf;

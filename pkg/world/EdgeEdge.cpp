@@ -24,14 +24,14 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
     const SurfaceIndex& S = pc_.surf;
     const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
     constexpr int K = PieceContactState::kEE;
-    const double sinFade2 = std::pow(std::sin(edgeFadeAngle), 2);
+    const double sinFade2 = std::pow(std::sin(settings.edgeFadeAngle), 2);
     const long stamp = iter;
-    const bool regularized = frictionModel == FrictionModel::Regularized;
+    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
-        double* pe = trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* pe = settings.trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = pc_.edgeItems[ie];
@@ -127,7 +127,7 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
                                              (1 - sp.t) * sw[S.surfIndexOfNode[b0]] + sp.t * sw[S.surfIndexOfNode[b1]]);
                     const double saw = std::sqrt(aw);
                     const ContactParams cp{w * aw * law.kn, w * saw * law.cn, w * aw * law.kt, w * saw * law.ct, law.mu,
-                                           frictionRegVelocity, m1 * m2 / (m1 + m2)};
+                                           settings.frictionRegVelocity, m1 * m2 / (m1 + m2)};
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                                   reach, vRel.dot(n), dt);
                     const ContactResult r =

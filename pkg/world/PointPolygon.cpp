@@ -39,14 +39,14 @@ template <bool Friction>
 void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
     const SurfaceIndex& S = pc_.surf;
     const auto ns = static_cast<int32_t>(surfNodes.size());
-    const bool tets = broadPhase != BroadPhase::Triangles;
-    const bool interiorFacesToo = broadPhase == BroadPhase::AllTets || broadPhase == BroadPhase::SurfaceTets;
+    const bool tets = settings.broadPhase != BroadPhase::Triangles;
+    const bool interiorFacesToo = settings.broadPhase == BroadPhase::AllTets || settings.broadPhase == BroadPhase::SurfaceTets;
     constexpr int K = PieceContactState::kPP;
     const long stamp = iter;
     long interiorTests = 0, interiorNear = 0;
-    const bool regions = pointPolygonRegions;
-    const bool regularized = frictionModel == FrictionModel::Regularized;
-    const double cosFeature = std::cos(edgeFeatureAngle);
+    const bool regions = settings.pointPolygonRegions;
+    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
+    const double cosFeature = std::cos(settings.edgeFeatureAngle);
     const double* radius = pc_.pieceRadius.data();
     const uint8_t* active = pc_.pieceActive.data();
     const int32_t* triPiece = S.triPiece.data();
@@ -64,7 +64,7 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
 #pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
         double* buf = pc_.threadForce[omp_get_thread_num()].data();
-        double* pe = trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* pe = settings.trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
         Candidate cand[kCandidates];
         TriLanes lanes;
         TriLanesOut near;
@@ -337,7 +337,7 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                 }
                 const double w = surfWeight[s], sw = std::sqrt(w);  // the query node's area weight
-                const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, frictionRegVelocity,
+                const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, settings.frictionRegVelocity,
                                        mass[node] * mT / (mass[node] + mT)};
                 const Vector3d vRel = at(vel, node) - vT;
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,

@@ -96,7 +96,7 @@ void World::putToSleep(std::size_t p) {
             ek += 0.5 * mass[n] * v * v;
             v = 0;
         }
-    if (trackEnergy) energy.sleep += ek;
+    if (settings.trackEnergy) energy.sleep += ek;
     // What it pushed on obstacles this step stays in their reactions.
     std::vector<double>& fr = frozenReaction_[p];
     fr.clear();
@@ -123,11 +123,11 @@ void World::putToSleep(std::size_t p) {
 
 void World::updateSleep(double dt) {
     const std::size_t np = pieces.size();
-    if (!(sleepVelocity > 0)) {
+    if (!(settings.sleepVelocity > 0)) {
         wakeAll();
         return;
     }
-    const double v2 = sleepVelocity * sleepVelocity;
+    const double v2 = settings.sleepVelocity * settings.sleepVelocity;
     // Largest node speed of each awake piece, from the integration.
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) continue;
@@ -136,7 +136,7 @@ void World::updateSleep(double dt) {
         pieceSpeed2_[p] = m;
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
-    const bool nbrsValid = pc_.nbrStart.size() == np + 1 && (pointPolygonOn || edgeEdgeOn) && np > 1;
+    const bool nbrsValid = pc_.nbrStart.size() == np + 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) && np > 1;
     auto fastNeighbour = [&](std::size_t p) {
         if (!nbrsValid) return false;
         for (int32_t q = pc_.nbrStart[p]; q < pc_.nbrStart[p + 1]; ++q) {
@@ -161,7 +161,7 @@ void World::updateSleep(double dt) {
                 wakeOne(p);
                 changed = true;
             }
-        } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&
+        } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= settings.sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&
                    !nearSphere(p)) {
             putToSleep(p);
             changed = true;

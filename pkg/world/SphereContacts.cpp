@@ -173,7 +173,7 @@ void World::sphereContactPhase(double dt) {
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
     long count = 0;
-    if (frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
+    if (settings.frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
     else sphereContacts<false>(dt, eEl, eDamp, eSlip, count);
     // Sum the thread buffers into the node contact forces (surface nodes of
     // the pieces spheres may touch).
@@ -186,7 +186,7 @@ void World::sphereContactPhase(double dt) {
                 for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
     contactCounts.sphere = count;
-    if (trackEnergy) {
+    if (settings.trackEnergy) {
         energy.contactElastic += eEl;
         energy.contactDamping += eDamp;
         energy.friction += eSlip;
@@ -201,9 +201,9 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
     const int32_t n = S.size();
     constexpr int K = SphereSet::kSlots;
     const long stamp = iter;
-    const double cosFeature = std::cos(edgeFeatureAngle);
+    const double cosFeature = std::cos(settings.edgeFeatureAngle);
     const std::size_t nSurf = surfNodes.size();
-    const bool regularized = frictionModel == FrictionModel::Regularized;
+    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -321,7 +321,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
                     // (a clump's is larger: this errs towards less drag, never towards reversing the slip).
                     const double mBall = 2.0 / 7.0 * S.mass[i];
-                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, frictionRegVelocity,
+                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, settings.frictionRegVelocity,
                                             std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT};
                     const Vector3d vRel = v + w.cross(arm) - vT;
                     // A contact found deep on a sphere already watched was missed,

@@ -143,7 +143,7 @@ void World::checkCurrentDt(double dt) const {
         if (asleep(i)) continue;  // does not move: checked while it was awake, and again when it wakes
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
-        const double beta = viscosityOn ? m.beta() : 0.0;
+        const double beta = settings.viscosityOn ? m.beta() : 0.0;
         double wc = 0, xic = 0;
         contactMode(i, wc, xic);  // as in stableDt()
         auto limitAt = [&](double we) {
@@ -233,7 +233,7 @@ StableDt World::stableDt() const {
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
         const double we = omegaCache_[i];
-        const double beta = viscosityOn ? m.beta() : 0.0;
+        const double beta = settings.viscosityOn ? m.beta() : 0.0;
         r.elastic = std::min(r.elastic, leapfrogLimit(we, 0.0));
         r.viscous = std::min(r.viscous, leapfrogLimit(we, 0.5 * beta * we));
         double wc = 0, xic = 0;

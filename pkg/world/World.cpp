@@ -122,7 +122,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     pieces.push_back(std::move(p));
     pc_.surf.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
     pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
-    pc_.surf.classifyEdges(refPos.data(), edgeFeatureAngle);
+    pc_.surf.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
     omegaCache_.clear();
     asleep_.push_back(0);
     frozen_.push_back(0);

@@ -19,12 +19,11 @@
 #include "../mesh/Surface.hpp"
 #include "../mesh/TetMesh.hpp"
 #include "Energy.hpp"
+#include "Settings.hpp"
 #include "ThreadLayout.hpp"
 #include "WorldState.hpp"
 
 namespace qdem {
-
-enum class FrictionModel : int { Spring = 0, Regularized = 1 };
 
 struct PieceInfo {
     int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
@@ -129,41 +128,10 @@ public:
     std::vector<Obstacle> obstacles;
     SphereSet spheres;  // YADE spheres near pieces: states in, forceTorque out
 
-    // ---- settings -----------------------------------------------------------
+    // ---- settings (Settings.hpp: each declared once) -------------------------
+    Settings settings;
     Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // set through setGravity when pieces may sleep
     void setGravity(const Eigen::Vector3d& g);            // wakes sleeping pieces when it changes
-    bool trackEnergy = false;
-    bool viscosityOn = true;  // user switch: the viscous term can be turned off
-    // Cundall's non-viscous local damping, as YADE's NewtonIntegrator.damping:
-    // each force component is reduced by damping*|f| against the motion.  For
-    // quasi-static problems only; 0 (the default) keeps the dynamics exact.
-    double localDamping = 0;
-    bool frictionOn = true;   // user switch: tangential forces off
-    // Tangential law of every contact: Spring (Cundall-Strack spring with a
-    // Coulomb cap, the default) or Regularized (Ft = -mu Fn vt/max(|vt|, vReg),
-    // no history; it creeps at vReg tan(theta)/mu on a slope: doc/accuracy.md).
-    FrictionModel frictionModel = FrictionModel::Spring;
-    double frictionRegVelocity = 1e-3;  // vReg [m/s] of the regularised law
-    // Piece-piece surface contacts (seed §3): which kinds, and how the broad
-    // phase registers surface elements.
-    bool pointPolygonOn = true;
-    // Point-polygon closest points in the edge and vertex regions of the
-    // triangles too (default).  False: the seed's inside test (§3.1) - a node
-    // counts only when its projection on the triangle's plane falls inside
-    // the triangle (or on its boundary).
-    bool pointPolygonRegions = true;
-    bool edgeEdgeOn = true;
-    BroadPhase broadPhase = BroadPhase::Triangles;
-    // Edge-edge forces fade out as edges become parallel (the point-polygon
-    // contacts at their ends carry such a contact): full at or above
-    // edgeFadeAngle [rad] between the edges, zero when parallel.
-    double edgeFadeAngle = 0.17453292519943295;  // 10 degrees
-    // Edge-edge contacts are sought between feature edges only: those whose
-    // two faces meet at more than this angle [rad] in the reference shape.
-    double edgeFeatureAngle = 0.5235987755982988;  // 30 degrees
-    // Verlet-list skin of the default broad phase, as a fraction of the
-    // largest particle radius: larger = rarer rebuilds, longer lists.
-    double verletSkin = 0.5;
     double time = 0;
     long iter = 0;
     Energy energy;
@@ -178,9 +146,7 @@ public:
     // neighbour piece moves faster than sleepVelocity, an obstacle near it
     // moves, a YADE sphere comes near, or wake()/wakeAll() is called (the
     // Python Piece does so when its arrays are handed out for writing).
-    // sleepVelocity 0 (the default) turns sleeping off.
-    double sleepVelocity = 0;
-    double sleepTime = 0.01;
+    // settings.sleepVelocity 0 (the default) turns sleeping off.
     bool asleep(std::size_t piece) const { return piece < asleep_.size() && asleep_[piece]; }
     long nAsleep() const { return nAsleep_; }
     long sleepCount = 0;  // pieces put to sleep so far (diagnostics)

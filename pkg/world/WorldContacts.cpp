@@ -54,7 +54,7 @@ void World::pieceContactPhase(double dt) {
     maxPieceOverlap = 0;
     const std::size_t np = pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
-    if (np < 2 || (!pointPolygonOn && !edgeEdgeOn)) return;
+    if (np < 2 || (!settings.pointPolygonOn && !settings.edgeEdgeOn)) return;
 
     // Which pieces can touch another one at all?  Sweep and prune on x:
     // pieces sorted by the low end of their boxes, each compared only with
@@ -109,14 +109,14 @@ void World::pieceContactPhase(double dt) {
     double rMax = 0;
     for (std::size_t ip = 0; ip < np; ++ip)
         if (pc_.pieceActive[ip]) rMax = std::max(rMax, materials[pieces[ip].material].radius);
-    if (pc_.surf.sharpAngle != edgeFeatureAngle) pc_.surf.classifyEdges(refPos.data(), edgeFeatureAngle);
+    if (pc_.surf.sharpAngle != settings.edgeFeatureAngle) pc_.surf.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
     const SurfaceIndex& S = pc_.surf;
-    const bool tetItems = broadPhase != BroadPhase::Triangles;
+    const bool tetItems = settings.broadPhase != BroadPhase::Triangles;
 
     // Verlet lists (default mode): rebuild only when a surface node has moved
     // more than half the skin, pieces were added, or a piece became active.
     const bool verlet = !tetItems;
-    const double skin = verletSkin * rMax;
+    const double skin = settings.verletSkin * rMax;
     bool rebuild = !verlet || !pc_.listValid || pc_.listTris != S.nTris() || pc_.listSkin != skin ||
                    pc_.listActive.size() != np;
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = pc_.pieceActive[ip] && !pc_.listActive[ip];
@@ -175,11 +175,11 @@ void World::pieceContactPhase(double dt) {
     for (std::size_t ip = 0; ip < np; ++ip) {
         const PieceInfo& p = pieces[ip];
         const double r = materials[p.material].radius;
-        if (pc_.pieceActive[ip] && pointPolygonOn && rebuild) {
+        if (pc_.pieceActive[ip] && settings.pointPolygonOn && rebuild) {
             if (!tetItems) {
                 for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
                     addItem(t, &S.tri[3 * t], 3, r, ip);
-            } else if (broadPhase == BroadPhase::AllTets) {
+            } else if (settings.broadPhase == BroadPhase::AllTets) {
                 for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) addItem(e, &tetNodes[4 * e], 4, r, ip);
             } else {
                 for (int32_t q = S.pieceSurfTetStart[ip]; q < S.pieceSurfTetStart[ip + 1]; ++q)
@@ -187,7 +187,7 @@ void World::pieceContactPhase(double dt) {
             }
         }
         if (rebuild) pc_.itemStart[ip + 1] = static_cast<int32_t>(pc_.items.size());
-        if (pc_.pieceActive[ip] && edgeEdgeOn && edgeRebuild) {
+        if (pc_.pieceActive[ip] && settings.edgeEdgeOn && edgeRebuild) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 const Vector3d a = at(pos, S.edge[2 * e]), b = at(pos, S.edge[2 * e + 1]);
@@ -228,7 +228,7 @@ void World::pieceContactPhase(double dt) {
         }
     }
     for (std::size_t ip = 0; ip < np && nAsleep_ > 0; ++ip) normalsFresh_[ip] = asleep_[ip] && pc_.pieceActive[ip];
-    if (verlet && rebuild && pointPolygonOn) {
+    if (verlet && rebuild && settings.pointPolygonOn) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(surfNodes.size());
@@ -285,7 +285,7 @@ void World::pieceContactPhase(double dt) {
         pc_.listValid = true;
         ++pc_.listBuilds;
     }
-    if (verlet && edgeRebuild && edgeEdgeOn) {
+    if (verlet && edgeRebuild && settings.edgeEdgeOn) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
         const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
         constexpr int KE = PieceContactState::kEdgeList;
@@ -321,7 +321,7 @@ void World::pieceContactPhase(double dt) {
 
     double eDamp = 0, eSlip = 0, maxOv = 0;
     long nPP = 0, nEE = 0;
-    const bool fric = frictionOn;
+    const bool fric = settings.frictionOn;
     // Thread buffers: only awake pieces' nodes are read (and so zeroed).
     const bool all = nAsleep_ == 0;
 #pragma omp parallel num_threads(nth)
@@ -332,12 +332,12 @@ void World::pieceContactPhase(double dt) {
             for (std::size_t ip = 0; ip < np; ++ip)
                 if (!asleep_[ip]) std::fill(&b[3 * pieces[ip].surfBegin], &b[3 * pieces[ip].surfEnd], 0.0);
     }
-    if (pointPolygonOn) {
+    if (settings.pointPolygonOn) {
         if (fric) pointPolygon<true>(dt, eDamp, eSlip, nPP, maxOv);
         else pointPolygon<false>(dt, eDamp, eSlip, nPP, maxOv);
     }
     const double t2 = omp_get_wtime();
-    if (edgeEdgeOn) {
+    if (settings.edgeEdgeOn) {
         if (fric) edgeEdge<true>(dt, eDamp, eSlip, nEE, maxOv);
         else edgeEdge<false>(dt, eDamp, eSlip, nEE, maxOv);
     }
@@ -357,7 +357,7 @@ void World::pieceContactPhase(double dt) {
     contactCounts.pointPolygon = nPP;
     contactCounts.edgeEdge = nEE;
     maxPieceOverlap = maxOv;
-    if (trackEnergy) {  // (the elastic energy is summed per piece)
+    if (settings.trackEnergy) {  // (the elastic energy is summed per piece)
         energy.contactDamping += eDamp;
         energy.friction += eSlip;
     }

@@ -20,7 +20,7 @@ void World::step(double dt) {
     double t0 = omp_get_wtime();
     if (obstaclesPending_ || gravityPending_) checkLoadedRest();
     contactsActive_ = false;
-    if (trackEnergy) {
+    if (settings.trackEnergy) {
         energy.contactElastic = 0;  // a state: summed afresh by the contact phases
         beginPieceEnergy();
     }
@@ -33,7 +33,7 @@ void World::step(double dt) {
     elementPhase(dt);
     double t2 = omp_get_wtime();
     integratePhase(dt);
-    if (trackEnergy) finishPieceEnergy();
+    if (settings.trackEnergy) finishPieceEnergy();
     double t3 = omp_get_wtime();
     timings.obstacles = tObs - t0;
     timings.elements = t2 - t1;
@@ -79,7 +79,7 @@ void World::elementPhase(double dt) {
     const int nth = omp_get_max_threads();
     if (!layout_.matches(nth, awakeVersion_)) layout_.build(tetNodes.data(), awakeTets_, nth, awakeVersion_);
     double diss = 0;
-    const bool energyOn = trackEnergy;
+    const bool energyOn = settings.trackEnergy;
 #pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
     {
         const int th = omp_get_thread_num();
@@ -89,7 +89,7 @@ void World::elementPhase(double dt) {
         double* pe = energyOn ? threadPieceEnergy_[th].data() : nullptr;
         for (const TetSegment& sg : layout_.share[th]) {
             const Material& m = materials[pieces[sg.piece].material];
-            const bool visc = viscosityOn && m.viscosity > 0;
+            const bool visc = settings.viscosityOn && m.viscosity > 0;
             double w = 0;
             // The law is chosen once per segment (one piece's tets): the
             // kernel below is compiled per law, with no call through a pointer.
@@ -163,8 +163,8 @@ void World::obstaclePhase(double dt) {
     // asleep keeps its own.
     const std::size_t nPairs = pieceObstacles_.size();
     obstacleReaction_.assign(static_cast<std::size_t>(nth) * nPairs * 6, 0.0);
-    const bool energyOn = trackEnergy;
-    const bool regularized = frictionModel == FrictionModel::Regularized;
+    const bool energyOn = settings.trackEnergy;
+    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
     // Sleeping pieces' nodes are skipped (their history kept as it is).
     const bool all = nAsleep_ == 0;
@@ -215,13 +215,13 @@ void World::obstaclePhase(double dt) {
                 const double mu = o.friction >= 0 ? o.friction : m.frictionWall;
                 const double kt = kn * 2 * (1 - m.poisson) / (2 - m.poisson);  // Mindlin's ratio
                 ContactParams cp{kn, 2 * xi * std::sqrt(kn * mass[node]), kt, 2 * xi * std::sqrt(kt * mass[node]),
-                                 mu, frictionRegVelocity, mass[node]};
+                                 mu, settings.frictionRegVelocity, mass[node]};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
-                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
+                    lawForce(settings.frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
                 newBody[used] = o.bodyId;
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;
@@ -274,7 +274,7 @@ void World::obstaclePhase(double dt) {
 void World::integratePhase(double dt) {
     const auto N = static_cast<int32_t>(nNodes());
     const int nth = layout_.nThreads;
-    const bool energyOn = trackEnergy;
+    const bool energyOn = settings.trackEnergy;
     const bool withContacts = contactsActive_;
     const double g[3] = {gravity[0], gravity[1], gravity[2]};
     double* X = pos.data();
@@ -285,12 +285,12 @@ void World::integratePhase(double dt) {
     const double* M = mass.data();
     const uint8_t* blk = blocked.data();
     double ek = 0, eg = 0, ed = 0;
-    const double damp = localDamping;
+    const double damp = settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
     const bool all = nAsleep_ == 0;
     const int32_t* ids = awakeNodes_.data();
     const auto count = all ? N : static_cast<int32_t>(awakeNodes_.size());
-    const bool sleepOn = sleepVelocity > 0;
+    const bool sleepOn = settings.sleepVelocity > 0;
     if (sleepOn) {
         threadSpeed2_.resize(nth);
         for (auto& t : threadSpeed2_) t.assign(pieces.size(), 0.0);
@@ -354,7 +354,7 @@ void World::computeStress(double* out) const {
     for (int32_t e = 0; e < T; ++e) {
         const PieceInfo& p = pieces[tetPiece[e]];
         const Material& m = materials[p.material];
-        const ElementParams prm{m.lambda(), m.mu(), viscosityOn ? m.beta() : 0.0};
+        const ElementParams prm{m.lambda(), m.mu(), settings.viscosityOn ? m.beta() : 0.0};
         const int32_t* c = tetNodes.data() + 4 * e;
         const Mat3 B = loadRowMajor(tetB.data() + 9 * e);
         const double* X = pos.data();

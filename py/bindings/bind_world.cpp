@@ -15,6 +15,8 @@ using namespace qdem;
 using qdem::py_::columnView;
 using qdem::py_::flatten;
 
+void bindSettings(py::module_& m, py::class_<World>& world);
+
 namespace {
 
 using Nodes = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -36,13 +38,6 @@ py::dict energyDict(const Energy& e) {
     return d;
 }
 
-// A setter that refuses negative, NaN and infinite values, naming the setting.
-auto nonNegative(double World::*field, const char* name) {
-    return [field, name](World& w, double v) {
-        if (!(v >= 0) || !std::isfinite(v)) throw InputError(std::string(name) + " must be >= 0 and finite");
-        w.*field = v;
-    };
-}
 
 // (begin, end) ranges of piece i in the global arrays.
 const PieceInfo& piece(const World& w, int i) {
@@ -83,8 +78,9 @@ void bindWorld(py::module_& m) {
         .def_readonly("reactionForce", &Obstacle::reactionForce)
         .def_readonly("reactionTorque", &Obstacle::reactionTorque);
 
-    py::class_<World>(m, "World", "All QDEM pieces of a scene and their step pipeline.")
-        .def(py::init<>())
+    py::class_<World> world(m, "World", "All QDEM pieces of a scene and their step pipeline.");
+    bindSettings(m, world);
+    world.def(py::init<>())
         .def(
             "addMaterial",
             [](World& w, double young, double poisson, double density, double viscosity, double frictionPiece,
@@ -191,36 +187,7 @@ void bindWorld(py::module_& m) {
         .def_property(
             "gravity", [](const World& w) { return w.gravity; },
             [](World& w, const Eigen::Vector3d& g) { w.setGravity(g); })
-        .def_readwrite("trackEnergy", &World::trackEnergy)
-        .def_readwrite("viscosityOn", &World::viscosityOn)
-        .def_readwrite("localDamping", &World::localDamping)
-        .def_readwrite("edgeFeatureAngle", &World::edgeFeatureAngle)
-        .def_readwrite("verletSkin", &World::verletSkin, "Verlet-list skin as a fraction of the particle radius.")
         .def_property_readonly("verletRebuilds", &World::verletRebuilds)
-        .def_readwrite("frictionOn", &World::frictionOn)
-        .def_readwrite("pointPolygonOn", &World::pointPolygonOn)
-        .def_readwrite("pointPolygonRegions", &World::pointPolygonRegions,
-                       "Point-polygon contacts in the triangles' edge and vertex regions too (True, default); "
-                       "False: the seed's inside test (projection inside the triangle).")
-        .def_property(
-            "frictionModel", [](const World& w) { return static_cast<int>(w.frictionModel); },
-            [](World& w, int m) {
-                if (m < 0 || m > 1) throw InputError("frictionModel must be 0 (spring) or 1 (regularized)");
-                w.frictionModel = static_cast<FrictionModel>(m);
-            },
-            "0: Cundall-Strack spring with a Coulomb cap (default); 1: viscous-regularised Coulomb, no history.")
-        .def_property(
-            "frictionRegVelocity", [](const World& w) { return w.frictionRegVelocity; },
-            [](World& w, double v) {
-                if (!(v > 0) || !std::isfinite(v)) throw InputError("frictionRegVelocity must be positive and finite");
-                w.frictionRegVelocity = v;
-            },
-            "Slip speed [m/s] at which the regularised friction law reaches mu*Fn.")
-        .def_property("sleepVelocity", [](const World& w) { return w.sleepVelocity; },
-                      nonNegative(&World::sleepVelocity, "sleepVelocity"),
-                      "Pieces whose nodes all stay slower than this [m/s] for sleepTime fall asleep (0 = never).")
-        .def_property("sleepTime", [](const World& w) { return w.sleepTime; }, nonNegative(&World::sleepTime, "sleepTime"),
-                      "How long [s] a piece must stay slow before it falls asleep.")
         .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
              "Is the piece asleep (left out of the step until something near it moves)?")
         .def_property_readonly("nAsleep", &World::nAsleep)
@@ -256,16 +223,6 @@ void bindWorld(py::module_& m) {
                 w.loadState(s);
             },
             py::arg("state"), "Restore a state from saveState() into a world built with the same pieces.")
-        .def_readwrite("edgeEdgeOn", &World::edgeEdgeOn)
-        .def_readwrite("edgeFadeAngle", &World::edgeFadeAngle)
-        .def_property(
-            "broadPhase", [](const World& w) { return static_cast<int>(w.broadPhase); },
-            [](World& w, int m) {
-                if (m < 0 || m > 3) throw InputError("broadPhase must be 0 (triangles), 1 (A), 2 (B) or 3 (C)");
-                w.broadPhase = static_cast<BroadPhase>(m);
-            },
-            "0: surface triangles (default); the seed's Figure 6 cases 1 = A (all tets), 2 = B (surface tets), "
-            "3 = C (surface tets, interior faces skipped).")
         .def_property_readonly("contactCounts",
                                [](const World& w) {
                                    py::dict d;

@@ -91,3 +91,53 @@ def _isnum(v):
     except (TypeError, ValueError):
         return False
     return f == f and abs(f) != float("inf")
+
+
+class WorldSetting(Attr):
+    """An engine attribute that is a setting of the engine's QDEM world: read
+    from and written to ``obj.world.core`` (no copy kept in the engine).  Built
+    from the setting's one declaration in C++ (pkg/world/Settings.hpp, exposed
+    as ``qdem._core.settings``): default, docstring and allowed values."""
+
+    def __init__(self, decl):
+        self.decl = decl
+        default = decl["default"]
+        if decl["kind"] == "choice":
+            default = decl["choices"][default]
+        super().__init__(default, decl["doc"])
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        v = getattr(obj.world.core, self.decl["name"])
+        if self.decl["kind"] == "choice":
+            return self.decl["choices"][v]
+        return bool(v) if self.decl["kind"] == "bool" else float(v)
+
+    def __set__(self, obj, value):
+        d = self.decl
+        if d["kind"] == "choice":
+            if value not in d["choices"]:
+                raise ValueError("%s: %s=%r is invalid: must be one of %s"
+                                 % (type(obj).__name__, self.name, value, d["choices"]))
+            value = d["choices"].index(value)
+        elif d["kind"] == "real":
+            ok = _isnum(value)
+            if ok:
+                v = float(value)
+                ok = (v > d["lo"] if d["loOpen"] else v >= d["lo"]) and (v < d["hi"] if d["hiOpen"] else v <= d["hi"])
+            if not ok:
+                raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, d["rule"]))
+            value = float(value)
+        else:
+            value = bool(value)
+        setattr(obj.world.core, d["name"], value)
+
+
+def worldSettings(namespace):
+    """Adds a WorldSetting to a class body (``worldSettings(locals())``) for each
+    world setting that has an engine name, in declaration order."""
+    from . import _core
+    for decl in _core.settings:
+        if decl["engineName"]:
+            namespace[decl["engineName"]] = WorldSetting(decl)

@@ -18,13 +18,11 @@ from yade import O, PyRunner
 
 from . import _core, lifecycle, setupcheck, yadeglue
 from .spheres import SphereCoupling
-from .attrs import Attr, AttrObject, documented
+from .attrs import Attr, AttrObject, WorldSetting, documented, worldSettings
 from .yadeclass import EngineMeta
 from .world import defaultWorld
 
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
-BROAD_PHASES = {"triangles": 0, "A": 1, "B": 2, "C": 3}
-FRICTION_MODELS = {"spring": 0, "regularized": 1}
 
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
@@ -56,15 +54,8 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
                             "are finite, count inverted elements (see inverted), and (with checkDt) that "
                             "O.dt is below the stable step of the current, strained shape (0 = never).")
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
-    viscosity = Attr(True, "Apply the Kelvin-Voigt viscous stress (False switches it off).")
-    damping = Attr(0.0, "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping "
-                        "(which QDEM does not inherit): for quasi-static problems; 0 keeps the dynamics exact.",
-                   lambda v: None if 0 <= v < 1 else "must lie in [0, 1)")
-    friction = Attr(True, "Apply tangential (friction) contact forces (False switches them off).")
     threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
                       "own count either way.")
-    pointPolygon = Attr(True, "Point-polygon contacts between pieces (seed paper 3.1).")
-    edgeEdge = Attr(True, "Edge-edge contacts between pieces (seed paper 3.2, with friction).")
     spheres = Attr(True, "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): "
                          "needs an InsertionSortCollider in O.engines, before this engine.")
     sphereMask = Attr(-1, "groupMask of the proxy bodies that find spheres near pieces: only spheres "
@@ -72,30 +63,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
     sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
                              "larger = fewer proxy moves (each forces a collider run), more spheres read.",
                         lambda v: None if 0.01 <= v <= 10 else "must lie in [0.01, 10]")
-    pointPolygonRegions = Attr(True, "Point-polygon closest points in the edge and vertex regions of the "
-                                     "triangles too (default), so a node over a convex ridge or corner of "
-                                     "the other piece keeps its contact; False: the seed's inside test "
-                                     "(3.1: the projection must fall inside the triangle).")
-    frictionModel = Attr("spring", "Tangential contact law: 'spring' (Cundall-Strack spring with a Coulomb "
-                                   "cap: sticks below the friction angle, the default) or 'regularized' "
-                                   "(Ft = -mu Fn vt/max(|vt|, frictionRegVelocity), no history: creeps on "
-                                   "slopes at frictionRegVelocity tan(theta)/mu). doc/accuracy.md compares them.",
-                         lambda v: None if v in FRICTION_MODELS else "must be one of %s" % list(FRICTION_MODELS))
-    frictionRegVelocity = Attr(1e-3, "Slip speed [m/s] at which the 'regularized' friction law reaches mu*Fn.",
-                               lambda v: None if isinstance(v, (int, float)) and v > 0 else "must be positive")
-    broadPhase = Attr("triangles", "How surface elements are registered in the cell list: 'triangles' "
-                                   "(default), or the seed's Figure 6 cases 'A' (all tets), 'B' (surface "
-                                   "tets), 'C' (surface tets, interior faces skipped).",
-                       lambda v: None if v in BROAD_PHASES else "must be one of %s" % list(BROAD_PHASES))
-
-    sleepVelocity = Attr(0.0, "Pieces at rest sleep: one whose nodes all stay slower than this [m/s] for "
-                              "sleepTime, with no faster piece near it, is left out of the step (zero "
-                              "velocity, no element or contact work; its push on obstacles kept) until a "
-                              "neighbour piece moves faster than this, an obstacle near it moves or a sphere "
-                              "comes near.  0 (default) = never.  doc/sleeping.md: choice and error.",
-                         lambda v: None if isinstance(v, (int, float)) and v >= 0 else "must be >= 0")
-    sleepTime = Attr(0.01, "How long [s] a piece must stay slower than sleepVelocity before it sleeps.",
-                     lambda v: None if isinstance(v, (int, float)) and v >= 0 else "must be >= 0")
+    # The world settings (viscosity, damping, friction, contact kinds, sleeping, ...):
+    # declared once in pkg/world/Settings.hpp; read and written on the world directly.
+    worldSettings(locals())
 
     _yadeAttrs = ("label", "dead")   # YADE's own Engine attributes it takes as keywords
     _public = ("stableDt", "stableTimeStep", "proxyIds", "bodiesChanged", "sphereCouplingTime", "stepOnce",
@@ -104,13 +74,19 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
     def __init__(self, world=None, qdemId=None, **kw):
         PyRunner.__init__(self)
         known = AttrObject.attrNames.__func__(type(self))
-        for k, v in kw.items():
-            if k in self._yadeAttrs or k in known:
-                setattr(self, k, v)
-            else:
+        for k in kw:
+            if k not in self._yadeAttrs and k not in known:
                 raise TypeError("QdemEngine: unknown keyword %r; known: world, label, dead, %s"
                                 % (k, ", ".join(known)))
         self.world = world or defaultWorld()
+        # A new engine starts its world from the declared defaults (as YADE engines
+        # start from theirs), then takes the keywords; afterwards the world holds them.
+        for k in known:
+            a = getattr(type(self), k)
+            if isinstance(a, WorldSetting) and k not in kw:
+                setattr(self, k, a.default)
+        for k, v in kw.items():
+            setattr(self, k, v)
         self.iterPeriod = 1
         self.initRun = True
         self.qdemId = qdemId or lifecycle.newId()
@@ -244,17 +220,6 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
                              "vector" % (tuple(g),))
         core.gravity = g
         core.trackEnergy = bool(O.trackEnergy)
-        core.viscosityOn = bool(self.viscosity)
-        core.localDamping = float(self.damping)
-        core.frictionOn = bool(self.friction)
-        core.pointPolygonOn = bool(self.pointPolygon)
-        core.edgeEdgeOn = bool(self.edgeEdge)
-        core.pointPolygonRegions = bool(self.pointPolygonRegions)
-        core.frictionModel = FRICTION_MODELS[self.frictionModel]
-        core.frictionRegVelocity = float(self.frictionRegVelocity)
-        core.broadPhase = BROAD_PHASES[self.broadPhase]
-        core.sleepVelocity = float(self.sleepVelocity)
-        core.sleepTime = float(self.sleepTime)
         coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
             t0 = time.perf_counter()

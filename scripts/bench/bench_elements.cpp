@@ -49,7 +49,7 @@ struct Figures {
 
 Figures run(World& w, int threads, int steps, bool viscous) {
     omp_set_num_threads(threads);
-    w.viscosityOn = viscous;
+    w.settings.viscosityOn = viscous;
     const double dt = 0.5 * w.stableDt().combined;
     for (int i = 0; i < 5; ++i) w.step(dt);  // warm-up, builds the thread layout
     double el = 0, in = 0;

@@ -51,8 +51,8 @@ Landing land(FrictionModel model) {
     w.setObstacleState(0, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero(),
                        Eigen::Vector3d::Zero());
     w.setGravity(Eigen::Vector3d(0, 0, -9.81));
-    w.frictionModel = model;
-    w.trackEnergy = true;
+    w.settings.frictionModel = model;
+    w.settings.trackEnergy = true;
     const double dt = 0.8 * w.stableDt().combined;
     auto centroid = [&](int d) {
         double s = 0, ms = 0;

@@ -1,0 +1,95 @@
+// Every switch and number of the QDEM step, declared once.
+//
+// One line of QDEM_SETTINGS per setting: its C++ type and member name, the
+// name users see on QdemEngine (empty: not an engine attribute), its default,
+// the values it may take, and its docstring.  From this list come the members
+// of Settings (what the phases read), the Python properties of the core World
+// with their checks and docstrings, and the attributes of QdemEngine with
+// their defaults shown in help() (py/bindings/bind_settings.cpp,
+// py/qdem/engine.py).  Adding a setting is one line here.
+#pragma once
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace qdem {
+
+// Tangential law of every contact (ContactLaw.hpp).
+enum class FrictionModel : int { Spring = 0, Regularized = 1 };
+
+// How surface elements are registered in the cell list.  The seed paper's
+// Figure 6 compares A, B and C; Triangles is ours and the default.
+enum class BroadPhase : int {
+    Triangles = 0,    // surface triangles only, binned by their own size
+    AllTets = 1,      // A: every tetrahedron, all four faces tested
+    SurfaceTets = 2,  // B: surface tetrahedra only, all four faces tested
+    SurfaceFaces = 3  // C: surface tetrahedra only, interior faces skipped
+};
+
+// What values a setting may take: any (bool), a closed or half-open range,
+// or named choices (enums; the index is the enum's value).
+struct SettingRange {
+    double lo = -INFINITY, hi = INFINITY;
+    bool hiOpen = false;  // [lo, hi) rather than [lo, hi]
+    bool loOpen = false;  // (lo, hi]
+    std::vector<std::string> choices;
+};
+
+inline SettingRange anyValue() { return {}; }
+inline SettingRange atLeast(double lo) { return {lo, INFINITY, false, false, {}}; }
+inline SettingRange positive() { return {0, INFINITY, false, true, {}}; }
+inline SettingRange within(double lo, double hi) { return {lo, hi, false, false, {}}; }
+inline SettingRange withinOpenTop(double lo, double hi) { return {lo, hi, true, false, {}}; }
+inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, INFINITY, false, false, std::move(names)}; }
+
+// X(type, member, engineName, default, range, doc)
+#define QDEM_SETTINGS(X)                                                                                              \
+    X(bool, trackEnergy, "", false, anyValue(),                                                                      \
+      "Sum the energy ledger each step (QdemEngine takes it from O.trackEnergy).")                                   \
+    X(bool, viscosityOn, "viscosity", true, anyValue(),                                                              \
+      "Apply the Kelvin-Voigt viscous stress (False switches it off).")                                              \
+    X(double, localDamping, "damping", 0.0, withinOpenTop(0, 1),                                                     \
+      "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping (which QDEM does not "         \
+      "inherit): for quasi-static problems; 0 keeps the dynamics exact.")                                            \
+    X(bool, frictionOn, "friction", true, anyValue(),                                                                \
+      "Apply tangential (friction) contact forces (False switches them off).")                                       \
+    X(FrictionModel, frictionModel, "frictionModel", FrictionModel::Spring, oneOf({"spring", "regularized"}),       \
+      "Tangential contact law: 'spring' (Cundall-Strack spring with a Coulomb cap: sticks below the friction "       \
+      "angle, the default) or 'regularized' (Ft = -mu Fn vt/max(|vt|, frictionRegVelocity), no history: creeps "    \
+      "on slopes at frictionRegVelocity tan(theta)/mu). doc/accuracy.md compares them.")                             \
+    X(double, frictionRegVelocity, "frictionRegVelocity", 1e-3, positive(),                                          \
+      "Slip speed [m/s] at which the 'regularized' friction law reaches mu*Fn.")                                     \
+    X(bool, pointPolygonOn, "pointPolygon", true, anyValue(), "Point-polygon contacts between pieces (seed paper 3.1).") \
+    X(bool, pointPolygonRegions, "pointPolygonRegions", true, anyValue(),                                            \
+      "Point-polygon closest points in the edge and vertex regions of the triangles too (default), so a node "      \
+      "over a convex ridge or corner of the other piece keeps its contact; False: the seed's inside test (3.1: "    \
+      "the projection must fall inside the triangle).")                                                              \
+    X(bool, edgeEdgeOn, "edgeEdge", true, anyValue(),                                                                \
+      "Edge-edge contacts between pieces (seed paper 3.2, with friction).")                                          \
+    X(BroadPhase, broadPhase, "broadPhase", BroadPhase::Triangles, oneOf({"triangles", "A", "B", "C"}),             \
+      "How surface elements are registered in the cell list: 'triangles' (default), or the seed's Figure 6 "       \
+      "cases 'A' (all tets), 'B' (surface tets), 'C' (surface tets, interior faces skipped).")                      \
+    X(double, edgeFadeAngle, "edgeFadeAngle", 0.17453292519943295, within(1e-6, 1.5707963267948966),               \
+      "Edge-edge forces fade out as edges become parallel (the point-polygon contacts at their ends carry such "    \
+      "a contact): full at or above this angle [rad] between the edges, zero when parallel.")                       \
+    X(double, edgeFeatureAngle, "edgeFeatureAngle", 0.5235987755982988, within(0, 3.141592653589793),               \
+      "Edge-edge contacts are sought between feature edges only: those whose two faces meet at more than this "     \
+      "angle [rad] in the reference shape.")                                                                        \
+    X(double, verletSkin, "verletSkin", 0.5, atLeast(0),                                                             \
+      "Verlet-list skin of the default broad phase, as a fraction of the largest particle radius: larger = "        \
+      "rarer rebuilds, longer lists.")                                                                               \
+    X(double, sleepVelocity, "sleepVelocity", 0.0, atLeast(0),                                                       \
+      "Pieces at rest sleep: one whose nodes all stay slower than this [m/s] for sleepTime, with no faster piece "  \
+      "near it, is left out of the step (zero velocity, no element or contact work; its push on obstacles kept) "   \
+      "until a neighbour piece moves faster than this, an obstacle near it moves or a sphere comes near.  0 "       \
+      "(default) = never.  doc/sleeping.md: choice and error.")                                                      \
+    X(double, sleepTime, "sleepTime", 0.01, atLeast(0),                                                              \
+      "How long [s] a piece must stay slower than sleepVelocity before it sleeps.")
+
+struct Settings {
+#define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;
+    QDEM_SETTINGS(QDEM_SETTING_MEMBER)
+#undef QDEM_SETTING_MEMBER
+};
+
+}  // namespace qdem
