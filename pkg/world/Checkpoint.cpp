@@ -7,16 +7,16 @@
 
 namespace qdem {
 
-// Every per-node, per-slot and per-piece array of the state, by name.
-template <class F>
-void World::forEachStateColumn(F&& f) {
-    f("pos", pos);
-    f("vel", vel);
-    f("extForce", extForce);
-    f("blocked", blocked);
-    f("slotBody", slotBody_);
-    f("slotShear", slotShear_);
-    f("slotSide", slotSide_);
+// Every per-node, per-slot and per-piece array of the state, by name: the
+// world's own, then each phase's (Phase::stateColumns).
+StateColumns World::stateColumns() {
+    StateColumns c;
+    c.add("pos", pos);
+    c.add("vel", vel);
+    c.add("extForce", extForce);
+    c.add("blocked", blocked);
+    for (Phase* p : phases()) p->stateColumns(c);
+    auto f = [&](const char* name, auto& col) { c.add(name, col); };
     f("ppKey", pc_.ppKey);
     f("ppPiece", pc_.ppPiece);
     f("ppShear", pc_.ppShear);
@@ -32,6 +32,7 @@ void World::forEachStateColumn(F&& f) {
     f("pieceSpeed2", pieceSpeed2_);
     f("sleepMoved2", sleepMoved2_);
     f("pieceEnergy", pieceEnergy_);
+    return c;
 }
 
 WorldState World::saveState() const {
@@ -47,8 +48,8 @@ WorldState World::saveState() const {
                           energy.contactElastic, energy.contactDamping, energy.friction, energy.boundaryWork,
                           energy.localDamping,   energy.sleep};
     s.put("energy", e, 10);
-    // (the visitor only reads here)
-    const_cast<World*>(this)->forEachStateColumn([&](const char* name, const auto& c) { s.put(name, c.data(), c.size()); });
+    // (the columns are only read here)
+    for (const auto& r : const_cast<World*>(this)->stateColumns().refs) s.putBytes(r.name, r.data, r.count, r.elemSize);
     std::vector<int64_t> start{0};  // frozen obstacle reactions, flattened
     std::vector<double> flat;
     for (const auto& fr : frozenReaction_) {
@@ -83,12 +84,11 @@ void World::loadState(const WorldState& s) {
     s.check<double>("time", 1);
     s.check<int64_t>("iter", 3);
     s.check<double>("energy", 10);
-    forEachStateColumn([&](const char* name, auto& c) {
-        s.check<std::decay_t<decltype(*c.data())>>(name, c.size());
-    });
+    const StateColumns cols = stateColumns();
+    for (const auto& r : cols.refs) s.checkBytes(r.name, r.count, r.elemSize);
     const bool hasHeld = s.fields.count("held") > 0;  // (files from before Piece.dynamic have none)
     if (hasHeld) s.check<uint8_t>("held", held_.size());
-    forEachStateColumn([&](const char* name, auto& c) { s.get(name, c.data(), c.size()); });
+    for (const auto& r : cols.refs) s.getBytes(r.name, r.data, r.count, r.elemSize);
     if (hasHeld) s.get("held", held_.data(), held_.size());
     else std::fill(held_.begin(), held_.end(), 0);
     double clock[1];
@@ -109,9 +109,7 @@ void World::loadState(const WorldState& s) {
     updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
     pc_.listValid = false;      // Verlet lists: rebuilt from the loaded positions
     contactsActive_ = false;
-    // A loaded state continues a run: its contacts with obstacles are not a
-    // set-up mistake (a new obstacle list still gets checked: setObstacles).
-    startChecked_.assign(pieces.size(), 1);
+    for (Phase* p : phases()) p->stateLoaded();
     // Sleeping pieces rest in the obstacles and gravity the state was saved
     // with (frozen reactions are by obstacle index): if this world gets others
     // (or the file predates these fields) they are woken at the next step.

@@ -100,6 +100,9 @@ void World::putToSleep(std::size_t p) {
     // What it pushed on obstacles this step stays in their reactions.
     std::vector<double>& fr = frozenReaction_[p];
     fr.clear();
+    const std::vector<int>& pieceObstacles_ = obstaclePhase_.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = obstaclePhase_.pieceObstacleBegin();
+    const std::vector<double>& pairReaction_ = obstaclePhase_.pairReaction();
     if (pieceObstacleBegin_.size() == pieces.size() + 1 && pairReaction_.size() == 6 * pieceObstacles_.size())
         for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
             fr.push_back(pieceObstacles_[j]);
@@ -145,6 +148,8 @@ void World::updateSleep(double dt) {
         }
         return false;
     };
+    const std::vector<int>& pieceObstacles_ = obstaclePhase_.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = obstaclePhase_.pieceObstacleBegin();
     auto movingObstacle = [&](std::size_t p) {
         if (pieceObstacleBegin_.size() != np + 1) return false;
         for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {

@@ -116,9 +116,6 @@ int World::addPiece(const TetMesh& mesh, int material) {
     p.minSurfaceMassPerWeight = mwmin;
     p.surface = std::move(s);
 
-    slotBody_.resize(kSlots * surfNodes.size(), -1);
-    slotShear_.resize(3 * kSlots * surfNodes.size(), 0.0);
-    slotSide_.resize(kSlots * surfNodes.size(), 0);
     pieces.push_back(std::move(p));
     pc_.surf.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
     pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
@@ -131,7 +128,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     pieceSpeed2_.push_back(0);
     sleepMoved2_.push_back(0);
     held_.push_back(0);
-    startChecked_.resize(pieces.size(), 0);
+    obstaclePhase_.piecesAdded();
     frozenReaction_.emplace_back();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
@@ -152,7 +149,7 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
     for (auto& o : obstacles) o.updateDerived();
     if (!same) {
         wakeAll();  // frozen reactions are kept by obstacle index
-        startChecked_.assign(pieces.size(), 0);  // a new list: every piece is checked against it once
+        obstaclePhase_.obstaclesChanged();
     }
     omegaCache_.clear();
 }

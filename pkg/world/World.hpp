@@ -19,6 +19,7 @@
 #include "../mesh/Surface.hpp"
 #include "../mesh/TetMesh.hpp"
 #include "Energy.hpp"
+#include "../phases/ObstaclePhase.hpp"
 #include "Settings.hpp"
 #include "ThreadLayout.hpp"
 #include "WorldState.hpp"
@@ -185,12 +186,19 @@ public:
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap = 0;
 
+    World() = default;
+    World(const World&) = delete;
+    World& operator=(const World&) = delete;
+
 private:
+    // The phases of World::step, each with its own state (pkg/phases/).  They
+    // are friends while the shared data they read is being given accessors.
+    friend class ObstaclePhase;
+    ObstaclePhase obstaclePhase_{*this};
     template <class Law, bool Viscous, bool Energy>
     void elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
                       double& wEl, double& diss) const;
     void elementPhase(double dt);
-    void obstaclePhase(double dt);
     void integratePhase(double dt);
     void pieceContactPhase(double dt);
     void sphereContactPhase(double dt);
@@ -209,16 +217,13 @@ private:
     void updateSleep(double dt);
     void putToSleep(std::size_t p);
     void wakeOne(std::size_t p);
-    template <class F>
-    void forEachStateColumn(F&& f);  // flags and clocks only: the caller calls awakeSetChanged()
+    // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
+    StateColumns stateColumns();
+    std::vector<Phase*> phases() { return {&obstaclePhase_}; }
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
-    // Refuses (InputError) a piece whose nodes start inside a wall, box or
-    // facet, once per piece and obstacle list (StartOverlap.cpp).
-    void checkStartOverlaps();
-    std::vector<uint8_t> startChecked_;  // per piece: start overlap checked for this obstacle list
 
     ThreadLayout layout_;
     // Sleeping: per piece flags and clocks (sized in addPiece).
@@ -241,7 +246,6 @@ private:
     bool obstaclesPending_ = false;
     bool gravityPending_ = false;
     void checkLoadedRest();
-    std::vector<double> pairReaction_;   // per (piece, obstacle) pair of the last obstacle phase, 6 each
     long nAsleep_ = 0;
     long awakeVersion_ = 0;              // bumped whenever pieces are added or fall asleep or wake
     std::vector<TetSegment> awakeTets_;  // per awake piece, its tets
@@ -251,17 +255,9 @@ private:
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;
     std::vector<std::vector<double>> threadPieceEnergy_;
-    // Contact history: kSlots (obstacle body id, tangential spring) per surface node.
-    static constexpr int kSlots = 4;
-    Column<int32_t> slotBody_;
-    Column<double> slotShear_;
-    Column<int8_t> slotSide_;
     Column<double> contactForce_;  // per node, from obstacles (and later piece contacts)
     bool contactsActive_ = false;  // contactForce_ holds forces for the coming update
     PieceContactState pc_;
-    std::vector<double> obstacleReaction_;  // per thread x obstacle x 6
-    std::vector<int> pieceObstacles_;       // per piece: candidate obstacle list (flattened)
-    std::vector<int> pieceObstacleBegin_;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
     mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };

@@ -16,6 +16,26 @@ namespace qdem {
 struct WorldState {
     std::map<std::string, std::vector<uint8_t>> fields;
 
+    // Untyped forms for the columns phases declare (Phase.hpp): n values of
+    // elemSize bytes each.
+    void putBytes(const std::string& name, const void* p, std::size_t n, std::size_t elemSize) {
+        std::vector<uint8_t>& f = fields[name];
+        f.resize(n * elemSize);
+        if (n) std::memcpy(f.data(), p, n * elemSize);
+    }
+    void checkBytes(const std::string& name, std::size_t n, std::size_t elemSize) const {
+        const auto it = fields.find(name);
+        if (it == fields.end()) throw InputError("world state: field '" + name + "' is missing");
+        if (it->second.size() != n * elemSize)
+            throw InputError("world state: field '" + name + "' has " + std::to_string(it->second.size() / elemSize) +
+                             " values, this world needs " + std::to_string(n) +
+                             " (not the same scene: build the same pieces before loading)");
+    }
+    void getBytes(const std::string& name, void* p, std::size_t n, std::size_t elemSize) const {
+        checkBytes(name, n, elemSize);
+        if (n) std::memcpy(p, fields.find(name)->second.data(), n * elemSize);
+    }
+
     template <class T>
     void put(const std::string& name, const T* p, std::size_t n) {
         std::vector<uint8_t>& f = fields[name];

@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <vector>
 
+#include <memory>
+
 #include "mesh/BoxMesh.hpp"
 #include "world/World.hpp"
 #include "BenchStats.hpp"
@@ -20,8 +22,10 @@ using namespace qdem;
 
 namespace {
 
-World makeScene(int cubesPerAxis, MaterialLaw law) {
-    World w;
+// (by pointer: a World is not copied or moved, its phases refer to it)
+std::unique_ptr<World> makeScene(int cubesPerAxis, MaterialLaw law) {
+    auto wp = std::make_unique<World>();
+    World& w = *wp;
     Material m;  // seed Table 1
     m.law = law;
     const int mat = w.addMaterial(m);
@@ -40,7 +44,7 @@ World makeScene(int cubesPerAxis, MaterialLaw law) {
     // A small random-looking velocity field so that the viscous term works.
     for (std::size_t i = 0; i < w.vel.size(); ++i) w.vel[i] = 1e-3 * ((i * 2654435761u) % 1000 / 1000.0 - 0.5);
     w.gravity = Eigen::Vector3d(0, 0, -9.80665);
-    return w;
+    return wp;
 }
 
 struct Figures {
@@ -72,9 +76,10 @@ int main(int argc, char** argv) {
     const int cubes = argc > 2 ? std::atoi(argv[2]) : 3;
     const int repeats = argc > 3 ? std::atoi(argv[3]) : 5;
     const MaterialLaw laws[2] = {MaterialLaw::SaintVenantKirchhoff, MaterialLaw::StableNeoHookean};
-    World worlds[2] = {makeScene(cubes, laws[0]), makeScene(cubes, laws[1])};
-    std::printf("{\"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"repeats\": %d, \"threads\": {", worlds[0].nTets(),
-                worlds[0].nNodes(), steps, repeats);
+    const std::unique_ptr<World> owners[2] = {makeScene(cubes, laws[0]), makeScene(cubes, laws[1])};
+    World* worlds[2] = {owners[0].get(), owners[1].get()};
+    std::printf("{\"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"repeats\": %d, \"threads\": {", worlds[0]->nTets(),
+                worlds[0]->nNodes(), steps, repeats);
     const int maxThreads = omp_get_num_procs();
     for (int th = 1; th <= std::min(2, maxThreads); ++th) {
         // [law][viscous]: element + integrate ns/tet/step; element only
@@ -82,7 +87,7 @@ int main(int argc, char** argv) {
         for (int r = 0; r < repeats; ++r)
             for (int l = 0; l < 2; ++l)
                 for (int v = 0; v < 2; ++v) {
-                    const Figures f = run(worlds[l], th, steps, v == 1);
+                    const Figures f = run(*worlds[l], th, steps, v == 1);
                     total[l][v].v.push_back(f.elementNs + f.integrateNs);
                     element[l][v].v.push_back(f.elementNs);
                 }

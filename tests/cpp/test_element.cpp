@@ -1,6 +1,8 @@
 // Element kernel: objectivity, patch test, batch kernel == reference kernel.
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include <Eigen/Geometry>
 #include <cmath>
 
@@ -13,13 +15,15 @@ using namespace qdem;
 
 namespace {
 
-World cubeWorld(double viscosity = 0.0, MaterialLaw law = MaterialLaw::StableNeoHookean) {
-    World w;
+// (by pointer: a World is not copied or moved, its phases refer to it)
+std::unique_ptr<World> cubeWorld(double viscosity = 0.0, MaterialLaw law = MaterialLaw::StableNeoHookean) {
+    auto wp = std::make_unique<World>();
+    World& w = *wp;
     Material m;
     m.viscosity = viscosity;
     m.law = law;
     w.addPiece(boxMesh(3, 3, 3, 1.0, 1.0, 1.0, 6), w.addMaterial(m));
-    return w;
+    return wp;
 }
 
 // Maps every node x -> A x + b (positions) and sets velocities L x.
@@ -43,7 +47,8 @@ double maxAbsStress(const World& w) {
 
 TEST(Element, RigidRotationGivesNoStress) {
     for (double angle : {M_PI / 2, M_PI, 2.3}) {
-        World w = cubeWorld(0.0);
+        const auto wOwner = cubeWorld(0.0);
+        World& w = *wOwner;
         const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
         affine(w, R, Eigen::Vector3d(5, -2, 1), Eigen::Matrix3d::Zero());
         // Stress relative to E: rounding level.
@@ -53,7 +58,8 @@ TEST(Element, RigidRotationGivesNoStress) {
 
 TEST(Element, RigidSpinGivesNoViscousStress) {
     // Spinning about an axis: the velocity gradient is skew, dE/dt = 0.
-    World w = cubeWorld(2.5e5);
+    const auto wOwner = cubeWorld(2.5e5);
+        World& w = *wOwner;
     Eigen::Matrix3d W;
     W << 0, -3, 2, 3, 0, -1, -2, 1, 0;
     affine(w, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), W);
@@ -61,7 +67,8 @@ TEST(Element, RigidSpinGivesNoViscousStress) {
 }
 
 TEST(Element, PatchTestUniformStressZeroInteriorForce) {
-    World w = cubeWorld(0.0);
+    const auto wOwner = cubeWorld(0.0);
+        World& w = *wOwner;
     Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
     A(0, 0) += 1e-3;
     A(0, 1) += 4e-4;
@@ -87,7 +94,8 @@ TEST(Element, PatchTestUniformStressZeroInteriorForce) {
 }
 
 TEST(Element, ForcesSumToZero) {
-    World w = cubeWorld(2.5e5);
+    const auto wOwner = cubeWorld(2.5e5);
+        World& w = *wOwner;
     Eigen::Matrix3d A = Eigen::Matrix3d::Identity() + 0.05 * Eigen::Matrix3d::Random();
     affine(w, A, Eigen::Vector3d::Zero(), 0.3 * Eigen::Matrix3d::Random());
     for (std::size_t n = 0; n < w.nNodes(); ++n) w.pos[3 * n] += 1e-3 * std::sin(3.0 * n);
@@ -103,7 +111,8 @@ TEST(Element, ForcesSumToZero) {
 
 TEST(Element, BatchKernelMatchesReference) {
     for (MaterialLaw lawTag : {MaterialLaw::StableNeoHookean, MaterialLaw::SaintVenantKirchhoff}) {
-        World w = cubeWorld(1e5, lawTag);
+        const auto wOwner = cubeWorld(1e5, lawTag);
+        World& w = *wOwner;
         Eigen::Matrix3d A = Eigen::Matrix3d::Identity() + 0.1 * Eigen::Matrix3d::Random();
         affine(w, A, Eigen::Vector3d::Zero(), 0.5 * Eigen::Matrix3d::Random());
         for (std::size_t i = 0; i < w.pos.size(); ++i) w.pos[i] += 1e-2 * std::cos(1.7 * i);

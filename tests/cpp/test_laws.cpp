@@ -6,6 +6,8 @@
 // Saint-Venant-Kirchhoff has a stress-free mirror state.
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <type_traits>
@@ -173,8 +175,10 @@ namespace {
 // A 2x2x2-cell block whose corner node 0 (in one tet only, 5 tets per cell)
 // is mirrored through that tet's opposite face and pushed `depth` times as
 // far beyond it: the tet is inverted (volume ratio -depth).
-World invertedBlock(MaterialLaw law, double depth, int& badTet) {
-    World w;
+// (by pointer: a World is not copied or moved, its phases refer to it)
+std::unique_ptr<World> invertedBlock(MaterialLaw law, double depth, int& badTet) {
+    auto wp = std::make_unique<World>();
+    World& w = *wp;
     Material m = material(law, 0.3);
     m.viscosity = 0;
     w.addPiece(boxMesh(2, 2, 2, 0.1, 0.1, 0.1, 5), w.addMaterial(m));
@@ -194,21 +198,23 @@ World invertedBlock(MaterialLaw law, double depth, int& badTet) {
     Eigen::Map<Vec3> x(&w.pos[3 * node]);
     const Vec3 n = (b - a).cross(d - a).normalized();
     x -= (1 + depth) * (x - a).dot(n) * n;
-    return w;
+    return wp;
 }
 
 }  // namespace
 
 TEST(Laws, InvertedElementsAreCountedAndSvkStops) {
     int bad = -1;
-    World snh = invertedBlock(MaterialLaw::StableNeoHookean, 1.0, bad);
+    const auto snhOwner = invertedBlock(MaterialLaw::StableNeoHookean, 1.0, bad);
+        World& snh = *snhOwner;
     const InversionCount r = snh.checkInverted();
     EXPECT_EQ(r.count, 1);
     EXPECT_EQ(r.unrecoverable, 0);
     EXPECT_EQ(r.piece, 0);
     EXPECT_EQ(r.element, bad);
     EXPECT_NEAR(r.volumeRatio, -1.0, 1e-12);
-    World svk = invertedBlock(MaterialLaw::SaintVenantKirchhoff, 1.0, bad);
+    const auto svkOwner = invertedBlock(MaterialLaw::SaintVenantKirchhoff, 1.0, bad);
+        World& svk = *svkOwner;
     EXPECT_EQ(svk.countInverted().unrecoverable, 1);
     try {
         svk.checkInverted();
@@ -232,7 +238,8 @@ TEST(Laws, CurrentStepCheckNamesAnInvertedElementAsInverted) {
     // reference step allows, for either law; the message says inverted.
     for (MaterialLaw tag : kLaws) {
         int bad = -1;
-        World w = invertedBlock(tag, 3.0, bad);
+        const auto wOwner = invertedBlock(tag, 3.0, bad);
+        World& w = *wOwner;
         const double dt = 0.99 * w.stableDt().combined;
         try {
             w.checkCurrentDt(dt);

@@ -14,7 +14,8 @@
 #include <sstream>
 
 #include "../core/Errors.hpp"
-#include "World.hpp"
+#include "../world/World.hpp"
+#include "ObstaclePhase.hpp"
 
 namespace qdem {
 
@@ -31,19 +32,19 @@ const char* kindName(const Obstacle& o) {
 
 }  // namespace
 
-void World::checkStartOverlaps() {
-    startChecked_.resize(pieces.size(), 0);
-    for (std::size_t ip = 0; ip < pieces.size(); ++ip) {
+void ObstaclePhase::checkStartOverlaps() {
+    startChecked_.resize(w_.pieces.size(), 0);
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
         if (startChecked_[ip]) continue;
         startChecked_[ip] = 1;  // checked now; a refused piece is refused once (the script stops)
-        const PieceInfo& p = pieces[ip];
-        const double r = materials[p.material].radius;
+        const PieceInfo& p = w_.pieces[ip];
+        const double r = w_.materials[p.material].radius;
         // The side of two-sided walls and facets the piece is on: that of its centroid.
         Eigen::Vector3d c = Eigen::Vector3d::Zero();
-        for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) c += Eigen::Map<const Eigen::Vector3d>(&pos[3 * n]);
+        for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) c += Eigen::Map<const Eigen::Vector3d>(&w_.pos[3 * n]);
         c /= double(p.nodeEnd - p.nodeBegin);
         for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
-            const Obstacle& o = obstacles[pieceObstacles_[j]];
+            const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
             int side = 0;
             if (o.kind == ObstacleKind::Wall && o.sense == 0) {
                 side = c[o.axis] >= o.pos[o.axis] ? 1 : -1;
@@ -56,7 +57,7 @@ void World::checkStartOverlaps() {
             int nPast = 0;
             Eigen::Vector3d normal = Eigen::Vector3d::Zero();
             for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
-                const Eigen::Map<const Eigen::Vector3d> x(&pos[3 * surfNodes[s]]);
+                const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * w_.surfNodes[s]]);
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, r, side, hit)) continue;
                 const double d = hit.overlap - r;

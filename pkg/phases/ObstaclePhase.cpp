@@ -1,0 +1,191 @@
+// Contacts of surface nodes with YADE walls, boxes and facets (rigid
+// obstacles): which obstacles each piece can reach, the spring-dashpot and
+// friction of each node contact with its history, and the reactions on the
+// obstacles.  A piece that starts inside an obstacle is refused
+// (ObstacleStartOverlap.cpp).
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../contact/ContactLaw.hpp"
+#include "../world/World.hpp"
+#include "ObstaclePhase.hpp"
+
+namespace qdem {
+
+
+void ObstaclePhase::run(double dt) {
+    const int nObs = static_cast<int>(w_.obstacles.size());
+    for (auto& o : w_.obstacles) {
+        o.reactionForce.setZero();
+        o.reactionTorque.setZero();
+    }
+    // Sleeping w_.pieces still push on w_.obstacles with what they pushed when
+    // they fell asleep.
+    for (std::size_t p = 0; p < w_.frozenReaction_.size(); ++p) {
+        const std::vector<double>& fr = w_.frozenReaction_[p];
+        for (std::size_t k = 0; k + 7 <= fr.size(); k += 7) {
+            Obstacle& o = w_.obstacles[static_cast<int>(fr[k])];
+            o.reactionForce += Eigen::Vector3d(fr[k + 1], fr[k + 2], fr[k + 3]);
+            o.reactionTorque += Eigen::Vector3d(fr[k + 4], fr[k + 5], fr[k + 6]);
+        }
+    }
+    pieceObstacles_.clear();
+    pieceObstacleBegin_.clear();
+    pairReaction_.clear();
+    w_.contactCounts.wall = 0;
+    if (nObs == 0 || w_.surfNodes.size() == 0) return;
+
+    // Which w_.obstacles can each piece reach this step (bounding boxes + radius)?
+    pieceObstacleBegin_.assign(w_.pieces.size() + 1, 0);
+    pieceObstacles_.clear();
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
+        const Eigen::Map<const Eigen::Vector3d> lo(&w_.pc_.pieceLo[3 * ip]), hi(&w_.pc_.pieceHi[3 * ip]);
+        const double r = w_.materials[w_.pieces[ip].material].radius;
+        for (int i = 0; i < nObs; ++i) {
+            const Obstacle& o = w_.obstacles[i];
+            bool near;
+            if (o.kind == ObstacleKind::Wall) {
+                // The piece's box is already grown by r; a centre within r of
+                // the plane (on an allowed side) can touch it.
+                const double w = o.pos[o.axis];
+                if (o.sense > 0) near = lo[o.axis] <= w + r && hi[o.axis] >= w - r;
+                else if (o.sense < 0) near = hi[o.axis] >= w - r && lo[o.axis] <= w + r;
+                else near = lo[o.axis] <= w + r && hi[o.axis] >= w - r;
+            } else {
+                near = (lo.array() <= o.hi.array()).all() && (hi.array() >= o.lo.array()).all();
+            }
+            if (near) pieceObstacles_.push_back(i);
+        }
+        pieceObstacleBegin_[ip + 1] = static_cast<int>(pieceObstacles_.size());
+    }
+    checkStartOverlaps();
+    if (pieceObstacles_.empty()) return;
+
+    w_.beginContactForces();
+    const int nth = omp_get_max_threads();
+    // Reactions per thread and (piece, obstacle) pair: a piece that falls
+    // asleep keeps its own.
+    const std::size_t nPairs = pieceObstacles_.size();
+    threadReaction_.assign(static_cast<std::size_t>(nth) * nPairs * 6, 0.0);
+    const bool energyOn = w_.settings.trackEnergy;
+    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    double eDamp = 0, eSlip = 0, eBound = 0;
+    // Sleeping w_.pieces' nodes are skipped (their history kept as it is).
+    const bool all = w_.nAsleep_ == 0;
+    const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
+    const int32_t* awakeSurf = w_.awakeSurf_.data();
+
+    long nWall = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
+    {
+        const int th = omp_get_thread_num();
+        double* react = threadReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
+        double* pe = energyOn ? w_.threadPieceEnergy_[th].data() : nullptr;
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < nSurf; ++i) {
+            const int32_t s = all ? i : awakeSurf[i];
+            const int32_t node = w_.surfNodes[s];
+            const int ip = w_.nodePiece[node];
+            const int ob0 = pieceObstacleBegin_[ip], ob1 = pieceObstacleBegin_[ip + 1];
+            int32_t* body = &slotBody_[kSlots * s];
+            double* shear = &slotShear_[3 * kSlots * s];
+            int8_t* side = &slotSide_[kSlots * s];
+            if (ob0 == ob1) {  // nothing near this piece: forget the history
+                for (int k = 0; k < kSlots; ++k) body[k] = -1;
+                continue;
+            }
+            const Material& m = w_.materials[w_.pieces[ip].material];
+            const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * node]);
+            const Eigen::Map<const Eigen::Vector3d> v(&w_.vel[3 * node]);
+            int32_t newBody[kSlots];
+            int8_t newSide[kSlots];
+            Eigen::Vector3d newShear[kSlots];
+            int used = 0;
+            Eigen::Vector3d fNode = Eigen::Vector3d::Zero();
+            for (int j = ob0; j < ob1; ++j) {
+                const int io = pieceObstacles_[j];
+                const Obstacle& o = w_.obstacles[io];
+                int slot = -1;
+                for (int k = 0; k < kSlots; ++k)
+                    if (body[k] == o.bodyId) slot = k;
+                ObstacleHit hit;
+                if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
+                if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
+                // Scaled by the node's share of the surface area (w_.surfWeight,
+                // World.hpp); the dashpots keep their damping ratio.
+                const double kn = w_.surfWeight[s] * (o.young > 0 ? 2 * m.young * o.young * m.radius / (m.young + o.young)
+                                                               : 2 * m.young * m.radius);
+                const double xi = dampingRatioFromRestitution(m.restitution);
+                const double mu = o.friction >= 0 ? o.friction : m.frictionWall;
+                const double kt = kn * 2 * (1 - m.poisson) / (2 - m.poisson);  // Mindlin's ratio
+                ContactParams cp{kn, 2 * xi * std::sqrt(kn * w_.mass[node]), kt, 2 * xi * std::sqrt(kt * w_.mass[node]),
+                                 mu, w_.settings.frictionRegVelocity, w_.mass[node]};
+                Eigen::Vector3d sh = Eigen::Vector3d::Zero();
+                if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
+                const Eigen::Vector3d vo = o.velocityAt(hit.point);
+                const Eigen::Vector3d vRel = v - vo;
+                const ContactResult r =
+                    lawForce(w_.settings.frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
+                newBody[used] = o.bodyId;
+                newSide[used] = static_cast<int8_t>(hit.side);
+                newShear[used] = sh;
+                ++used;
+                ++nWall;
+                fNode += r.force;
+                double* R = react + 6 * j;
+                const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
+                for (int d = 0; d < 3; ++d) {
+                    R[d] -= r.force[d];
+                    R[3 + d] += torque[d];
+                }
+                if (energyOn) {
+                    pe[3 * ip + 1] += r.elastic;
+                    eDamp += r.dampPower * dt;
+                    eSlip += r.slipWork;
+                    eBound -= r.force.dot(vo) * dt;
+                }
+            }
+            for (int k = 0; k < kSlots; ++k) {
+                body[k] = k < used ? newBody[k] : -1;
+                side[k] = k < used ? newSide[k] : 0;
+                if (k < used)
+                    for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
+            }
+            for (int d = 0; d < 3; ++d) w_.contactForce_[3 * node + d] += fNode[d];
+        }
+    }
+    w_.contactCounts.wall = nWall;
+    pairReaction_.assign(6 * nPairs, 0.0);
+    for (int th = 0; th < nth; ++th)
+        for (std::size_t j = 0; j < 6 * nPairs; ++j)
+            pairReaction_[j] += threadReaction_[static_cast<std::size_t>(th) * nPairs * 6 + j];
+    for (std::size_t j = 0; j < nPairs; ++j) {
+        const double* R = &pairReaction_[6 * j];
+        Obstacle& o = w_.obstacles[pieceObstacles_[j]];
+        o.reactionForce += Eigen::Vector3d(R[0], R[1], R[2]);
+        o.reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
+    }
+    if (energyOn) {
+        w_.energy.contactDamping += eDamp;
+        w_.energy.friction += eSlip;
+        w_.energy.boundaryWork += eBound;
+    }
+}
+
+void ObstaclePhase::stateColumns(StateColumns& c) {
+    c.add("slotBody", slotBody_);
+    c.add("slotShear", slotShear_);
+    c.add("slotSide", slotSide_);
+}
+
+void ObstaclePhase::piecesAdded() {
+    const std::size_t ns = w_.surfNodes.size();
+    slotBody_.resize(kSlots * ns, -1);
+    slotShear_.resize(3 * kSlots * ns, 0.0);
+    slotSide_.resize(kSlots * ns, 0);
+    startChecked_.resize(w_.pieces.size(), 0);
+}
+
+}  // namespace qdem

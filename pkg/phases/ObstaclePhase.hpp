@@ -1,0 +1,52 @@
+// Surface nodes against YADE walls, boxes and facets: the first phase of a
+// step.  Owns the node-obstacle contact history and the per-(piece,
+// obstacle) reactions that sleeping pieces keep pushing with.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../core/Column.hpp"
+#include "../world/Phase.hpp"
+
+namespace qdem {
+
+class ObstaclePhase final : public Phase {
+public:
+    using Phase::Phase;
+    const char* name() const override { return "obstacles"; }
+    // Contact forces on the awake surface nodes (World::contactForce), the
+    // obstacles' reactions (sleeping pieces' frozen ones included), energies.
+    void run(double dt);
+    void stateColumns(StateColumns& c) override;
+    void piecesAdded() override;
+    // A loaded state continues a run: its contacts with obstacles are not a
+    // set-up mistake (a new obstacle list still gets checked).
+    void stateLoaded() override { startChecked_.assign(startChecked_.size(), 1); }
+    // A new obstacle list: every piece is checked against it once.
+    void obstaclesChanged() { startChecked_.assign(startChecked_.size(), 0); }
+
+    // The obstacles each piece could reach in the last step (CSR: piece p's
+    // are pieceObstacles()[pieceObstacleBegin()[p] .. [p + 1])), and what
+    // the piece pushed on each of them (6 per entry: force, torque).
+    const std::vector<int>& pieceObstacles() const { return pieceObstacles_; }
+    const std::vector<int>& pieceObstacleBegin() const { return pieceObstacleBegin_; }
+    const std::vector<double>& pairReaction() const { return pairReaction_; }
+
+    // Contact history: kSlots (obstacle body id, side, tangential spring) per surface node.
+    static constexpr int kSlots = 4;
+
+private:
+    // Refuses (InputError) a piece whose nodes start inside a wall, box or
+    // facet, once per piece and obstacle list.
+    void checkStartOverlaps();
+
+    Column<int32_t> slotBody_;  // YADE body id, -1 = empty
+    Column<double> slotShear_;
+    Column<int8_t> slotSide_;
+    std::vector<uint8_t> startChecked_;     // per piece: start overlap checked for this obstacle list
+    std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
+    std::vector<int> pieceObstacles_, pieceObstacleBegin_;
+    std::vector<double> pairReaction_;      // per (piece, obstacle) pair, 6 each
+};
+
+}  // namespace qdem

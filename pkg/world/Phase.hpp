@@ -1,0 +1,51 @@
+// One stage of World::step, with the state it owns.
+//
+// A phase is run once per step (a virtual call per phase and step, never per
+// node or contact).  It declares what a restart must keep of its state
+// (stateColumns: named arrays that Checkpoint.cpp saves and loads without
+// knowing the phase), grows its per-node and per-piece state when pieces are
+// added, and is told when a loaded state replaced its arrays.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace qdem {
+
+class World;
+
+// Named arrays of a phase's state, by reference, for Checkpoint.cpp.
+struct StateColumns {
+    struct Ref {
+        std::string name;
+        void* data;
+        std::size_t count;     // values
+        std::size_t elemSize;  // bytes per value
+    };
+    std::vector<Ref> refs;
+    template <class C>
+    void add(const char* name, C& column) {
+        refs.push_back({name, static_cast<void*>(column.data()), column.size(), sizeof(*column.data())});
+    }
+};
+
+class Phase {
+public:
+    explicit Phase(World& world) : w_(world) {}
+    virtual ~Phase() = default;
+    Phase(const Phase&) = delete;
+    Phase& operator=(const Phase&) = delete;
+
+    virtual const char* name() const = 0;
+    // What a restart must keep of this phase's state (none by default).
+    virtual void stateColumns(StateColumns&) {}
+    // Pieces were added: grow per-node / per-piece state (new entries empty).
+    virtual void piecesAdded() {}
+    // A saved state was loaded into the columns: derived data is stale.
+    virtual void stateLoaded() {}
+
+protected:
+    World& w_;
+};
+
+}  // namespace qdem
