@@ -14,14 +14,13 @@
 
 namespace qdem {
 
-
 void ObstaclePhase::run(double dt) {
     const int nObs = static_cast<int>(w_.obstacles.size());
     for (auto& o : w_.obstacles) {
         o.reactionForce.setZero();
         o.reactionTorque.setZero();
     }
-    // Sleeping w_.pieces still push on w_.obstacles with what they pushed when
+    // Sleeping pieces still push on obstacles with what they pushed when
     // they fell asleep.
     for (std::size_t p = 0; p < w_.frozenReaction_.size(); ++p) {
         const std::vector<double>& fr = w_.frozenReaction_[p];
@@ -37,7 +36,7 @@ void ObstaclePhase::run(double dt) {
     w_.contactCounts.wall = 0;
     if (nObs == 0 || w_.surfNodes.size() == 0) return;
 
-    // Which w_.obstacles can each piece reach this step (bounding boxes + radius)?
+    // Which obstacles can each piece reach this step (bounding boxes + radius)?
     pieceObstacleBegin_.assign(w_.pieces.size() + 1, 0);
     pieceObstacles_.clear();
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
@@ -72,7 +71,7 @@ void ObstaclePhase::run(double dt) {
     const bool energyOn = w_.settings.trackEnergy;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
-    // Sleeping w_.pieces' nodes are skipped (their history kept as it is).
+    // Sleeping pieces' nodes are skipped (their history kept as it is).
     const bool all = w_.nAsleep_ == 0;
     const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
     const int32_t* awakeSurf = w_.awakeSurf_.data();
@@ -113,7 +112,7 @@ void ObstaclePhase::run(double dt) {
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
-                // Scaled by the node's share of the surface area (w_.surfWeight,
+                // Scaled by the node's share of the surface area (surfWeight,
                 // World.hpp); the dashpots keep their damping ratio.
                 const double kn = w_.surfWeight[s] * (o.young > 0 ? 2 * m.young * o.young * m.radius / (m.young + o.young)
                                                                : 2 * m.young * m.radius);

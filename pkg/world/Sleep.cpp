@@ -134,8 +134,7 @@ void World::updateSleep(double dt) {
     // Largest node speed of each awake piece, from the integration.
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) continue;
-        double m = 0;
-        for (const auto& t : threadSpeed2_) m = std::max(m, t[p]);
+        const double m = integrationPhase_.maxSpeed2(p);
         pieceSpeed2_[p] = m;
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }

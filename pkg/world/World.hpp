@@ -19,6 +19,8 @@
 #include "../mesh/Surface.hpp"
 #include "../mesh/TetMesh.hpp"
 #include "Energy.hpp"
+#include "../phases/ElementPhase.hpp"
+#include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
 #include "Settings.hpp"
 #include "ThreadLayout.hpp"
@@ -108,7 +110,7 @@ public:
 
     // ---- output -----------------------------------------------------------
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
-    void computeStress(double* out) const;
+    void computeStress(double* out) const { elementPhase_.stress(out); }
 
     // ---- data (struct of arrays; 3 doubles per node for vectors) ----------
     Column<double> pos, vel, refPos, force, extForce, mass;
@@ -194,12 +196,11 @@ private:
     // The phases of World::step, each with its own state (pkg/phases/).  They
     // are friends while the shared data they read is being given accessors.
     friend class ObstaclePhase;
+    friend class ElementPhase;
+    friend class IntegrationPhase;
     ObstaclePhase obstaclePhase_{*this};
-    template <class Law, bool Viscous, bool Energy>
-    void elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
-                      double& wEl, double& diss) const;
-    void elementPhase(double dt);
-    void integratePhase(double dt);
+    ElementPhase elementPhase_{*this};
+    IntegrationPhase integrationPhase_{*this, elementPhase_};
     void pieceContactPhase(double dt);
     void sphereContactPhase(double dt);
     template <bool Friction>
@@ -219,13 +220,12 @@ private:
     void wakeOne(std::size_t p);
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();
-    std::vector<Phase*> phases() { return {&obstaclePhase_}; }
+    std::vector<Phase*> phases() { return {&obstaclePhase_, &elementPhase_, &integrationPhase_}; }
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
 
-    ThreadLayout layout_;
     // Sleeping: per piece flags and clocks (sized in addPiece).
     std::vector<uint8_t> asleep_;
     std::vector<uint8_t> frozen_;        // asleep with all neighbours asleep: its contacts are skipped
@@ -234,7 +234,6 @@ private:
     std::vector<double> pieceSpeed2_;    // largest squared node speed in the last step
     std::vector<uint8_t> held_;          // per piece: not dynamic (asleep until made dynamic)
     std::vector<double> sleepMoved2_;    // squared displacement since the last list rebuild, when it fell asleep
-    std::vector<std::vector<double>> threadSpeed2_;      // per thread, per piece
     std::vector<std::vector<double>> frozenReaction_;    // per piece: (obstacle index, F, T) x 7 at its sleep
     // What the sleeping pieces of a loaded state rest in: the obstacle list
     // (obstacleSignature) and gravity it was saved with.  A script restarting

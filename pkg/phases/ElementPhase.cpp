@@ -1,0 +1,110 @@
+// Element forces: every awake tet's elastic and viscous nodal forces
+// (ElementKernel.hpp, compiled per material law), summed per thread into
+// private buffers (ThreadLayout.hpp) that the integration phase adds up.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <type_traits>
+
+#include "../element/ElementKernel.hpp"
+#include "../element/MaterialLaw.hpp"
+#include "../world/World.hpp"
+#include "ElementPhase.hpp"
+
+namespace qdem {
+
+template <class Law, bool Viscous, bool Energy>
+void ElementPhase::elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
+                         double& wEl, double& diss) const {
+    const ElementParams prm{m.lambda(), m.mu(), Viscous ? m.beta() : 0.0};
+    const int32_t* conn = w_.tetNodes.data();
+    double w = 0, d = 0;
+    BatchOut out;
+    for (int32_t e0 = t0; e0 < t1; e0 += kLanes) {
+        const int count = std::min<int32_t>(kLanes, t1 - e0);
+        elementBatch<Law, Viscous, Energy>(law, e0, count, conn, w_.pos.data(), w_.vel.data(), w_.tetB.data(), w_.tetVol0.data(),
+                                           prm, out);
+        for (int l = 0; l < count; ++l) {
+            const int32_t* c = conn + 4 * (e0 + l);
+            for (int k = 0; k < 4; ++k) {
+                double* o = buf + 3 * (c[k] - lo);
+                o[0] += out.f[k][0][l];
+                o[1] += out.f[k][1][l];
+                o[2] += out.f[k][2][l];
+            }
+            if constexpr (Energy) {
+                w += out.wElastic[l];
+                d += out.diss[l];
+            }
+        }
+    }
+    wEl += w;
+    diss += d;
+}
+
+void ElementPhase::run(double dt) {
+    const int nth = omp_get_max_threads();
+    if (!layout_.matches(nth, w_.awakeVersion_)) layout_.build(w_.tetNodes.data(), w_.awakeTets_, nth, w_.awakeVersion_);
+    double diss = 0;
+    const bool energyOn = w_.settings.trackEnergy;
+#pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
+    {
+        const int th = omp_get_thread_num();
+        std::vector<double>& buf = layout_.buffers[th];
+        std::fill(buf.begin(), buf.end(), 0.0);
+        const int32_t lo = layout_.nodeLo[th];
+        double* pe = energyOn ? w_.threadPieceEnergy_[th].data() : nullptr;
+        for (const TetSegment& sg : layout_.share[th]) {
+            const Material& m = w_.materials[w_.pieces[sg.piece].material];
+            const bool visc = w_.settings.viscosityOn && m.viscosity > 0;
+            double w = 0;
+            // The law is chosen once per segment (one piece's tets): the
+            // kernel below is compiled per law, with no call through a pointer.
+            withLaw(m, [&](const auto& law) {
+                using Law = std::decay_t<decltype(law)>;
+                if (visc && energyOn) elementRange<Law, true, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else if (visc) elementRange<Law, true, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else if (energyOn) elementRange<Law, false, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                else elementRange<Law, false, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+            });
+            if (energyOn) pe[3 * sg.piece] += w;  // strain energy per piece (sleeping ones keep theirs)
+        }
+    }
+    if (energyOn) w_.energy.viscous += diss * dt;
+}
+
+// ---------------------------------------------------------------------------
+// Stress output
+
+void ElementPhase::stress(double* out) const {
+    const auto T = static_cast<int32_t>(w_.nTets());
+#pragma omp parallel for schedule(static)
+    for (int32_t e = 0; e < T; ++e) {
+        const PieceInfo& p = w_.pieces[w_.tetPiece[e]];
+        const Material& m = w_.materials[p.material];
+        const ElementParams prm{m.lambda(), m.mu(), w_.settings.viscosityOn ? m.beta() : 0.0};
+        const int32_t* c = w_.tetNodes.data() + 4 * e;
+        const Mat3 B = loadRowMajor(w_.tetB.data() + 9 * e);
+        const double* X = w_.pos.data();
+        const double* V = w_.vel.data();
+        const Mat3 F = edgeMatrix(X + 3 * c[0], X + 3 * c[1], X + 3 * c[2], X + 3 * c[3]) * B;
+        const Mat3 Fd = edgeMatrix(V + 3 * c[0], V + 3 * c[1], V + 3 * c[2], V + 3 * c[3]) * B;
+        const Mat3 P = withLaw(m, [&](const auto& law) {
+            using Law = std::decay_t<decltype(law)>;
+            return tetStress<Law, true, false>(law, F, Fd, prm).P;
+        });
+        // sigma = P F^T / J (for J <= 0 the element is inverted: the number
+        // is the law's, signs and all)
+        const Mat3 sigma = (P * F.transpose()) / F.determinant();
+        double* o = out + 6 * e;
+        o[0] = sigma(0, 0);
+        o[1] = sigma(1, 1);
+        o[2] = sigma(2, 2);
+        o[3] = sigma(1, 2);
+        o[4] = sigma(0, 2);
+        o[5] = sigma(0, 1);
+    }
+}
+
+}  // namespace qdem

@@ -1,0 +1,95 @@
+// Leapfrog integration of the nodes, the same scheme as YADE's
+// NewtonIntegrator (velocities at half steps), with gravity, external and
+// contact forces, Cundall's local damping and prescribed (blocked) DOFs.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../world/World.hpp"
+#include "IntegrationPhase.hpp"
+
+namespace qdem {
+
+void IntegrationPhase::run(double dt) {
+    const auto N = static_cast<int32_t>(w_.nNodes());
+    const ThreadLayout& layout = elements_.layout();
+    const int nth = layout.nThreads;
+    const bool energyOn = w_.settings.trackEnergy;
+    const bool withContacts = w_.contactsActive_;
+    const double g[3] = {w_.gravity[0], w_.gravity[1], w_.gravity[2]};
+    double* X = w_.pos.data();
+    double* V = w_.vel.data();
+    double* Fout = w_.force.data();
+    const double* Fext = w_.extForce.data();
+    const double* Fc = w_.contactForce_.data();
+    const double* M = w_.mass.data();
+    const uint8_t* blk = w_.blocked.data();
+    double ek = 0, eg = 0, ed = 0;
+    const double damp = w_.settings.localDamping;
+    // Sleeping pieces are skipped: then only the awake nodes are visited.
+    const bool all = w_.nAsleep_ == 0;
+    const int32_t* ids = w_.awakeNodes_.data();
+    const auto count = all ? N : static_cast<int32_t>(w_.awakeNodes_.size());
+    const bool sleepOn = w_.settings.sleepVelocity > 0;
+    if (sleepOn) {
+        threadSpeed2_.resize(nth);
+        for (auto& t : threadSpeed2_) t.assign(w_.pieces.size(), 0.0);
+    }
+#pragma omp parallel num_threads(nth) reduction(+ : ek, eg, ed)
+    {
+        double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < count; ++i) {
+            const int32_t n = all ? i : ids[i];
+            double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
+            for (int t = 0; t < nth; ++t)
+                if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
+                    const double* b = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+                    f[0] += b[0];
+                    f[1] += b[1];
+                    f[2] += b[2];
+                }
+            if (withContacts)
+                for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
+            const double invM = 1.0 / M[n];
+            for (int d = 0; d < 3; ++d) {
+                Fout[3 * n + d] = f[d];
+                const double vOld = V[3 * n + d];
+                const bool free = !((blk[n] >> d) & 1u);
+                if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
+                    const double vm = vOld + 0.5 * dt * f[d] * invM;
+                    const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                    f[d] -= fd;
+                    if (energyOn) ed += fd * vm * dt;
+                }
+                const double a = free ? f[d] * invM : 0.0;
+                if (energyOn) {
+                    const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
+                    ek += 0.5 * M[n] * vMid * vMid;
+                    eg -= M[n] * g[d] * vOld * dt;
+                }
+                V[3 * n + d] = vOld + dt * a;
+                X[3 * n + d] += dt * V[3 * n + d];
+            }
+            if (speed2) {
+                const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
+                double& m = speed2[w_.nodePiece[n]];
+                m = std::max(m, v2);
+            }
+        }
+    }
+    if (energyOn) {
+        w_.energy.kinetic = ek;
+        w_.energy.gravity += eg;
+        w_.energy.localDamping += ed;
+    }
+}
+
+double IntegrationPhase::maxSpeed2(std::size_t piece) const {
+    double m = 0;
+    for (const auto& t : threadSpeed2_) m = std::max(m, t[piece]);
+    return m;
+}
+
+}  // namespace qdem

@@ -1,0 +1,26 @@
+// The leapfrog update of the awake nodes: element forces (the element
+// phase's thread buffers), contact forces, gravity and external forces.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "../world/Phase.hpp"
+
+namespace qdem {
+
+class ElementPhase;
+
+class IntegrationPhase final : public Phase {
+public:
+    IntegrationPhase(World& world, const ElementPhase& elements) : Phase(world), elements_(elements) {}
+    const char* name() const override { return "integrate"; }
+    void run(double dt);
+    // Largest squared node speed of a piece in the last run (sleeping on only).
+    double maxSpeed2(std::size_t piece) const;
+
+private:
+    const ElementPhase& elements_;
+    std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece
+};
+
+}  // namespace qdem
