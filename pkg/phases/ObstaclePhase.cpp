@@ -40,7 +40,7 @@ void ObstaclePhase::run(double dt) {
     pieceObstacleBegin_.assign(w_.pieces.size() + 1, 0);
     pieceObstacles_.clear();
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
-        const Eigen::Map<const Eigen::Vector3d> lo(&w_.pc_.pieceLo[3 * ip]), hi(&w_.pc_.pieceHi[3 * ip]);
+        const Eigen::Map<const Eigen::Vector3d> lo(&w_.pieceLo_[3 * ip]), hi(&w_.pieceHi_[3 * ip]);
         const double r = w_.materials[w_.pieces[ip].material].radius;
         for (int i = 0; i < nObs; ++i) {
             const Obstacle& o = w_.obstacles[i];

@@ -17,16 +17,6 @@ StateColumns World::stateColumns() {
     c.add("blocked", blocked);
     for (Phase* p : phases()) p->stateColumns(c);
     auto f = [&](const char* name, auto& col) { c.add(name, col); };
-    f("ppKey", pc_.ppKey);
-    f("ppPiece", pc_.ppPiece);
-    f("ppShear", pc_.ppShear);
-    f("ppRef", pc_.ppRef);
-    f("ppStamp", pc_.ppStamp);
-    f("eeOther", pc_.eeOther);
-    f("eeSide", pc_.eeSide);
-    f("eeShear", pc_.eeShear);
-    f("eeRef", pc_.eeRef);
-    f("eeStamp", pc_.eeStamp);
     f("asleep", asleep_);
     f("slowFor", slowFor_);
     f("pieceSpeed2", pieceSpeed2_);
@@ -104,10 +94,7 @@ void World::loadState(const WorldState& s) {
     energy = Energy{e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9]};
     for (std::size_t p = 0; p < pieces.size(); ++p)
         frozenReaction_[p].assign(flat.begin() + fs[p], flat.begin() + fs[p + 1]);
-    std::fill(frozen_.begin(), frozen_.end(), 0);
-    std::fill(normalsFresh_.begin(), normalsFresh_.end(), 0);
     updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
-    pc_.listValid = false;      // Verlet lists: rebuilt from the loaded positions
     contactsActive_ = false;
     for (Phase* p : phases()) p->stateLoaded();
     // Sleeping pieces rest in the obstacles and gravity the state was saved

@@ -32,8 +32,7 @@ void World::awakeSetChanged() {
 
 void World::wakeOne(std::size_t p) {
     asleep_[p] = 0;
-    frozen_[p] = 0;
-    normalsFresh_[p] = 0;
+    pieceContactPhase_.sleepChanged(p, true);
     slowFor_[p] = 0;
     pieceSpeed2_[p] = 0;
     frozenReaction_[p].clear();
@@ -111,16 +110,17 @@ void World::putToSleep(std::size_t p) {
     // How far it moved since the Verlet lists were built: other nodes may
     // only move the rest of half the skin before the lists are rebuilt.
     double m2 = 0;
-    if (pc_.listValid && pc_.listPos.size() == 3 * surfNodes.size())
+    const PieceContactState& pc = pieceContactPhase_.state();
+    if (pc.listValid && pc.listPos.size() == 3 * surfNodes.size())
         for (int32_t s = P.surfBegin; s < P.surfEnd; ++s) {
             const int32_t n = surfNodes[s];
             double d2 = 0;
-            for (int d = 0; d < 3; ++d) d2 += std::pow(pos[3 * n + d] - pc_.listPos[3 * s + d], 2);
+            for (int d = 0; d < 3; ++d) d2 += std::pow(pos[3 * n + d] - pc.listPos[3 * s + d], 2);
             m2 = std::max(m2, d2);
         }
     sleepMoved2_[p] = m2;
     asleep_[p] = 1;
-    normalsFresh_[p] = 0;
+    pieceContactPhase_.sleepChanged(p, false);
     ++sleepCount;
 }
 
@@ -138,11 +138,12 @@ void World::updateSleep(double dt) {
         pieceSpeed2_[p] = m;
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
-    const bool nbrsValid = pc_.nbrStart.size() == np + 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) && np > 1;
+    const PieceContactState& pc = pieceContactPhase_.state();
+    const bool nbrsValid = pc.nbrStart.size() == np + 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) && np > 1;
     auto fastNeighbour = [&](std::size_t p) {
         if (!nbrsValid) return false;
-        for (int32_t q = pc_.nbrStart[p]; q < pc_.nbrStart[p + 1]; ++q) {
-            const int32_t b = pc_.nbrs[q];
+        for (int32_t q = pc.nbrStart[p]; q < pc.nbrStart[p + 1]; ++q) {
+            const int32_t b = pc.nbrs[q];
             if (!asleep_[b] && pieceSpeed2_[b] >= v2) return true;
         }
         return false;
@@ -187,7 +188,7 @@ void World::finishPieceEnergy() {
     double el = 0, contact = 0;
     for (std::size_t p = 0; p < pieces.size(); ++p) {
         for (int c = 0; c < 3; ++c) {
-            const bool computed = c < 2 ? !asleep_[p] : !frozen_[p];
+            const bool computed = c < 2 ? !asleep_[p] : !pieceContactPhase_.frozen(p);
             if (!computed) continue;
             double sum = 0;
             for (const auto& t : threadPieceEnergy_) sum += t[3 * p + c];

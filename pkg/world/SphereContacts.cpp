@@ -14,8 +14,8 @@
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
-#include "ContactDetail.hpp"
-#include "TouchSelection.hpp"
+#include "../contact/ContactDetail.hpp"
+#include "../contact/TouchSelection.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -129,7 +129,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
 // centroid, with bounding radii and unit normals of the current shape.
 void World::buildSphereGrids() {
     SphereSet& S = spheres;
-    const SurfaceIndex& surf = pc_.surf;
+    const SurfaceIndex& surf = surf_;
     const auto np = static_cast<int32_t>(pieces.size());
     S.pieceUsed.assign(np, 0);
     for (int32_t p : S.pairPiece) S.pieceUsed[p] = 1;
@@ -197,7 +197,7 @@ void World::sphereContactPhase(double dt) {
 template <bool Friction>
 void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
     SphereSet& S = spheres;
-    const SurfaceIndex& surf = pc_.surf;
+    const SurfaceIndex& surf = surf_;
     const int32_t n = S.size();
     constexpr int K = SphereSet::kSlots;
     const long stamp = iter;
@@ -232,7 +232,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                 const double reach = R + mb.radius;
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= C[d] + R;
+                    overlap = C[d] - R <= pieceHi_[3 * pb + d] && pieceLo_[3 * pb + d] <= C[d] + R;
                 int nc = 0;
                 bool anyBehind = false;
                 const int32_t t0 = surf.pieceTriStart[pb];

@@ -117,18 +117,15 @@ int World::addPiece(const TetMesh& mesh, int material) {
     p.surface = std::move(s);
 
     pieces.push_back(std::move(p));
-    pc_.surf.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
-    pc_.resizeHistory(surfNodes.size(), pc_.surf.nEdges());
-    pc_.surf.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
+    surf_.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
+    surf_.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
     omegaCache_.clear();
     asleep_.push_back(0);
-    frozen_.push_back(0);
-    normalsFresh_.push_back(0);
     slowFor_.push_back(0);
     pieceSpeed2_.push_back(0);
     sleepMoved2_.push_back(0);
     held_.push_back(0);
-    obstaclePhase_.piecesAdded();
+    for (Phase* ph : phases()) ph->piecesAdded();
     frozenReaction_.emplace_back();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
@@ -172,6 +169,39 @@ void World::checkFinite() const {
         if (!std::isfinite(pos[i]) || !std::isfinite(vel[i]))
             throw StabilityError(cat("QDEM state is not finite at node ", i / 3, " (piece ", nodePiece[i / 3],
                                      ") after step ", iter, ": the integration blew up"));
+}
+
+// Bounding boxes of the pieces (grown by the particle radius) from their
+// surface nodes: where each piece can touch anything this step.
+void World::updatePieceBounds(bool all) {
+    const std::size_t np = pieces.size();
+    pieceLo_.resize(3 * np);
+    pieceHi_.resize(3 * np);
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        if (asleep_[ip] && !all) continue;  // has not moved
+        const PieceInfo& p = pieces[ip];
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+        for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
+            const Eigen::Vector3d x(pos[3 * surfNodes[s]], pos[3 * surfNodes[s] + 1], pos[3 * surfNodes[s] + 2]);
+            lo = lo.cwiseMin(x);
+            hi = hi.cwiseMax(x);
+        }
+        const double r = materials[p.material].radius;
+        for (int d = 0; d < 3; ++d) {
+            pieceLo_[3 * ip + d] = lo[d] - r;
+            pieceHi_[3 * ip + d] = hi[d] + r;
+        }
+    }
+}
+
+void World::beginContactForces() {
+    if (contactsActive_) return;
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+        if (asleep_[p]) continue;  // not integrated: its contact forces are not read
+        for (int32_t i = pieces[p].surfBegin; i < pieces[p].surfEnd; ++i)
+            for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[i] + d] = 0.0;
+    }
+    contactsActive_ = true;
 }
 
 }  // namespace qdem

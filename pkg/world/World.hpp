@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "../contact/Obstacle.hpp"
-#include "../contact/PieceContactState.hpp"
+#include "../contact/SurfaceIndex.hpp"
 #include "../contact/SphereSet.hpp"
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
@@ -22,6 +22,7 @@
 #include "../phases/ElementPhase.hpp"
 #include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
+#include "../phases/PieceContactPhase.hpp"
 #include "Settings.hpp"
 #include "ThreadLayout.hpp"
 #include "WorldState.hpp"
@@ -172,7 +173,7 @@ public:
         double broadPhase = 0, pointPolygon = 0, edgeEdge = 0;
         double spheres = 0;  // sphere-triangle contacts (grids included)
     } timings;
-    long verletRebuilds() const { return pc_.listBuilds; }
+    long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
     // Contacts found in the last step (for tests and diagnostics).
     struct ContactCounts {
         long pointPolygon = 0, edgeEdge = 0;
@@ -181,10 +182,10 @@ public:
         long interiorFaceTests = 0;  // cases A/B: interior faces tested for nothing
         long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
     } contactCounts;
-    const SurfaceIndex& surfaceIndex() const { return pc_.surf; }
+    const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Point-polygon contacts of the last step: kPP slots per surface node
     // holding 8 * triangle + feature (-1 = empty); for diagnostics.
-    const Column<int32_t>& pointPolygonKeys() const { return pc_.ppKey; }
+    const Column<int32_t>& pointPolygonKeys() const { return pieceContactPhase_.state().ppKey; }
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap = 0;
 
@@ -198,20 +199,17 @@ private:
     friend class ObstaclePhase;
     friend class ElementPhase;
     friend class IntegrationPhase;
+    friend class PieceContactPhase;
     ObstaclePhase obstaclePhase_{*this};
+    PieceContactPhase pieceContactPhase_{*this};
     ElementPhase elementPhase_{*this};
     IntegrationPhase integrationPhase_{*this, elementPhase_};
-    void pieceContactPhase(double dt);
     void sphereContactPhase(double dt);
     template <bool Friction>
     void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
     void buildSphereGrids();
     void updatePieceBounds(bool all = false);  // all: sleeping pieces' too (after a load)
     void beginContactForces();
-    template <bool Friction>
-    void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
-    template <bool Friction>
-    void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     double elementOmegaMax(const PieceInfo& p) const;
     // Sleeping (Sleep.cpp): the decisions at the end of a step, one piece
     // put to sleep, and the derived lists when the awake set changed.
@@ -220,7 +218,7 @@ private:
     void wakeOne(std::size_t p);
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();
-    std::vector<Phase*> phases() { return {&obstaclePhase_, &elementPhase_, &integrationPhase_}; }
+    std::vector<Phase*> phases() { return {&obstaclePhase_, &pieceContactPhase_, &elementPhase_, &integrationPhase_}; }
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();
@@ -228,8 +226,6 @@ private:
 
     // Sleeping: per piece flags and clocks (sized in addPiece).
     std::vector<uint8_t> asleep_;
-    std::vector<uint8_t> frozen_;        // asleep with all neighbours asleep: its contacts are skipped
-    std::vector<uint8_t> normalsFresh_;  // asleep and its triangle normals computed since it stopped
     std::vector<double> slowFor_;        // time all its nodes have been slower than sleepVelocity [s]
     std::vector<double> pieceSpeed2_;    // largest squared node speed in the last step
     std::vector<uint8_t> held_;          // per piece: not dynamic (asleep until made dynamic)
@@ -256,7 +252,11 @@ private:
     std::vector<std::vector<double>> threadPieceEnergy_;
     Column<double> contactForce_;  // per node, from obstacles (and later piece contacts)
     bool contactsActive_ = false;  // contactForce_ holds forces for the coming update
-    PieceContactState pc_;
+    // The surfaces of all pieces in global ids, with their adjacency.
+    SurfaceIndex surf_;
+    // Per piece: bounding box of its surface nodes grown by its particle
+    // radius (3 + 3 each), updated each step for the awake pieces.
+    std::vector<double> pieceLo_, pieceHi_;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
     mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };

@@ -25,7 +25,7 @@ void World::step(double dt) {
     updatePieceBounds();
     obstaclePhase_.run(dt);
     const double tObs = omp_get_wtime();
-    pieceContactPhase(dt);
+    pieceContactPhase_.run(dt);
     sphereContactPhase(dt);
     double t1 = omp_get_wtime();
     elementPhase_.run(dt);

@@ -7,8 +7,9 @@
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
-#include "ContactDetail.hpp"
-#include "World.hpp"
+#include "../contact/ContactDetail.hpp"
+#include "../world/World.hpp"
+#include "PieceContactPhase.hpp"
 
 namespace qdem {
 
@@ -20,37 +21,37 @@ using namespace contact_detail;
 // edge; each pair is handled by its lower edge id.
 
 template <bool Friction>
-void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
-    const SurfaceIndex& S = pc_.surf;
-    const auto ne = static_cast<int32_t>(pc_.edgeItems.size());
+void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
+    const SurfaceIndex& S = w_.surf_;
+    const auto ne = static_cast<int32_t>(st_.edgeItems.size());
     constexpr int K = PieceContactState::kEE;
-    const double sinFade2 = std::pow(std::sin(settings.edgeFadeAngle), 2);
-    const long stamp = iter;
-    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
+    const double sinFade2 = std::pow(std::sin(w_.settings.edgeFadeAngle), 2);
+    const long stamp = w_.iter;
+    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
-        double* buf = pc_.threadForce[omp_get_thread_num()].data();
-        double* pe = settings.trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* buf = st_.threadForce[omp_get_thread_num()].data();
+        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t ie = 0; ie < ne; ++ie) {
-            const int32_t e = pc_.edgeItems[ie];
+            const int32_t e = st_.edgeItems[ie];
             const int32_t pa = S.edgePiece[e];
             if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
-                pc_.eeStamp[e] = stamp;
+                st_.eeStamp[e] = stamp;
                 continue;
             }
-            int32_t* other = &pc_.eeOther[K * e];
-            int8_t* side = &pc_.eeSide[K * e];
-            double* shear = &pc_.eeShear[3 * K * e];
-            double* ref = &pc_.eeRef[K * e];
-            const bool watched = pc_.eeStamp[e] == stamp - 1;
+            int32_t* other = &st_.eeOther[K * e];
+            int8_t* side = &st_.eeSide[K * e];
+            double* shear = &st_.eeShear[3 * K * e];
+            double* ref = &st_.eeRef[K * e];
+            const bool watched = st_.eeStamp[e] == stamp - 1;
             if (!watched)  // history is only valid from the previous step
                 for (int k = 0; k < K; ++k) other[k] = -1;
-            pc_.eeStamp[e] = stamp;
-            const Material& ma = materials[pieces[pa].material];
+            st_.eeStamp[e] = stamp;
+            const Material& ma = w_.materials[w_.pieces[pa].material];
             const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
-            const Vector3d p1 = at(pos, a0), q1 = at(pos, a1);
+            const Vector3d p1 = at(w_.pos, a0), q1 = at(w_.pos, a1);
             const double len1 = (q1 - p1).norm();
             int32_t newOther[K];
             int8_t newSide[K];
@@ -60,13 +61,13 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
             // One pair of edges: je indexes the registered edges.
             auto pair = [&](int32_t je) {
                     if (nNew == K) return;
-                    const int32_t e2 = pc_.edgeItems[je];
+                    const int32_t e2 = st_.edgeItems[je];
                     const int32_t pb = S.edgePiece[e2];
-                    if (!pc_.pieceActive[pb]) return;
-                    const Material& mb = materials[pieces[pb].material];
+                    if (!st_.pieceActive[pb]) return;
+                    const Material& mb = w_.materials[w_.pieces[pb].material];
                     const double reach = ma.radius + mb.radius;
                     const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
-                    const Vector3d p2 = at(pos, b0), q2 = at(pos, b1);
+                    const Vector3d p2 = at(w_.pos, b0), q2 = at(w_.pos, b1);
                     const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
                     constexpr double kEnd = 1e-9;
                     if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;
@@ -94,10 +95,10 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
                     // pushed back, not let through.
                     int sNow = d.dot(cross) < 0 ? -1 : 1;
                     if (dist <= 1e-12 * reach && slot < 0) {  // touching at first sight: ask the piece centres
-                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pa]) +
-                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pa]));
-                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&pc_.pieceLo[3 * pb]) +
-                                                   Eigen::Map<const Vector3d>(&pc_.pieceHi[3 * pb]));
+                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&w_.pieceLo_[3 * pa]) +
+                                                   Eigen::Map<const Vector3d>(&w_.pieceHi_[3 * pa]));
+                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&w_.pieceLo_[3 * pb]) +
+                                                   Eigen::Map<const Vector3d>(&w_.pieceHi_[3 * pb]));
                         sNow = (ca - cb).dot(cross) < 0 ? -1 : 1;
                     }
                     const int sUse = slot >= 0 && side[slot] != 0 ? side[slot] : sNow;
@@ -111,23 +112,23 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
                         overlap = reach + dist;
                     }
                     if (overlap <= 0) return;
-                    const double m1 = (1 - sp.s) * mass[a0] + sp.s * mass[a1];
-                    const double m2 = (1 - sp.t) * mass[b0] + sp.t * mass[b1];
+                    const double m1 = (1 - sp.s) * w_.mass[a0] + sp.s * w_.mass[a1];
+                    const double m2 = (1 - sp.t) * w_.mass[b0] + sp.t * w_.mass[b1];
                     const PairLaw law = pairLaw(ma, mb, m1, m2);
-                    const Vector3d vRel = ((1 - sp.s) * at(vel, a0) + sp.s * at(vel, a1)) -
-                                          ((1 - sp.t) * at(vel, b0) + sp.t * at(vel, b1));
+                    const Vector3d vRel = ((1 - sp.s) * at(w_.vel, a0) + sp.s * at(w_.vel, a1)) -
+                                          ((1 - sp.t) * at(w_.vel, b0) + sp.t * at(w_.vel, b1));
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     // Area weight (doc/contacts.md, "Area weights"): the mean of
                     // the two crossing points' weights, each interpolated along
                     // its edge, so it varies continuously as the crossing slides
                     // and meets the end node's point-polygon weight at the ends.
-                    const double* sw = surfWeight.data();
+                    const double* sw = w_.surfWeight.data();
                     const double aw = 0.5 * ((1 - sp.s) * sw[S.surfIndexOfNode[a0]] + sp.s * sw[S.surfIndexOfNode[a1]] +
                                              (1 - sp.t) * sw[S.surfIndexOfNode[b0]] + sp.t * sw[S.surfIndexOfNode[b1]]);
                     const double saw = std::sqrt(aw);
                     const ContactParams cp{w * aw * law.kn, w * saw * law.cn, w * aw * law.kt, w * saw * law.ct, law.mu,
-                                           settings.frictionRegVelocity, m1 * m2 / (m1 + m2)};
+                                           w_.settings.frictionRegVelocity, m1 * m2 / (m1 + m2)};
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                                   reach, vRel.dot(n), dt);
                     const ContactResult r =
@@ -150,21 +151,21 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
             // Each pair of pieces once: edges of the lower piece id meet the
             // higher piece's edges, from the list made at the last rebuild or
             // from the cells.
-            if (pc_.listValid && pc_.edgeListCount[ie] >= 0) {
-                const int32_t* L = &pc_.edgeList[static_cast<std::size_t>(PieceContactState::kEdgeList) * ie];
-                for (int k = 0; k < pc_.edgeListCount[ie]; ++k) pair(L[k]);
+            if (st_.listValid && st_.edgeListCount[ie] >= 0) {
+                const int32_t* L = &st_.edgeList[static_cast<std::size_t>(PieceContactState::kEdgeList) * ie];
+                for (int k = 0; k < st_.edgeListCount[ie]; ++k) pair(L[k]);
             } else {
-                for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q) {
-                    const int32_t pb = pc_.nbrs[q];
+                for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1]; ++q) {
+                    const int32_t pb = st_.nbrs[q];
                     if (pb < pa) continue;
-                    const double* lo = &pc_.edgeLo[3 * ie];
-                    const double* hi = &pc_.edgeHi[3 * ie];
+                    const double* lo = &st_.edgeLo[3 * ie];
+                    const double* hi = &st_.edgeHi[3 * ie];
                     bool overlap = true;  // the edge's box must reach the other piece's box
                     for (int d = 0; d < 3 && overlap; ++d)
-                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
+                        overlap = lo[d] <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= hi[d];
                     if (!overlap) continue;
-                    const int32_t j0 = pc_.edgeStart[pb];
-                    pc_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
+                    const int32_t j0 = st_.edgeStart[pb];
+                    st_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
                 }
             }
             for (int k = 0; k < K; ++k) {
@@ -178,7 +179,7 @@ void World::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, doubl
     }
 }
 
-template void World::edgeEdge<true>(double, double&, double&, long&, double&);
-template void World::edgeEdge<false>(double, double&, double&, long&, double&);
+template void PieceContactPhase::edgeEdge<true>(double, double&, double&, long&, double&);
+template void PieceContactPhase::edgeEdge<false>(double, double&, double&, long&, double&);
 
 }  // namespace qdem

@@ -9,9 +9,10 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
-#include "ContactDetail.hpp"
-#include "TouchSelection.hpp"
-#include "World.hpp"
+#include "../contact/ContactDetail.hpp"
+#include "../contact/TouchSelection.hpp"
+#include "../world/World.hpp"
+#include "PieceContactPhase.hpp"
 
 namespace qdem {
 
@@ -36,26 +37,26 @@ inline bool straightBehind(bool faceFeature, double dist, double h) {
 // other pieces.  One thread per surface node (seed §4.1).
 
 template <bool Friction>
-void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
-    const SurfaceIndex& S = pc_.surf;
-    const auto ns = static_cast<int32_t>(surfNodes.size());
-    const bool tets = settings.broadPhase != BroadPhase::Triangles;
-    const bool interiorFacesToo = settings.broadPhase == BroadPhase::AllTets || settings.broadPhase == BroadPhase::SurfaceTets;
+void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
+    const SurfaceIndex& S = w_.surf_;
+    const auto ns = static_cast<int32_t>(w_.surfNodes.size());
+    const bool tets = w_.settings.broadPhase != BroadPhase::Triangles;
+    const bool interiorFacesToo = w_.settings.broadPhase == BroadPhase::AllTets || w_.settings.broadPhase == BroadPhase::SurfaceTets;
     constexpr int K = PieceContactState::kPP;
-    const long stamp = iter;
+    const long stamp = w_.iter;
     long interiorTests = 0, interiorNear = 0;
-    const bool regions = settings.pointPolygonRegions;
-    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
-    const double cosFeature = std::cos(settings.edgeFeatureAngle);
-    const double* radius = pc_.pieceRadius.data();
-    const uint8_t* active = pc_.pieceActive.data();
+    const bool regions = w_.settings.pointPolygonRegions;
+    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
+    const double* radius = st_.pieceRadius.data();
+    const uint8_t* active = st_.pieceActive.data();
     const int32_t* triPiece = S.triPiece.data();
-    const int32_t* listStart = pc_.listStart.data();
-    const int32_t* listFlat = pc_.listFlat.data();
-    const int32_t* listCount = pc_.listCount.data();
+    const int32_t* listStart = st_.listStart.data();
+    const int32_t* listFlat = st_.listFlat.data();
+    const int32_t* listCount = st_.listCount.data();
     const int32_t* tri = S.tri.data();
-    const double* normal = pc_.triNormal.data();
-    const double* X = pos.data();
+    const double* normal = st_.triNormal.data();
+    const double* X = w_.pos.data();
     struct Tunnel {
         int32_t node = -1, pa = -1, pb = -1;
         double depth = 0, speed = 0, mass = 0, kn = 0;
@@ -63,28 +64,28 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
-        double* buf = pc_.threadForce[omp_get_thread_num()].data();
-        double* pe = settings.trackEnergy ? threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* buf = st_.threadForce[omp_get_thread_num()].data();
+        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
         Candidate cand[kCandidates];
         TriLanes lanes;
         TriLanesOut near;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t s = 0; s < ns; ++s) {
-            const int32_t node = surfNodes[s];
-            const int32_t pa = nodePiece[node];
+            const int32_t node = w_.surfNodes[s];
+            const int32_t pa = w_.nodePiece[node];
             if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
-                pc_.ppStamp[s] = stamp;
+                st_.ppStamp[s] = stamp;
                 continue;
             }
-            int32_t* key = &pc_.ppKey[K * s];
-            int32_t* kpiece = &pc_.ppPiece[K * s];
-            double* shear = &pc_.ppShear[3 * K * s];
-            double* ref = &pc_.ppRef[K * s];
-            const bool watched = pc_.ppStamp[s] == stamp - 1;
+            int32_t* key = &st_.ppKey[K * s];
+            int32_t* kpiece = &st_.ppPiece[K * s];
+            double* shear = &st_.ppShear[3 * K * s];
+            double* ref = &st_.ppRef[K * s];
+            const bool watched = st_.ppStamp[s] == stamp - 1;
             if (!watched)  // history is only valid from the previous step
                 for (int k = 0; k < K; ++k) key[k] = -1;
-            pc_.ppStamp[s] = stamp;
-            const bool useList = pc_.listValid && listCount[s] >= 0;
+            st_.ppStamp[s] = stamp;
+            const bool useList = st_.listValid && listCount[s] >= 0;
             if (!active[pa] || (useList && listCount[s] == 0 && key[0] < 0)) {
                 // Nothing can touch this node: its slots are empty (slots
                 // after the first empty one are empty too).  A node with a
@@ -94,14 +95,14 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     for (int k = 0; k < K; ++k) key[k] = -1;
                 continue;
             }
-            const Material& ma = materials[pieces[pa].material];
+            const Material& ma = w_.materials[w_.pieces[pa].material];
             // The law's constants of this node's piece with piece pb.
             auto lawOf = [&](int32_t pb) -> PairConst {
-                for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1]; ++q)
-                    if (pc_.nbrs[q] == pb) return pc_.nbrLaw[q];
-                return pairConst(ma, materials[pieces[pb].material]);  // listed before the pieces parted
+                for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1]; ++q)
+                    if (st_.nbrs[q] == pb) return st_.nbrLaw[q];
+                return pairConst(ma, w_.materials[w_.pieces[pb].material]);  // listed before the pieces parted
             };
-            const Vector3d A = at(pos, node);
+            const Vector3d A = at(w_.pos, node);
             int nc = 0;
             bool anyBehind = false;
             // Candidate triangles: bounding sphere grown by the reach holds the
@@ -110,10 +111,10 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
             auto consider = [&](int32_t t, double reach) {
                 if (nc == kCandidates) return;
                 const int32_t* c = &S.tri[3 * t];
-                const Vector3d a = at(pos, c[0]);
-                const double h = (A - a).dot(Eigen::Map<const Vector3d>(&pc_.triNormal[3 * t]));
+                const Vector3d a = at(w_.pos, c[0]);
+                const double h = (A - a).dot(Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]));
                 if (h > reach) return;
-                const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
                 const double dist = (A - cp.point).norm();
                 // The seed's inside test: the projection on the plane must fall
                 // in the triangle or on its boundary (closest point at |h|).
@@ -167,26 +168,26 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     }
                 }
             }
-            for (int32_t q = pc_.nbrStart[pa]; q < pc_.nbrStart[pa + 1] && !useList; ++q) {
-                const int32_t pb = pc_.nbrs[q];
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && !useList; ++q) {
+                const int32_t pb = st_.nbrs[q];
                 const double reach = ma.radius + radius[pb];
                 {
                     const Vector3d lo = A.array() - reach, hi = A.array() + reach;
                     bool overlap = true;
                     for (int d = 0; d < 3 && overlap; ++d)
-                        overlap = lo[d] <= pc_.pieceHi[3 * pb + d] && pc_.pieceLo[3 * pb + d] <= hi[d];
+                        overlap = lo[d] <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= hi[d];
                     if (!overlap) continue;
                 }
-                const int32_t i0 = pc_.itemStart[pb];
+                const int32_t i0 = st_.itemStart[pb];
                 // Items that can reach the node have their reference point within
                 // (largest radius + reach) of it: visit the cells of that box only.
-                const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
-                pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
+                const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
+                st_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
                     const int32_t it = i0 + local;
                     // (grown by the skin: the cells may date from the last list rebuild)
-                    const double R = pc_.itemRadius[it] + reach + (pc_.listValid ? pc_.listSkin : 0.0);
-                    if ((A - Eigen::Map<const Vector3d>(&pc_.itemPoint[3 * it])).squaredNorm() > R * R) return;
-                    const int32_t id = pc_.items[it];
+                    const double R = st_.itemRadius[it] + reach + (st_.listValid ? st_.listSkin : 0.0);
+                    if ((A - Eigen::Map<const Vector3d>(&st_.itemPoint[3 * it])).squaredNorm() > R * R) return;
+                    const int32_t id = st_.items[it];
                     if (!tets) {
                         consider(id, reach);
                         return;
@@ -200,8 +201,8 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                             // irrelevant): the cost the seed's Figure 6 measures.
                             int32_t f[3], n = 0;
                             for (int j = 0; j < 4; ++j)
-                                if (j != k) f[n++] = tetNodes[4 * id + j];
-                            const TriPoint cp = closestOnTriangle(A, at(pos, f[0]), at(pos, f[1]), at(pos, f[2]));
+                                if (j != k) f[n++] = w_.tetNodes[4 * id + j];
+                            const TriPoint cp = closestOnTriangle(A, at(w_.pos, f[0]), at(w_.pos, f[1]), at(w_.pos, f[2]));
                             ++interiorTests;
                             if ((A - cp.point).norm() < reach) ++interiorNear;
                         }
@@ -221,9 +222,9 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     for (int i = 0; i < nc && !found; ++i) found = cand[i].tri == t;
                     if (found || !active[triPiece[t]]) continue;
                     const int32_t* c = tri + 3 * t;
-                    const Vector3d a = at(pos, c[0]);
+                    const Vector3d a = at(w_.pos, c[0]);
                     if ((A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t)) >= 0) continue;  // in front: ends as usual
-                    const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                    const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
                     const double dist = (A - cp.point).norm();
                     const double h = (A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t));
                     // Behind the plane and at most a reach beside the triangle
@@ -246,8 +247,8 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     if (!cand[i].behind) continue;
                     const int32_t pb = S.triPiece[cand[i].tri];
                     const double db = cand[i].dist;
-                    const int32_t i0 = pc_.itemStart[pb];
-                    const Vector3d qlo = A.array() - pc_.itemReach, qhi = A.array() + pc_.itemReach;
+                    const int32_t i0 = st_.itemStart[pb];
+                    const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
                     int32_t killedBy = -1;  // the front face found nearer
                     auto witness = [&](int32_t id) {
                         if (!keep[i]) return;
@@ -255,10 +256,10 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                             const int32_t t = tets ? S.tetFaceTri[4 * id + k] : id;
                             if (t < 0) continue;
                             const int32_t* c = &S.tri[3 * t];
-                            const Vector3d a = at(pos, c[0]);
-                            const double h = (A - a).dot(Eigen::Map<const Vector3d>(&pc_.triNormal[3 * t]));
+                            const Vector3d a = at(w_.pos, c[0]);
+                            const double h = (A - a).dot(Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]));
                             if (h >= db) continue;  // cannot be nearer
-                            const TriPoint cp = closestOnTriangle(A, a, at(pos, c[1]), at(pos, c[2]));
+                            const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
                             const double dw = (A - cp.point).norm();
                             const bool behind = h < 0 && straightBehind(cp.feature == TriFeature::Face, dw, h);
                             if (!behind && dw < db) {
@@ -272,8 +273,8 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                         for (int k = 0; k < listCount[s]; ++k)
                             if (triPiece[L[k]] == pb) witness(L[k]);
                     } else {
-                        pc_.itemGrid[pb].forRange(qlo.data(), qhi.data(),
-                                                  [&](int32_t local) { witness(pc_.items[i0 + local]); });
+                        st_.itemGrid[pb].forRange(qlo.data(), qhi.data(),
+                                                  [&](int32_t local) { witness(st_.items[i0 + local]); });
                     }
                     // Side memory (issue 12): a contact carried from the last step
                     // whose node is still behind its face came from the front - the
@@ -294,10 +295,10 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                         } else if (carried && db > ma.radius + radius[pb]) {
                             double mT;
                             Vector3d vT;
-                            trianglePointState(cand[i], tri + 3 * cand[i].tri, mass, vel, mT, vT);
-                            const double speed = (at(vel, node) - vT).norm();
+                            trianglePointState(cand[i], tri + 3 * cand[i].tri, w_.mass, w_.vel, mT, vT);
+                            const double speed = (at(w_.vel, node) - vT).norm();
 #pragma omp critical(qdemTunnel)
-                            if (tunnel.node < 0) tunnel = Tunnel{node, pa, pb, db, speed, mass[node], lawOf(pb).kn};
+                            if (tunnel.node < 0) tunnel = Tunnel{node, pa, pb, db, speed, w_.mass[node], lawOf(pb).kn};
                         }
                     }
                 }
@@ -320,9 +321,9 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                 const int32_t pb = triPiece[c.tri];
                 double mT;
                 Vector3d vT;
-                trianglePointState(c, tn, mass, vel, mT, vT);
-                const PairLaw law = pairLaw(lawOf(pb), mass[node], mT);
-                const Vector3d nT(pc_.triNormal[3 * c.tri], pc_.triNormal[3 * c.tri + 1], pc_.triNormal[3 * c.tri + 2]);
+                trianglePointState(c, tn, w_.mass, w_.vel, mT, vT);
+                const PairLaw law = pairLaw(lawOf(pb), w_.mass[node], mT);
+                const Vector3d nT(st_.triNormal[3 * c.tri], st_.triNormal[3 * c.tri + 1], st_.triNormal[3 * c.tri + 2]);
                 Vector3d n;
                 double overlap;
                 candidateContact(c, A, nT, law.reach, eps, n, overlap);
@@ -336,10 +337,10 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
                     usedOld[slot] = true;
                     sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                 }
-                const double w = surfWeight[s], sw = std::sqrt(w);  // the query node's area weight
-                const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, settings.frictionRegVelocity,
-                                       mass[node] * mT / (mass[node] + mT)};
-                const Vector3d vRel = at(vel, node) - vT;
+                const double w = w_.surfWeight[s], sw = std::sqrt(w);  // the query node's area weight
+                const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, w_.settings.frictionRegVelocity,
+                                       w_.mass[node] * mT / (w_.mass[node] + mT)};
+                const Vector3d vRel = at(w_.vel, node) - vT;
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
                                               vRel.dot(n), dt);
                 const ContactResult r =
@@ -368,15 +369,15 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
             }
         }
     }
-    contactCounts.interiorFaceTests = interiorTests;
-    contactCounts.interiorFaceNear = interiorNear;
+    w_.contactCounts.interiorFaceTests = interiorTests;
+    w_.contactCounts.interiorFaceNear = interiorNear;
     if (tunnel.node >= 0) {
         // Stopping distance of a node of mass m at speed v on a spring kn:
         // v sqrt(m / kn) (doc/hard_cases.md, "Tunnelling").
         const double stop = tunnel.speed * std::sqrt(tunnel.mass / tunnel.kn);
         std::ostringstream m;
         m.precision(3);
-        m << "QDEM: piece " << tunnel.pa << " went through piece " << tunnel.pb << " at step " << iter << ": node "
+        m << "QDEM: piece " << tunnel.pa << " went through piece " << tunnel.pb << " at step " << w_.iter << ": node "
           << tunnel.node << " is " << tunnel.depth << " m behind a face of piece " << tunnel.pb
           << " and past its middle, at a relative speed of " << tunnel.speed
           << " m/s. The contact is too soft to stop this impact: stopping distance v sqrt(m_node/kn) = " << stop
@@ -387,7 +388,7 @@ void World::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, d
     }
 }
 
-template void World::pointPolygon<true>(double, double&, double&, long&, double&);
-template void World::pointPolygon<false>(double, double&, double&, long&, double&);
+template void PieceContactPhase::pointPolygon<true>(double, double&, double&, long&, double&);
+template void PieceContactPhase::pointPolygon<false>(double, double&, double&, long&, double&);
 
 }  // namespace qdem

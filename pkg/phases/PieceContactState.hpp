@@ -1,14 +1,14 @@
-// Working data of the piece-piece contact phase, owned by World.  Everything
+// Working data of the piece-piece contact phase (PieceContactPhase).  Everything
 // here is sized once and reused, so the step does not allocate.
 #pragma once
 #include <cstdint>
 #include <vector>
 
 #include "../core/Column.hpp"
-#include "BoxGrid.hpp"
-#include "ContactLaw.hpp"
-#include "CellGrid.hpp"
-#include "SurfaceIndex.hpp"
+#include "../contact/BoxGrid.hpp"
+#include "../contact/ContactLaw.hpp"
+#include "../contact/CellGrid.hpp"
+#include "../contact/SurfaceIndex.hpp"
 #include "../world/Settings.hpp"
 
 namespace qdem {
@@ -50,12 +50,12 @@ struct PieceContactState {
     static constexpr int kEdgeList = 32;
     std::vector<int32_t> edgeList, edgeListCount;
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
-    std::vector<double> pieceLo, pieceHi;  // bounding boxes grown by the radius
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's
     std::vector<int32_t> pieceOrder, pairs, nbrFill;  // sweep-and-prune work arrays
 
     // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
-    bool nearOther(int32_t pa, const double* lo, const double* hi) const {
+    // (pieceLo, pieceHi: the pieces' boxes, World::pieceLo_/pieceHi_.)
+    bool nearOther(int32_t pa, const double* lo, const double* hi, const double* pieceLo, const double* pieceHi) const {
         for (int32_t q = nbrStart[pa]; q < nbrStart[pa + 1]; ++q) {
             const int32_t pb = nbrs[q];
             bool overlap = true;

@@ -1,0 +1,365 @@
+// Piece-piece surface contacts (seed paper §3-4): which pieces can touch,
+// registration in cell lists, Verlet lists, and the phase driver.  The two
+// contact kinds are in PointPolygon.cpp and EdgeEdge.cpp.  Derivations and
+// the rules that keep forces continuous: doc/contacts.md.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../contact/ContactLaw.hpp"
+#include "../contact/Geometry.hpp"
+#include "../contact/ContactDetail.hpp"
+#include "../world/World.hpp"
+#include "PieceContactPhase.hpp"
+
+namespace qdem {
+
+using Eigen::Vector3d;
+using namespace contact_detail;
+
+void PieceContactPhase::run(double dt) {
+    w_.timings.broadPhase = w_.timings.pointPolygon = w_.timings.edgeEdge = 0;
+    w_.contactCounts.pointPolygon = w_.contactCounts.edgeEdge = 0;
+    w_.maxPieceOverlap = 0;
+    const std::size_t np = w_.pieces.size();
+    std::fill(frozen_.begin(), frozen_.end(), 0);
+    if (np < 2 || (!w_.settings.pointPolygonOn && !w_.settings.edgeEdgeOn)) return;
+
+    // Which pieces can touch another one at all?  Sweep and prune on x:
+    // pieces sorted by the low end of their boxes, each compared only with
+    // those starting before its box ends.  O(P log P + touching pairs).
+    const double t0 = omp_get_wtime();
+    st_.pieceActive.assign(np, 0);
+    st_.pieceOrder.resize(np);
+    for (std::size_t i = 0; i < np; ++i) st_.pieceOrder[i] = static_cast<int32_t>(i);
+    std::sort(st_.pieceOrder.begin(), st_.pieceOrder.end(),
+              [&](int32_t a, int32_t b) { return w_.pieceLo_[3 * a] < w_.pieceLo_[3 * b]; });
+    st_.pairs.clear();
+    for (std::size_t i = 0; i < np; ++i) {
+        const int32_t a = st_.pieceOrder[i];
+        for (std::size_t j = i + 1; j < np; ++j) {
+            const int32_t b = st_.pieceOrder[j];
+            if (w_.pieceLo_[3 * b] > w_.pieceHi_[3 * a]) break;
+            if (w_.pieceLo_[3 * a + 1] <= w_.pieceHi_[3 * b + 1] && w_.pieceLo_[3 * b + 1] <= w_.pieceHi_[3 * a + 1] &&
+                w_.pieceLo_[3 * a + 2] <= w_.pieceHi_[3 * b + 2] && w_.pieceLo_[3 * b + 2] <= w_.pieceHi_[3 * a + 2])
+                st_.pairs.insert(st_.pairs.end(), {a, b, b, a});
+        }
+    }
+    // Neighbour lists (CSR) from the pairs, both directions.
+    st_.nbrStart.assign(np + 1, 0);
+    for (std::size_t q = 0; q < st_.pairs.size(); q += 2) ++st_.nbrStart[st_.pairs[q] + 1];
+    for (std::size_t i = 0; i < np; ++i) st_.nbrStart[i + 1] += st_.nbrStart[i];
+    st_.nbrs.resize(st_.pairs.size() / 2);
+    st_.nbrFill.assign(st_.nbrStart.begin(), st_.nbrStart.end() - 1);
+    for (std::size_t q = 0; q < st_.pairs.size(); q += 2) st_.nbrs[st_.nbrFill[st_.pairs[q]]++] = st_.pairs[q + 1];
+    for (std::size_t i = 0; i < np; ++i) st_.pieceActive[i] = st_.nbrStart[i + 1] > st_.nbrStart[i];
+    // A sleeping piece whose neighbours all sleep has nothing moving near it:
+    // its contacts are skipped (their history kept).
+    if (w_.nAsleep_ > 0)
+        for (std::size_t i = 0; i < np; ++i) {
+            if (!w_.asleep_[i]) continue;
+            bool all = true;
+            for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1] && all; ++q) all = w_.asleep_[st_.nbrs[q]];
+            frozen_[i] = all;
+        }
+    const bool any = !st_.pairs.empty();
+    if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
+    // The contact law's material constants of each pair of pieces that can
+    // touch (a log and roots each): once per step, not once per contact.
+    st_.nbrLaw.resize(st_.nbrs.size());
+    st_.pieceRadius.resize(np);
+    for (std::size_t i = 0; i < np; ++i) {
+        st_.pieceRadius[i] = w_.materials[w_.pieces[i].material].radius;
+        for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q)
+            st_.nbrLaw[q] = pairConst(w_.materials[w_.pieces[i].material], w_.materials[w_.pieces[st_.nbrs[q]].material]);
+    }
+    w_.beginContactForces();
+
+    double rMax = 0;
+    for (std::size_t ip = 0; ip < np; ++ip)
+        if (st_.pieceActive[ip]) rMax = std::max(rMax, w_.materials[w_.pieces[ip].material].radius);
+    if (w_.surf_.sharpAngle != w_.settings.edgeFeatureAngle) w_.surf_.classifyEdges(w_.refPos.data(), w_.settings.edgeFeatureAngle);
+    const SurfaceIndex& S = w_.surf_;
+    const bool tetItems = w_.settings.broadPhase != BroadPhase::Triangles;
+
+    // Verlet lists (default mode): rebuild only when a surface node has moved
+    // more than half the skin, pieces were added, or a piece became active.
+    const bool verlet = !tetItems;
+    const double skin = w_.settings.verletSkin * rMax;
+    bool rebuild = !verlet || !st_.listValid || st_.listTris != S.nTris() || st_.listSkin != skin ||
+                   st_.listActive.size() != np;
+    for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
+    if (!rebuild) {
+        const bool all = w_.nAsleep_ == 0;  // else only the awake pieces' nodes move
+        const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
+        double moved2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved2)
+        for (int32_t j = 0; j < ns; ++j) {
+            const int32_t i = all ? j : w_.awakeSurf_[j];
+            const int32_t n = w_.surfNodes[i];
+            if (!st_.pieceActive[w_.nodePiece[n]]) continue;
+            moved2 = std::max(moved2, (at(w_.pos, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
+        }
+        // Sleeping pieces do not move now, but may have moved before they fell asleep.
+        for (std::size_t ip = 0; ip < np && w_.nAsleep_ > 0; ++ip)
+            if (st_.pieceActive[ip] && w_.asleep_[ip]) moved2 = std::max(moved2, w_.sleepMoved2_[ip]);
+        rebuild = moved2 > 0.25 * skin * skin;
+    }
+    const double grow = verlet ? skin : 0.0;
+
+    // Register, piece by piece, the surface elements that lie near another
+    // piece's box (the others cannot be touched this step), in cells sized by
+    // the seed's eq. 6: element bounding radius (eq. 7) plus contact reach.
+    if (rebuild) {
+        st_.itemStart.assign(np + 1, 0);
+        st_.items.clear(), st_.itemPoint.clear(), st_.itemRadius.clear();
+    }
+    const bool edgeRebuild = rebuild || !verlet;  // edge lists follow the same rebuilds
+    if (edgeRebuild) {
+        st_.edgeStart.assign(np + 1, 0);
+        st_.edgeItems.clear(), st_.edgeLo.clear(), st_.edgeHi.clear();
+    }
+    st_.triNormal.resize(3 * S.nTris());
+    st_.itemGrid.resize(np), st_.edgeGrid.resize(np);
+    double itemR = 0, edgeR = 0;
+    auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
+        Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
+        for (int k = 0; k < n; ++k) {
+            const Vector3d x = at(w_.pos, nodes[k]);
+            c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+        }
+        c /= n;
+        lo.array() -= r + grow, hi.array() += r + grow;
+        // Ours filters out elements far from other pieces; the seed's cases
+        // A/B/C register everything of their kind, as the paper measured.
+        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.pieceLo_.data(), w_.pieceHi_.data())) return;
+        double R = 0;
+        for (int k = 0; k < n; ++k) R = std::max(R, (at(w_.pos, nodes[k]) - c).squaredNorm());
+        R = std::sqrt(R);
+        itemR = std::max(itemR, R);
+        st_.items.push_back(id);
+        st_.itemPoint.insert(st_.itemPoint.end(), {c[0], c[1], c[2]});
+        st_.itemRadius.push_back(R);
+    };
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        const PieceInfo& p = w_.pieces[ip];
+        const double r = w_.materials[p.material].radius;
+        if (st_.pieceActive[ip] && w_.settings.pointPolygonOn && rebuild) {
+            if (!tetItems) {
+                for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
+                    addItem(t, &S.tri[3 * t], 3, r, ip);
+            } else if (w_.settings.broadPhase == BroadPhase::AllTets) {
+                for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) addItem(e, &w_.tetNodes[4 * e], 4, r, ip);
+            } else {
+                for (int32_t q = S.pieceSurfTetStart[ip]; q < S.pieceSurfTetStart[ip + 1]; ++q)
+                    addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip);
+            }
+        }
+        if (rebuild) st_.itemStart[ip + 1] = static_cast<int32_t>(st_.items.size());
+        if (st_.pieceActive[ip] && w_.settings.edgeEdgeOn && edgeRebuild) {
+            for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
+                if (!S.edgeSharp[e]) continue;
+                const Vector3d a = at(w_.pos, S.edge[2 * e]), b = at(w_.pos, S.edge[2 * e + 1]);
+                // Box grown by r (+ half the skin): two edges within reach
+                // r_a + r_b (+ skin) share a cell.
+                const double g = r + 0.5 * grow;
+                const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
+                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.pieceLo_.data(), w_.pieceHi_.data())) continue;
+                edgeR = std::max(edgeR, (b - a).norm());
+                st_.edgeItems.push_back(e);
+                st_.edgeLo.insert(st_.edgeLo.end(), {lo[0], lo[1], lo[2]});
+                st_.edgeHi.insert(st_.edgeHi.end(), {hi[0], hi[1], hi[2]});
+            }
+        }
+        if (edgeRebuild) st_.edgeStart[ip + 1] = static_cast<int32_t>(st_.edgeItems.size());
+    }
+    if (rebuild) st_.itemReach = itemR + 2 * rMax + grow;
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        const int32_t i0 = st_.itemStart[ip], i1 = st_.itemStart[ip + 1];
+        // Cells twice the reach: a query box of +-reach then spans 2 cells per
+        // axis (8 cells) instead of 3 (27), for a few more items per cell.
+        if (rebuild) st_.itemGrid[ip].build(st_.itemPoint.data() + 3 * i0, i1 - i0, 2 * st_.itemReach);
+        const int32_t e0 = st_.edgeStart[ip], e1 = st_.edgeStart[ip + 1];
+        if (edgeRebuild)
+            st_.edgeGrid[ip].build(st_.edgeLo.data() + 3 * e0, st_.edgeHi.data() + 3 * e0, e1 - e0,
+                                   edgeR + 2 * rMax + grow);
+    }
+    // Unit normals of the surface triangles of active pieces (quick plane
+    // test); a sleeping piece's once after it stopped.
+#pragma omp parallel
+    for (std::size_t ip = 0; ip < np; ++ip) {
+        if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
+#pragma omp for schedule(static) nowait
+        for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
+            const int32_t* c = &S.tri[3 * t];
+            const Vector3d n = (at(w_.pos, c[1]) - at(w_.pos, c[0])).cross(at(w_.pos, c[2]) - at(w_.pos, c[0])).normalized();
+            for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+        }
+    }
+    for (std::size_t ip = 0; ip < np && w_.nAsleep_ > 0; ++ip) normalsFresh_[ip] = w_.asleep_[ip] && st_.pieceActive[ip];
+    if (verlet && rebuild && w_.settings.pointPolygonOn) {
+        // Each surface node's candidate triangles: bounding sphere grown by
+        // reach + skin holds the node.
+        const auto ns = static_cast<int32_t>(w_.surfNodes.size());
+        constexpr int KL = PieceContactState::kList;
+        st_.list.resize(KL * static_cast<std::size_t>(ns));
+        st_.listCount.assign(ns, 0);
+        st_.listPos.resize(3 * static_cast<std::size_t>(ns));
+#pragma omp parallel for schedule(dynamic, 64)
+        for (int32_t i = 0; i < ns; ++i) {
+            const int32_t node = w_.surfNodes[i];
+            const int32_t pa = w_.nodePiece[node];
+            const Vector3d A = at(w_.pos, node);
+            for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
+            if (!st_.pieceActive[pa]) continue;
+            const double ra = w_.materials[w_.pieces[pa].material].radius;
+            int count = 0;
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
+                const int32_t pb = st_.nbrs[q];
+                const double reach = ra + w_.materials[w_.pieces[pb].material].radius + skin;
+                bool overlap = true;
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = A[d] - reach <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= A[d] + reach;
+                if (!overlap) continue;
+                const int32_t i0 = st_.itemStart[pb];
+                const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
+                st_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
+                    const int32_t it = i0 + local;
+                    const double R = st_.itemRadius[it] + reach;
+                    if (count < 0 ||
+                        (A - Eigen::Map<const Vector3d>(&st_.itemPoint[3 * it])).squaredNorm() > R * R)
+                        return;
+                    if (count == KL) {
+                        count = -1;  // crowded: this node queries the cells each step
+                        return;
+                    }
+                    st_.list[static_cast<std::size_t>(KL) * i + count++] = st_.items[it];
+                });
+            }
+            st_.listCount[i] = count;
+        }
+        // Pack the lists (the step streams through them node after node).
+        st_.listStart.resize(static_cast<std::size_t>(ns) + 1);
+        st_.listStart[0] = 0;
+        for (int32_t i = 0; i < ns; ++i) st_.listStart[i + 1] = st_.listStart[i] + std::max(0, st_.listCount[i]);
+        st_.listFlat.resize(st_.listStart[ns]);
+#pragma omp parallel for schedule(static)
+        for (int32_t i = 0; i < ns; ++i)
+            std::copy_n(&st_.list[static_cast<std::size_t>(KL) * i], std::max(0, st_.listCount[i]),
+                        &st_.listFlat[st_.listStart[i]]);
+        st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
+        std::fill(w_.sleepMoved2_.begin(), w_.sleepMoved2_.end(), 0.0);  // lists now from the current positions
+        st_.listSkin = skin;
+        st_.listTris = S.nTris();
+        st_.listValid = true;
+        ++st_.listBuilds;
+    }
+    if (verlet && edgeRebuild && w_.settings.edgeEdgeOn) {
+        // Each registered edge's candidate edges of higher pieces (each pair once).
+        const auto ne = static_cast<int32_t>(st_.edgeItems.size());
+        constexpr int KE = PieceContactState::kEdgeList;
+        st_.edgeList.resize(KE * static_cast<std::size_t>(ne));
+        st_.edgeListCount.assign(ne, 0);
+#pragma omp parallel for schedule(dynamic, 64)
+        for (int32_t ie = 0; ie < ne; ++ie) {
+            const int32_t pa = S.edgePiece[st_.edgeItems[ie]];
+            int count = 0;
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
+                const int32_t pb = st_.nbrs[q];
+                if (pb < pa) continue;
+                const int32_t j0 = st_.edgeStart[pb];
+                st_.edgeGrid[pb].forOverlapping(&st_.edgeLo[3 * ie], &st_.edgeHi[3 * ie], [&](int32_t local) {
+                    if (count < 0) return;
+                    if (count == KE) {
+                        count = -1;  // crowded: this edge queries the cells each step
+                        return;
+                    }
+                    st_.edgeList[static_cast<std::size_t>(KE) * ie + count++] = j0 + local;
+                });
+            }
+            st_.edgeListCount[ie] = count;
+        }
+    }
+    if (!verlet) st_.listValid = false;
+
+    const int nth = omp_get_max_threads();
+    if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
+    for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
+    const double t1 = omp_get_wtime();
+    w_.timings.broadPhase = t1 - t0;
+
+    double eDamp = 0, eSlip = 0, maxOv = 0;
+    long nPP = 0, nEE = 0;
+    const bool fric = w_.settings.frictionOn;
+    // Thread buffers: only awake pieces' nodes are read (and so zeroed).
+    const bool all = w_.nAsleep_ == 0;
+#pragma omp parallel num_threads(nth)
+    {
+        auto& b = st_.threadForce[omp_get_thread_num()];
+        if (all) std::fill(b.begin(), b.end(), 0.0);
+        else
+            for (std::size_t ip = 0; ip < np; ++ip)
+                if (!w_.asleep_[ip]) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+    }
+    if (w_.settings.pointPolygonOn) {
+        if (fric) pointPolygon<true>(dt, eDamp, eSlip, nPP, maxOv);
+        else pointPolygon<false>(dt, eDamp, eSlip, nPP, maxOv);
+    }
+    const double t2 = omp_get_wtime();
+    if (w_.settings.edgeEdgeOn) {
+        if (fric) edgeEdge<true>(dt, eDamp, eSlip, nEE, maxOv);
+        else edgeEdge<false>(dt, eDamp, eSlip, nEE, maxOv);
+    }
+    const double tEE = omp_get_wtime();
+    // Sum the thread buffers into the node contact forces.
+    const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
+#pragma omp parallel for schedule(static) num_threads(nth)
+    for (int32_t j = 0; j < ns; ++j) {
+        const int32_t s = all ? j : w_.awakeSurf_[j];
+        for (int th = 0; th < nth; ++th)
+            for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
+    }
+    const double t3 = omp_get_wtime();
+    // The sum of the thread buffers is booked to point-polygon, the main user.
+    w_.timings.pointPolygon = (t2 - t1) + (t3 - tEE);
+    w_.timings.edgeEdge = tEE - t2;
+    w_.contactCounts.pointPolygon = nPP;
+    w_.contactCounts.edgeEdge = nEE;
+    w_.maxPieceOverlap = maxOv;
+    if (w_.settings.trackEnergy) {  // (the elastic energy is summed per piece)
+        w_.energy.contactDamping += eDamp;
+        w_.energy.friction += eSlip;
+    }
+}
+
+}  // namespace qdem
+
+namespace qdem {
+
+void PieceContactPhase::stateColumns(StateColumns& c) {
+    c.add("ppKey", st_.ppKey);
+    c.add("ppPiece", st_.ppPiece);
+    c.add("ppShear", st_.ppShear);
+    c.add("ppRef", st_.ppRef);
+    c.add("ppStamp", st_.ppStamp);
+    c.add("eeOther", st_.eeOther);
+    c.add("eeSide", st_.eeSide);
+    c.add("eeShear", st_.eeShear);
+    c.add("eeRef", st_.eeRef);
+    c.add("eeStamp", st_.eeStamp);
+}
+
+void PieceContactPhase::piecesAdded() {
+    st_.resizeHistory(w_.surfNodes.size(), w_.surfaceIndex().nEdges());
+    frozen_.resize(w_.pieces.size(), 0);
+    normalsFresh_.resize(w_.pieces.size(), 0);
+}
+
+void PieceContactPhase::stateLoaded() {
+    std::fill(frozen_.begin(), frozen_.end(), 0);
+    std::fill(normalsFresh_.begin(), normalsFresh_.end(), 0);
+    st_.listValid = false;  // Verlet lists: rebuilt from the loaded positions
+}
+
+}  // namespace qdem

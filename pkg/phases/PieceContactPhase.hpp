@@ -1,0 +1,47 @@
+// Piece-piece surface contacts (seed paper §3-4): which pieces can touch
+// (sweep and prune on their boxes), registration of surface elements in cell
+// lists, Verlet lists, then the contact kinds: point-polygon
+// (PointPolygon.cpp) and edge-edge (EdgeEdge.cpp).  Owns the lists and the
+// contact histories.  Derivations and rules: doc/contacts.md.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "../world/Phase.hpp"
+#include "PieceContactState.hpp"
+
+namespace qdem {
+
+class PieceContactPhase final : public Phase {
+public:
+    using Phase::Phase;
+    const char* name() const override { return "pieceContacts"; }
+    void run(double dt);
+    void stateColumns(StateColumns& c) override;
+    void piecesAdded() override;
+    void stateLoaded() override;
+
+    // Read by the sleeping logic: neighbour pieces (CSR nbrStart/nbrs) and
+    // the node positions of the last list rebuild.
+    const PieceContactState& state() const { return st_; }
+    // Asleep with all its neighbours asleep: its contacts were skipped this step.
+    bool frozen(std::size_t piece) const { return frozen_[piece] != 0; }
+    // A piece fell asleep (awake = false) or woke up.
+    void sleepChanged(std::size_t piece, bool awake) {
+        normalsFresh_[piece] = 0;
+        if (awake) frozen_[piece] = 0;
+    }
+
+private:
+    template <bool Friction>
+    void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
+    template <bool Friction>
+    void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
+
+    PieceContactState st_;
+    std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
+    std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
+};
+
+}  // namespace qdem
