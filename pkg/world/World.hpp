@@ -23,6 +23,7 @@
 #include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
 #include "../phases/PieceContactPhase.hpp"
+#include "../phases/SpherePhase.hpp"
 #include "Settings.hpp"
 #include "ThreadLayout.hpp"
 #include "WorldState.hpp"
@@ -78,7 +79,9 @@ public:
     // Contact history is carried over for (sphere id, piece) pairs kept.
     void setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
                     const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
-                    const int32_t* pairPiece);
+                    const int32_t* pairPiece) {
+        spherePhase_.setSpheres(n, id, radius, young, ktRatio, friction, restitution, mass, pairStart, pairPiece);
+    }
 
     // ---- stepping ---------------------------------------------------------
     void step(double dt);
@@ -200,14 +203,12 @@ private:
     friend class ElementPhase;
     friend class IntegrationPhase;
     friend class PieceContactPhase;
+    friend class SpherePhase;
     ObstaclePhase obstaclePhase_{*this};
     PieceContactPhase pieceContactPhase_{*this};
+    SpherePhase spherePhase_{*this};
     ElementPhase elementPhase_{*this};
     IntegrationPhase integrationPhase_{*this, elementPhase_};
-    void sphereContactPhase(double dt);
-    template <bool Friction>
-    void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
-    void buildSphereGrids();
     void updatePieceBounds(bool all = false);  // all: sleeping pieces' too (after a load)
     void beginContactForces();
     double elementOmegaMax(const PieceInfo& p) const;
@@ -218,7 +219,7 @@ private:
     void wakeOne(std::size_t p);
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();
-    std::vector<Phase*> phases() { return {&obstaclePhase_, &pieceContactPhase_, &elementPhase_, &integrationPhase_}; }
+    std::vector<Phase*> phases() { return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_}; }
     void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();

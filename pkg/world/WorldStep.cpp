@@ -26,7 +26,7 @@ void World::step(double dt) {
     obstaclePhase_.run(dt);
     const double tObs = omp_get_wtime();
     pieceContactPhase_.run(dt);
-    sphereContactPhase(dt);
+    spherePhase_.run(dt);
     double t1 = omp_get_wtime();
     elementPhase_.run(dt);
     double t2 = omp_get_wtime();

@@ -16,7 +16,8 @@
 #include "../core/Format.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../contact/TouchSelection.hpp"
-#include "World.hpp"
+#include "../world/World.hpp"
+#include "SpherePhase.hpp"
 
 namespace qdem {
 
@@ -47,10 +48,10 @@ PairLaw sphereLaw(const SphereSet& S, int32_t i, const Material& b, double mT) {
 
 }  // namespace
 
-void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
+void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
                        const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
                        const int32_t* pairPiece) {
-    const auto np = static_cast<int32_t>(pieces.size());
+    const auto np = static_cast<int32_t>(w_.pieces.size());
     if (n < 0 || pairStart[0] != 0) throw InputError("setSpheres: bad sphere count or pair offsets");
     for (int32_t i = 0; i < n; ++i) {
         if (!(radius[i] > 0) || !std::isfinite(radius[i]))
@@ -69,7 +70,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
             if (pairPiece[q] < 0 || pairPiece[q] >= np)
                 throw InputError(cat("sphere ", id[i], ": unknown piece ", pairPiece[q]));
     }
-    SphereSet& S = spheres;
+    SphereSet& S = w_.spheres;
     // Carry the contact history of (id, piece) pairs over to the new order.
     std::unordered_map<int64_t, int32_t> oldPair;
     for (int32_t i = 0; i < S.size(); ++i)
@@ -117,7 +118,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
     for (int32_t i = 0; i < n; ++i) {
         S.radiusMax = std::max(S.radiusMax, radius[i]);
         for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
-            const Material& b = materials[pieces[pairPiece[q]].material];
+            const Material& b = w_.materials[w_.pieces[pairPiece[q]].material];
             const double kn = sphereLaw(S, i, b, 1.0).kn;
             S.pieceKnMax[pairPiece[q]] = std::max(S.pieceKnMax[pairPiece[q]], kn);
             S.omegaMax = std::max(S.omegaMax, std::sqrt(kn / mass[i]));
@@ -127,10 +128,10 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
 
 // Per piece that a sphere may touch: its surface triangles binned by
 // centroid, with bounding radii and unit normals of the current shape.
-void World::buildSphereGrids() {
-    SphereSet& S = spheres;
-    const SurfaceIndex& surf = surf_;
-    const auto np = static_cast<int32_t>(pieces.size());
+void SpherePhase::buildGrids() {
+    SphereSet& S = w_.spheres;
+    const SurfaceIndex& surf = w_.surf_;
+    const auto np = static_cast<int32_t>(w_.pieces.size());
     S.pieceUsed.assign(np, 0);
     for (int32_t p : S.pairPiece) S.pieceUsed[p] = 1;
     S.triGrid.resize(np);
@@ -145,7 +146,7 @@ void World::buildSphereGrids() {
 #pragma omp parallel for schedule(static) reduction(max : rMax)
         for (int32_t t = t0; t < t1; ++t) {
             const int32_t* c = &surf.tri[3 * t];
-            const Vector3d a = at(pos, c[0]), b = at(pos, c[1]), d = at(pos, c[2]);
+            const Vector3d a = at(w_.pos, c[0]), b = at(w_.pos, c[1]), d = at(w_.pos, c[2]);
             const Vector3d m = (a + b + d) / 3.0;
             const Vector3d n = (b - a).cross(d - a).normalized();
             const double r = std::sqrt(std::max({(a - m).squaredNorm(), (b - m).squaredNorm(), (d - m).squaredNorm()}));
@@ -155,55 +156,55 @@ void World::buildSphereGrids() {
         }
         S.pieceTriRadius[p] = rMax;
         // Cells twice the largest reach: a query then spans 2 cells per axis.
-        const double reach = rMax + S.radiusMax + materials[pieces[p].material].radius;
+        const double reach = rMax + S.radiusMax + w_.materials[w_.pieces[p].material].radius;
         S.triGrid[p].build(&S.triPoint[3 * t0], t1 - t0, 2 * reach);
     }
 }
 
-void World::sphereContactPhase(double dt) {
-    timings.spheres = 0;
-    contactCounts.sphere = 0;
-    SphereSet& S = spheres;
+void SpherePhase::run(double dt) {
+    w_.timings.spheres = 0;
+    w_.contactCounts.sphere = 0;
+    SphereSet& S = w_.spheres;
     std::fill(S.forceTorque.begin(), S.forceTorque.end(), 0.0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
     const double t0 = omp_get_wtime();
-    buildSphereGrids();
-    beginContactForces();
+    buildGrids();
+    w_.beginContactForces();
     const int nth = omp_get_max_threads();
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
     long count = 0;
-    if (settings.frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
+    if (w_.settings.frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
     else sphereContacts<false>(dt, eEl, eDamp, eSlip, count);
     // Sum the thread buffers into the node contact forces (surface nodes of
     // the pieces spheres may touch).
-    for (std::size_t p = 0; p < pieces.size(); ++p) {
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p) {
         if (!S.pieceUsed[p]) continue;
-        const int32_t s0 = pieces[p].surfBegin, s1 = pieces[p].surfEnd;
+        const int32_t s0 = w_.pieces[p].surfBegin, s1 = w_.pieces[p].surfEnd;
 #pragma omp parallel for schedule(static) num_threads(nth)
         for (int32_t s = s0; s < s1; ++s)
             for (int th = 0; th < nth; ++th)
-                for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+                for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
-    contactCounts.sphere = count;
-    if (settings.trackEnergy) {
-        energy.contactElastic += eEl;
-        energy.contactDamping += eDamp;
-        energy.friction += eSlip;
+    w_.contactCounts.sphere = count;
+    if (w_.settings.trackEnergy) {
+        w_.energy.contactElastic += eEl;
+        w_.energy.contactDamping += eDamp;
+        w_.energy.friction += eSlip;
     }
-    timings.spheres = omp_get_wtime() - t0;
+    w_.timings.spheres = omp_get_wtime() - t0;
 }
 
 template <bool Friction>
-void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
-    SphereSet& S = spheres;
-    const SurfaceIndex& surf = surf_;
+void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
+    SphereSet& S = w_.spheres;
+    const SurfaceIndex& surf = w_.surf_;
     const int32_t n = S.size();
     constexpr int K = SphereSet::kSlots;
-    const long stamp = iter;
-    const double cosFeature = std::cos(settings.edgeFeatureAngle);
-    const std::size_t nSurf = surfNodes.size();
-    const bool regularized = settings.frictionModel == FrictionModel::Regularized;
+    const long stamp = w_.iter;
+    const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
+    const std::size_t nSurf = w_.surfNodes.size();
+    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -228,11 +229,11 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                 if (!watched)  // history is only valid from the previous step
                     for (int k = 0; k < K; ++k) key[k] = -1;
                 S.pairStamp[q] = stamp;
-                const Material& mb = materials[pieces[pb].material];
+                const Material& mb = w_.materials[w_.pieces[pb].material];
                 const double reach = R + mb.radius;
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= pieceHi_[3 * pb + d] && pieceLo_[3 * pb + d] <= C[d] + R;
+                    overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
                 int nc = 0;
                 bool anyBehind = false;
                 const int32_t t0 = surf.pieceTriStart[pb];
@@ -244,10 +245,10 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
-                        const Vector3d a = at(pos, c[0]);
+                        const Vector3d a = at(w_.pos, c[0]);
                         const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
                         if (h > reach) return;
-                        const TriPoint cp = closestOnTriangle(C, a, at(pos, c[1]), at(pos, c[2]));
+                        const TriPoint cp = closestOnTriangle(C, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
                         const double dist = (C - cp.point).norm();
                         const bool behind = h < 0 && cp.feature == TriFeature::Face;
                         if (!behind && dist >= reach) return;
@@ -278,10 +279,10 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                             if (!keep[k]) return;
                             const int32_t t = t0 + local;
                             const int32_t* c = &surf.tri[3 * t];
-                            const Vector3d a = at(pos, c[0]);
+                            const Vector3d a = at(w_.pos, c[0]);
                             const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
                             if (h >= db) return;  // cannot be nearer
-                            const TriPoint cp = closestOnTriangle(C, a, at(pos, c[1]), at(pos, c[2]));
+                            const TriPoint cp = closestOnTriangle(C, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
                             const bool behind = h < 0 && cp.feature == TriFeature::Face;
                             if (!behind && (C - cp.point).norm() < db) keep[k] = false;
                         });
@@ -302,7 +303,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     const int32_t* tn = &surf.tri[3 * c.tri];
                     double mT;
                     Vector3d vT;
-                    trianglePointState(c, tn, mass, vel, mT, vT);
+                    trianglePointState(c, tn, w_.mass, w_.vel, mT, vT);
                     const PairLaw law = sphereLaw(S, i, mb, mT);
                     const Vector3d nT(S.triNormal[3 * c.tri], S.triNormal[3 * c.tri + 1], S.triNormal[3 * c.tri + 2]);
                     Vector3d nrm;
@@ -321,7 +322,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
                     // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
                     // (a clump's is larger: this errs towards less drag, never towards reversing the slip).
                     const double mBall = 2.0 / 7.0 * S.mass[i];
-                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, settings.frictionRegVelocity,
+                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, w_.settings.frictionRegVelocity,
                                             std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT};
                     const Vector3d vRel = v + w.cross(arm) - vT;
                     // A contact found deep on a sphere already watched was missed,
@@ -355,7 +356,7 @@ void World::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip,
     }
 }
 
-template void World::sphereContacts<true>(double, double&, double&, double&, long&);
-template void World::sphereContacts<false>(double, double&, double&, double&, long&);
+template void SpherePhase::sphereContacts<true>(double, double&, double&, double&, long&);
+template void SpherePhase::sphereContacts<false>(double, double&, double&, double&, long&);
 
 }  // namespace qdem
