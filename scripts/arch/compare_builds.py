@@ -34,13 +34,24 @@ Measures, per scene: D = largest node displacement from the start (old build,
 first thread count); max |dx| old vs new at each thread count (largest
 distance between the same node in the two runs, over all checkpoints); the
 licence = max |dx| old at 1 thread vs old at the other counts (how much the
-thread count alone already changes the trajectory) and, unless --no-repeat,
-old vs old again at 2 threads (at 2 threads the same build does not repeat
-itself to the bit: ~1e-13 D in cubes27).  A scene PASSes when old vs new <=
-max(1e-12 D, licence) at every thread count.  Obstacle reactions
-are compared and printed too (not part of the verdict).  Writes
-<out>/compare.json (and the runs' .npz files in <out>/runs); exits 1 when a
-scene fails.  The whole default run takes a few minutes on 2 busy cores."""
+thread count alone already changes the trajectory) and the largest
+difference among the old build's runs at 2 threads (the first one and
+--repeat more: at 2 threads a build does not repeat itself to the bit, since
+the point-polygon and edge-edge loops hand out contacts to threads by
+schedule(dynamic) and the per-thread force buffers are summed in another
+grouping each run).  A scene PASSes when old vs new <= max(1e-12 D,
+slack x licence) at every thread count, slack = 10 by default; the rows also
+say whether old vs new stays within the licence itself (pass_strict).  Why
+the slack: the licence is one or two samples of a rounding noise that spans
+decades (the restart scene's 2-thread run-to-run difference: 1e-14 D in one
+run, 2.3e-12 D in another), and a build that legitimately sums in another
+order draws one more sample of it: without slack, identical code failed at
+2 threads in one of our first three runs.  At 1 thread runs repeat to the bit, so identical
+physics gives exactly 0 there.
+Obstacle reactions are compared and printed too (not part of the verdict).
+Writes <out>/compare.json (and the runs' .npz files and compare.log in
+<out>/runs and <out>); exits 1 when a scene fails.  The whole default run
+takes 2-3 minutes on 2 busy cores."""
 import argparse
 import json
 import os
@@ -103,20 +114,24 @@ def displacement(a):
     return float(np.linalg.norm(a["pos"] - a["ref"][None], axis=2).max())
 
 
-def judge(name, runs, threads, D, Fmax):
+def judge(name, runs, threads, D, Fmax, slack):
     """The verdict of one pair of builds: runs[(build, threads)] -> data;
-    runs[("repeat", t)]: the old build again at t > 1 thread (when measured)."""
+    runs[("repeat", t, i)]: the old build again at t > 1 thread (when measured)."""
     t0 = threads[0]
     lic = max([maxDx(runs[("old", t0)], runs[("old", t)]) for t in threads[1:]], default=0.0)
     licF = max([maxDf(runs[("old", t0)], runs[("old", t)]) for t in threads[1:]], default=0.0)
-    again = max([maxDx(runs[("old", t)], runs[("repeat", t)]) for t in threads[1:] if ("repeat", t) in runs],
-                default=0.0)
-    againF = max([maxDf(runs[("old", t)], runs[("repeat", t)]) for t in threads[1:] if ("repeat", t) in runs],
-                 default=0.0)
-    allowed = max(REL * D, lic, again)
+    pairs = []
+    for t in threads[1:]:
+        same = [runs[("old", t)]] + [v for k, v in sorted(runs.items(), key=lambda kv: str(kv[0]))
+                                     if k[:2] == ("repeat", t)]
+        pairs += [(x, y) for i, x in enumerate(same) for y in same[i + 1:]]
+    again = max([maxDx(x, y) for x, y in pairs], default=0.0)
+    againF = max([maxDf(x, y) for x, y in pairs], default=0.0)
+    strict = max(REL * D, lic, again)
+    allowed = max(REL * D, slack * max(lic, again))
     res = {"licence_old_%d_vs_other_threads" % t0: lic, "licence_ratio": lic / D if D else None,
            "old_run_to_run_at_more_threads": again, "run_to_run_ratio": again / D if D else None,
-           "allowed_dx": allowed, "force_licence": max(licF, againF), "old_vs_new": {}}
+           "allowed_dx": allowed, "allowed_dx_strict": strict, "slack": slack, "force_licence": max(licF, againF), "old_vs_new": {}}
     ok = True
     for t in threads:
         dx = maxDx(runs[("old", t)], runs[("new", t)])
@@ -124,6 +139,7 @@ def judge(name, runs, threads, D, Fmax):
         passed = dx <= allowed
         ok &= passed
         res["old_vs_new"][str(t)] = {"max_dx": dx, "ratio": dx / D if D else None, "pass": passed,
+                                      "pass_strict": dx <= strict,
                                       "max_dforce": df, "force_ratio": df / Fmax if Fmax else None}
     return res, ok
 
@@ -156,8 +172,10 @@ def main():
     ap.add_argument("--spheres", type=int, default=400)
     ap.add_argument("--restart-at", type=int, default=11000)
     ap.add_argument("--restart-steps", type=int, default=5000)
-    ap.add_argument("--no-repeat", dest="repeat", action="store_false",
-                    help="do not run the old build a second time at more than 1 thread")
+    ap.add_argument("--slack", type=float, default=10.0,
+                    help="the licence (a sample of rounding noise) is multiplied by this in the verdict")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="extra runs of the old build at each thread count > 1 (their spread joins the licence)")
     a = ap.parse_args()
     for b in (a.old, a.new):
         if not os.path.isdir(os.path.join(b, "qdem")):
@@ -169,7 +187,8 @@ def main():
     builds = {"old": a.old, "new": a.new}
     threads = a.threads
     report = {"old": os.path.abspath(a.old), "new": os.path.abspath(a.new), "threads": threads, "rel": REL,
-              "rule": "PASS when max|dx| old vs new <= max(%g * largest displacement, licence)" % REL,
+              "rule": "PASS when max|dx| old vs new <= max(%g * largest displacement, %g * licence); "
+                      "pass_strict: <= max(%g * largest displacement, licence)" % (REL, a.slack, REL),
               "scenes": {}}
     failed = []
     if "shogi" in a.scenes:
@@ -195,12 +214,13 @@ def main():
                         name, path, t, os.path.join(work, "%s_%s_%d.npz" % (name, b, t)), args, log)
                 print("  %s: %s build, %d thread(s): %.1f s" % (name, b, t, sum(
                     v for k, v in walls.items() if k.startswith("%s_%d" % (b, t)))), flush=True)
-        if a.repeat:
+        for i in range(a.repeat):
             for t in threads[1:]:   # how much the old build differs from itself at this thread count
                 phase = ["--phase", "straight", "--state", os.path.join(work, "restart_repeat_%d.state.npz" % t)] \
                     if name == "restart" else []
-                runs[("repeat", t)], walls["old_%d_again" % t] = run(
-                    name, a.old, t, os.path.join(work, "%s_old_%d_again.npz" % (name, t)), args + phase, log)
+                runs[("repeat", t, i)], walls["old_%d_again%d" % (t, i + 1)] = run(
+                    name, a.old, t, os.path.join(work, "%s_old_%d_again%d.npz" % (name, t, i + 1)), args + phase,
+                    log)
         if name == "restart":
             for t in threads:   # the new build goes on from the old build's state file
                 state = os.path.join(work, "restart_old_%d.state.npz" % t)
@@ -210,9 +230,9 @@ def main():
         ref = runs[("old", threads[0])]
         D = displacement(ref)
         Fmax = float(np.abs(ref["force"]).max()) if ref["force"].size else 0.0
-        res, ok = judge(name, runs, threads, D, Fmax)
+        res, ok = judge(name, runs, threads, D, Fmax, a.slack)
         if name == "restart":
-            allowed = res["allowed_dx"]
+            allowed = res["allowed_dx"]   # (with the slack)
             within = {}
             for b in builds:
                 for t in threads:
@@ -257,8 +277,10 @@ def summary(name, res, threads):
              res["licence_ratio"] or 0.0, res["old_run_to_run_at_more_threads"], res["run_to_run_ratio"] or 0.0,
              c["pointPolygon"], c["edgeEdge"], c["wall"], c["sphere"], c["verletRebuilds"]))
     for t, r in res["old_vs_new"].items():
-        print("    old vs new, %s thread(s): max|dx| %.3g m = %.3g D (allowed %.3g m)  %s;  max|dF| %.3g N = %.3g Fmax"
-              % (t, r["max_dx"], r["ratio"] or 0.0, res["allowed_dx"], "ok" if r["pass"] else "FAIL",
+        print("    old vs new, %s thread(s): max|dx| %.3g m = %.3g D (allowed %.3g m, strictly %.3g m)  %s%s;  "
+              "max|dF| %.3g N = %.3g Fmax"
+              % (t, r["max_dx"], r["ratio"] or 0.0, res["allowed_dx"], res["allowed_dx_strict"],
+                 "ok" if r["pass"] else "FAIL", "" if r["pass_strict"] else " (above the licence itself)",
                  r["max_dforce"], r["force_ratio"] or 0.0))
     for k, r in res.get("restart_within_build_resumed_vs_straight", {}).items():
         print("    restart within build %s: resumed vs straight max|dx| %.3g  %s" % (k, r["max_dx"],
