@@ -131,7 +131,8 @@ def judge(name, runs, threads, D, Fmax, slack):
     allowed = max(REL * D, slack * max(lic, again))
     res = {"licence_old_%d_vs_other_threads" % t0: lic, "licence_ratio": lic / D if D else None,
            "old_run_to_run_at_more_threads": again, "run_to_run_ratio": again / D if D else None,
-           "allowed_dx": allowed, "allowed_dx_strict": strict, "slack": slack, "force_licence": max(licF, againF), "old_vs_new": {}}
+           "allowed_dx": allowed, "allowed_dx_strict": strict, "slack": slack, "force_licence": max(licF, againF),
+           "old_vs_new": {}}
     ok = True
     for t in threads:
         dx = maxDx(runs[("old", t)], runs[("new", t)])
