@@ -45,7 +45,7 @@ void ElementPhase::elementRange(const Law& law, int32_t t0, int32_t t1, const Ma
 
 void ElementPhase::run(double dt) {
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, w_.awakeVersion_)) layout_.build(w_.tetNodes.data(), w_.awakeTets_, nth, w_.awakeVersion_);
+    if (!layout_.matches(nth, w_.sleeping().version())) layout_.build(w_.tetNodes.data(), w_.sleeping().awakeTets(), nth, w_.sleeping().version());
     double diss = 0;
     const bool energyOn = w_.settings.trackEnergy;
 #pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)

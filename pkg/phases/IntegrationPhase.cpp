@@ -28,9 +28,9 @@ void IntegrationPhase::run(double dt) {
     double ek = 0, eg = 0, ed = 0;
     const double damp = w_.settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
-    const bool all = w_.nAsleep_ == 0;
-    const int32_t* ids = w_.awakeNodes_.data();
-    const auto count = all ? N : static_cast<int32_t>(w_.awakeNodes_.size());
+    const bool all = w_.sleeping().nAsleep() == 0;
+    const int32_t* ids = w_.sleeping().awakeNodes().data();
+    const auto count = all ? N : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
     const bool sleepOn = w_.settings.sleepVelocity > 0;
     if (sleepOn) {
         threadSpeed2_.resize(nth);

@@ -22,8 +22,8 @@ void ObstaclePhase::run(double dt) {
     }
     // Sleeping pieces still push on obstacles with what they pushed when
     // they fell asleep.
-    for (std::size_t p = 0; p < w_.frozenReaction_.size(); ++p) {
-        const std::vector<double>& fr = w_.frozenReaction_[p];
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p) {
+        const std::vector<double>& fr = w_.sleeping().frozenReaction(p);
         for (std::size_t k = 0; k + 7 <= fr.size(); k += 7) {
             Obstacle& o = w_.obstacles[static_cast<int>(fr[k])];
             o.reactionForce += Eigen::Vector3d(fr[k + 1], fr[k + 2], fr[k + 3]);
@@ -72,9 +72,9 @@ void ObstaclePhase::run(double dt) {
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
     // Sleeping pieces' nodes are skipped (their history kept as it is).
-    const bool all = w_.nAsleep_ == 0;
-    const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
-    const int32_t* awakeSurf = w_.awakeSurf_.data();
+    const bool all = w_.sleeping().nAsleep() == 0;
+    const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
+    const int32_t* awakeSurf = w_.sleeping().awakeSurf().data();
 
     long nWall = 0;
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)

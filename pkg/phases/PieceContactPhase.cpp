@@ -56,11 +56,11 @@ void PieceContactPhase::run(double dt) {
     for (std::size_t i = 0; i < np; ++i) st_.pieceActive[i] = st_.nbrStart[i + 1] > st_.nbrStart[i];
     // A sleeping piece whose neighbours all sleep has nothing moving near it:
     // its contacts are skipped (their history kept).
-    if (w_.nAsleep_ > 0)
+    if (w_.sleeping().nAsleep() > 0)
         for (std::size_t i = 0; i < np; ++i) {
-            if (!w_.asleep_[i]) continue;
+            if (!w_.sleeping().asleep(i)) continue;
             bool all = true;
-            for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1] && all; ++q) all = w_.asleep_[st_.nbrs[q]];
+            for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1] && all; ++q) all = w_.sleeping().asleep(st_.nbrs[q]);
             frozen_[i] = all;
         }
     const bool any = !st_.pairs.empty();
@@ -91,19 +91,19 @@ void PieceContactPhase::run(double dt) {
                    st_.listActive.size() != np;
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
     if (!rebuild) {
-        const bool all = w_.nAsleep_ == 0;  // else only the awake pieces' nodes move
-        const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
+        const bool all = w_.sleeping().nAsleep() == 0;  // else only the awake pieces' nodes move
+        const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
         double moved2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
         for (int32_t j = 0; j < ns; ++j) {
-            const int32_t i = all ? j : w_.awakeSurf_[j];
+            const int32_t i = all ? j : w_.sleeping().awakeSurf()[j];
             const int32_t n = w_.surfNodes[i];
             if (!st_.pieceActive[w_.nodePiece[n]]) continue;
             moved2 = std::max(moved2, (at(w_.pos, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
         }
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
-        for (std::size_t ip = 0; ip < np && w_.nAsleep_ > 0; ++ip)
-            if (st_.pieceActive[ip] && w_.asleep_[ip]) moved2 = std::max(moved2, w_.sleepMoved2_[ip]);
+        for (std::size_t ip = 0; ip < np && w_.sleeping().nAsleep() > 0; ++ip)
+            if (st_.pieceActive[ip] && w_.sleeping().asleep(ip)) moved2 = std::max(moved2, w_.sleeping().moved2(ip));
         rebuild = moved2 > 0.25 * skin * skin;
     }
     const double grow = verlet ? skin : 0.0;
@@ -197,7 +197,7 @@ void PieceContactPhase::run(double dt) {
             for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
         }
     }
-    for (std::size_t ip = 0; ip < np && w_.nAsleep_ > 0; ++ip) normalsFresh_[ip] = w_.asleep_[ip] && st_.pieceActive[ip];
+    for (std::size_t ip = 0; ip < np && w_.sleeping().nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping().asleep(ip) && st_.pieceActive[ip];
     if (verlet && rebuild && w_.settings.pointPolygonOn) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
@@ -249,7 +249,7 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.list[static_cast<std::size_t>(KL) * i], std::max(0, st_.listCount[i]),
                         &st_.listFlat[st_.listStart[i]]);
         st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
-        std::fill(w_.sleepMoved2_.begin(), w_.sleepMoved2_.end(), 0.0);  // lists now from the current positions
+        w_.sleepPhase_.listsRebuilt();  // lists now from the current positions
         st_.listSkin = skin;
         st_.listTris = S.nTris();
         st_.listValid = true;
@@ -293,14 +293,14 @@ void PieceContactPhase::run(double dt) {
     long nPP = 0, nEE = 0;
     const bool fric = w_.settings.frictionOn;
     // Thread buffers: only awake pieces' nodes are read (and so zeroed).
-    const bool all = w_.nAsleep_ == 0;
+    const bool all = w_.sleeping().nAsleep() == 0;
 #pragma omp parallel num_threads(nth)
     {
         auto& b = st_.threadForce[omp_get_thread_num()];
         if (all) std::fill(b.begin(), b.end(), 0.0);
         else
             for (std::size_t ip = 0; ip < np; ++ip)
-                if (!w_.asleep_[ip]) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+                if (!w_.sleeping().asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
     }
     if (w_.settings.pointPolygonOn) {
         if (fric) pointPolygon<true>(dt, eDamp, eSlip, nPP, maxOv);
@@ -313,10 +313,10 @@ void PieceContactPhase::run(double dt) {
     }
     const double tEE = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
-    const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.awakeSurf_.size());
+    const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t j = 0; j < ns; ++j) {
-        const int32_t s = all ? j : w_.awakeSurf_[j];
+        const int32_t s = all ? j : w_.sleeping().awakeSurf()[j];
         for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
     }

@@ -13,6 +13,7 @@
 namespace qdem {
 
 class World;
+struct WorldState;
 
 // Named arrays of a phase's state, by reference, for Checkpoint.cpp.
 struct StateColumns {
@@ -41,7 +42,13 @@ public:
     virtual void stateColumns(StateColumns&) {}
     // Pieces were added: grow per-node / per-piece state (new entries empty).
     virtual void piecesAdded() {}
-    // A saved state was loaded into the columns: derived data is stale.
+    // State that is not a column (lists of lists, flags with defaults for
+    // older files): written to and read from the state by name.  checkFields
+    // throws InputError before anything changes when the state does not fit.
+    virtual void saveFields(WorldState&) const {}
+    virtual void checkFields(const WorldState&) const {}
+    virtual void loadFields(const WorldState&) {}
+    // A saved state was loaded (columns and fields): derived data is stale.
     virtual void stateLoaded() {}
 
 protected:

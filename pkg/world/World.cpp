@@ -120,15 +120,8 @@ int World::addPiece(const TetMesh& mesh, int material) {
     surf_.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
     surf_.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
     omegaCache_.clear();
-    asleep_.push_back(0);
-    slowFor_.push_back(0);
-    pieceSpeed2_.push_back(0);
-    sleepMoved2_.push_back(0);
-    held_.push_back(0);
     for (Phase* ph : phases()) ph->piecesAdded();
-    frozenReaction_.emplace_back();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
-    awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
     return pieceId;
 }
 
@@ -140,12 +133,10 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
             throw InputError(cat("obstacle ", o.bodyId, ": box extents must be >= 0"));
     }
     const std::vector<double> sig = obstacleSignature(obs);
-    const bool same = obstaclesPending_ ? sig == loadedObstacles_ : sig == obstacleSignature(obstacles);
-    obstaclesPending_ = false;
+    const bool same = sleepPhase_.obstaclesSet(sig, obstacleSignature(obstacles));  // false: all woken
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
     if (!same) {
-        wakeAll();  // frozen reactions are kept by obstacle index
         obstaclePhase_.obstaclesChanged();
     }
     omegaCache_.clear();
@@ -178,7 +169,7 @@ void World::updatePieceBounds(bool all) {
     pieceLo_.resize(3 * np);
     pieceHi_.resize(3 * np);
     for (std::size_t ip = 0; ip < np; ++ip) {
-        if (asleep_[ip] && !all) continue;  // has not moved
+        if (sleepPhase_.asleep(ip) && !all) continue;  // has not moved
         const PieceInfo& p = pieces[ip];
         Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
         for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
@@ -197,11 +188,22 @@ void World::updatePieceBounds(bool all) {
 void World::beginContactForces() {
     if (contactsActive_) return;
     for (std::size_t p = 0; p < pieces.size(); ++p) {
-        if (asleep_[p]) continue;  // not integrated: its contact forces are not read
+        if (sleepPhase_.asleep(p)) continue;  // not integrated: its contact forces are not read
         for (int32_t i = pieces[p].surfBegin; i < pieces[p].surfEnd; ++i)
             for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[i] + d] = 0.0;
     }
     contactsActive_ = true;
+}
+
+void World::setGravity(const Eigen::Vector3d& g) {
+    const Eigen::Vector3d old = gravity;
+    gravity = g;
+    sleepPhase_.gravitySet(old, g);
+}
+
+void World::setDynamic(std::size_t p, bool dynamic) {
+    if (p >= pieces.size()) throw InputError(cat("setDynamic: no piece ", p));
+    sleepPhase_.setDynamic(p, dynamic);
 }
 
 }  // namespace qdem

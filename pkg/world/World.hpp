@@ -23,6 +23,7 @@
 #include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
 #include "../phases/PieceContactPhase.hpp"
+#include "../phases/SleepPhase.hpp"
 #include "../phases/SpherePhase.hpp"
 #include "Settings.hpp"
 #include "ThreadLayout.hpp"
@@ -154,18 +155,20 @@ public:
     // moves, a YADE sphere comes near, or wake()/wakeAll() is called (the
     // Python Piece does so when its arrays are handed out for writing).
     // settings.sleepVelocity 0 (the default) turns sleeping off.
-    bool asleep(std::size_t piece) const { return piece < asleep_.size() && asleep_[piece]; }
-    long nAsleep() const { return nAsleep_; }
-    long sleepCount = 0;  // pieces put to sleep so far (diagnostics)
-    long wakeCount = 0;   // and woken
-    void wake(std::size_t piece);
-    void wakeAll();
+    bool asleep(std::size_t piece) const { return sleepPhase_.asleep(piece); }
+    long nAsleep() const { return sleepPhase_.nAsleep(); }
+    long sleepCount() const { return sleepPhase_.sleepCount(); }  // pieces put to sleep so far (diagnostics)
+    long wakeCount() const { return sleepPhase_.wakeCount(); }    // and woken
+    void wake(std::size_t piece) { sleepPhase_.wake(piece); }
+    void wakeAll() { sleepPhase_.wakeAll(); }
     // A piece that is not dynamic (YADE's Body.dynamic) is put to sleep where
     // it is and stays so: nothing wakes it until it is made dynamic again.
     // Awake pieces still touch it as a fixed body; its push on obstacles
     // stays what it was.  Works with sleeping off too.
-    bool dynamic(std::size_t piece) const { return piece >= held_.size() || !held_[piece]; }
+    bool dynamic(std::size_t piece) const { return sleepPhase_.dynamic(piece); }
     void setDynamic(std::size_t piece, bool dynamic);
+    // The awake set and the sleeping decisions (read by the phases).
+    const SleepPhase& sleeping() const { return sleepPhase_; }
 
     std::size_t nNodes() const { return mass.size(); }
     std::size_t nTets() const { return tetVol0.size(); }
@@ -204,49 +207,30 @@ private:
     friend class IntegrationPhase;
     friend class PieceContactPhase;
     friend class SpherePhase;
+    friend class SleepPhase;
     ObstaclePhase obstaclePhase_{*this};
     PieceContactPhase pieceContactPhase_{*this};
     SpherePhase spherePhase_{*this};
     ElementPhase elementPhase_{*this};
     IntegrationPhase integrationPhase_{*this, elementPhase_};
+    SleepPhase sleepPhase_{*this};
+    // In the order of the step; Checkpoint.cpp and addPiece visit them.
+    std::vector<Phase*> phases() {
+        return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_, &sleepPhase_};
+    }
+    std::vector<const Phase*> phases() const {
+        return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_, &sleepPhase_};
+    }
+    // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
+    StateColumns stateColumns();
+
     void updatePieceBounds(bool all = false);  // all: sleeping pieces' too (after a load)
     void beginContactForces();
     double elementOmegaMax(const PieceInfo& p) const;
-    // Sleeping (Sleep.cpp): the decisions at the end of a step, one piece
-    // put to sleep, and the derived lists when the awake set changed.
-    void updateSleep(double dt);
-    void putToSleep(std::size_t p);
-    void wakeOne(std::size_t p);
-    // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
-    StateColumns stateColumns();
-    std::vector<Phase*> phases() { return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_}; }
-    void awakeSetChanged();
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
 
-    // Sleeping: per piece flags and clocks (sized in addPiece).
-    std::vector<uint8_t> asleep_;
-    std::vector<double> slowFor_;        // time all its nodes have been slower than sleepVelocity [s]
-    std::vector<double> pieceSpeed2_;    // largest squared node speed in the last step
-    std::vector<uint8_t> held_;          // per piece: not dynamic (asleep until made dynamic)
-    std::vector<double> sleepMoved2_;    // squared displacement since the last list rebuild, when it fell asleep
-    std::vector<std::vector<double>> frozenReaction_;    // per piece: (obstacle index, F, T) x 7 at its sleep
-    // What the sleeping pieces of a loaded state rest in: the obstacle list
-    // (obstacleSignature) and gravity it was saved with.  A script restarting
-    // in a new process loads the state before its engine hands over gravity
-    // and the YADE bodies: when they are the saved ones nobody is woken; if
-    // the first step comes with others, every piece is (checkLoadedRest).
-    std::vector<double> loadedObstacles_;
-    Eigen::Vector3d loadedGravity_ = Eigen::Vector3d::Zero();
-    bool obstaclesPending_ = false;
-    bool gravityPending_ = false;
-    void checkLoadedRest();
-    long nAsleep_ = 0;
-    long awakeVersion_ = 0;              // bumped whenever pieces are added or fall asleep or wake
-    std::vector<TetSegment> awakeTets_;  // per awake piece, its tets
-    std::vector<int32_t> awakeNodes_;    // ids of the nodes of awake pieces (used when some sleep)
-    std::vector<int32_t> awakeSurf_;     // indices (into surfNodes) of their surface nodes
     // Energy states per piece (elastic, contact with obstacles, contact with
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;

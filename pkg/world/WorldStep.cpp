@@ -16,7 +16,7 @@ void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
     double t0 = omp_get_wtime();
-    if (obstaclesPending_ || gravityPending_) checkLoadedRest();
+    sleepPhase_.checkLoadedRest();
     contactsActive_ = false;
     if (settings.trackEnergy) {
         energy.contactElastic = 0;  // a state: summed afresh by the contact phases
@@ -38,7 +38,7 @@ void World::step(double dt) {
     timings.integrate = t3 - t2;
     time += dt;
     ++iter;
-    updateSleep(dt);
+    sleepPhase_.run(dt);
 }
 
 }  // namespace qdem

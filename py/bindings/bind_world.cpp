@@ -191,8 +191,8 @@ void bindWorld(py::module_& m) {
         .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
              "Is the piece asleep (left out of the step until something near it moves)?")
         .def_property_readonly("nAsleep", &World::nAsleep)
-        .def_readonly("sleepCount", &World::sleepCount, "Pieces put to sleep so far.")
-        .def_readonly("wakeCount", &World::wakeCount, "Pieces woken so far.")
+        .def_property_readonly("sleepCount", &World::sleepCount, "Pieces put to sleep so far.")
+        .def_property_readonly("wakeCount", &World::wakeCount, "Pieces woken so far.")
         .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),
              "Wake a sleeping piece (before changing its state from outside).")
         .def("wakeAll", &World::wakeAll)

@@ -1,0 +1,245 @@
+// Sleeping pieces (doc/sleeping.md): pieces at rest are left out of the step
+// until something near them moves.  In a domino line of 40 pieces only the
+// few around the front move at any time; the rest stand or lie still.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../world/World.hpp"
+#include "SleepPhase.hpp"
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+
+namespace qdem {
+
+void SleepPhase::awakeSetChanged() {
+    ++version_;
+    const std::size_t np = w_.pieces.size();
+    awakeTets_.clear();
+    awakeNodes_.clear();
+    awakeSurf_.clear();
+    nAsleep_ = 0;
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) {
+            ++nAsleep_;
+            continue;
+        }
+        awakeTets_.push_back({static_cast<int32_t>(p), w_.pieces[p].tetBegin, w_.pieces[p].tetEnd});
+        for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
+        for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) awakeSurf_.push_back(s);
+    }
+}
+
+void SleepPhase::wakeOne(std::size_t p) {
+    asleep_[p] = 0;
+    w_.pieceContactPhase_.sleepChanged(p, true);
+    slowFor_[p] = 0;
+    pieceSpeed2_[p] = 0;
+    frozenReaction_[p].clear();
+    ++wakeCount_;
+}
+
+void SleepPhase::wake(std::size_t p) {
+    if (p >= asleep_.size() || !asleep_[p] || held_[p]) return;
+    wakeOne(p);
+    awakeSetChanged();
+}
+
+void SleepPhase::wakeAll() {
+    if (nAsleep_ == 0) return;
+    bool changed = false;
+    for (std::size_t p = 0; p < asleep_.size(); ++p)
+        if (asleep_[p] && !held_[p]) {
+            wakeOne(p);
+            changed = true;
+        }
+    if (changed) awakeSetChanged();
+}
+
+void SleepPhase::setDynamic(std::size_t p, bool dynamic) {
+    if (dynamic) {
+        held_[p] = 0;
+        wake(p);
+        return;
+    }
+    held_[p] = 1;
+    if (!asleep_[p]) {
+        putToSleep(p);
+        awakeSetChanged();
+    }
+    w_.updatePieceBounds(true);  // its box is no longer updated by the step (and may not exist yet)
+}
+
+void SleepPhase::putToSleep(std::size_t p) {
+    const PieceInfo& P = w_.pieces[p];
+    // Velocities to zero: the kinetic energy left is booked as removed.
+    double ek = 0;
+    for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n)
+        for (int d = 0; d < 3; ++d) {
+            double& v = w_.vel[3 * n + d];
+            ek += 0.5 * w_.mass[n] * v * v;
+            v = 0;
+        }
+    if (w_.settings.trackEnergy) w_.energy.sleep += ek;
+    // What it pushed on obstacles this step stays in their reactions.
+    std::vector<double>& fr = frozenReaction_[p];
+    fr.clear();
+    const std::vector<int>& pieceObstacles_ = w_.obstaclePhase_.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = w_.obstaclePhase_.pieceObstacleBegin();
+    const std::vector<double>& pairReaction_ = w_.obstaclePhase_.pairReaction();
+    if (pieceObstacleBegin_.size() == w_.pieces.size() + 1 && pairReaction_.size() == 6 * pieceObstacles_.size())
+        for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
+            fr.push_back(pieceObstacles_[j]);
+            fr.insert(fr.end(), &pairReaction_[6 * j], &pairReaction_[6 * j + 6]);
+        }
+    // How far it moved since the Verlet lists were built: other nodes may
+    // only move the rest of half the skin before the lists are rebuilt.
+    double m2 = 0;
+    const PieceContactState& pc = w_.pieceContactPhase_.state();
+    if (pc.listValid && pc.listPos.size() == 3 * w_.surfNodes.size())
+        for (int32_t s = P.surfBegin; s < P.surfEnd; ++s) {
+            const int32_t n = w_.surfNodes[s];
+            double d2 = 0;
+            for (int d = 0; d < 3; ++d) d2 += std::pow(w_.pos[3 * n + d] - pc.listPos[3 * s + d], 2);
+            m2 = std::max(m2, d2);
+        }
+    sleepMoved2_[p] = m2;
+    asleep_[p] = 1;
+    w_.pieceContactPhase_.sleepChanged(p, false);
+    ++sleepCount_;
+}
+
+void SleepPhase::run(double dt) {
+    const std::size_t np = w_.pieces.size();
+    if (!(w_.settings.sleepVelocity > 0)) {
+        wakeAll();
+        return;
+    }
+    const double v2 = w_.settings.sleepVelocity * w_.settings.sleepVelocity;
+    // Largest node speed of each awake piece, from the integration.
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) continue;
+        const double m = w_.integrationPhase_.maxSpeed2(p);
+        pieceSpeed2_[p] = m;
+        slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
+    }
+    const PieceContactState& pc = w_.pieceContactPhase_.state();
+    const bool nbrsValid = pc.nbrStart.size() == np + 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn) && np > 1;
+    auto fastNeighbour = [&](std::size_t p) {
+        if (!nbrsValid) return false;
+        for (int32_t q = pc.nbrStart[p]; q < pc.nbrStart[p + 1]; ++q) {
+            const int32_t b = pc.nbrs[q];
+            if (!asleep_[b] && pieceSpeed2_[b] >= v2) return true;
+        }
+        return false;
+    };
+    const std::vector<int>& pieceObstacles_ = w_.obstaclePhase_.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = w_.obstaclePhase_.pieceObstacleBegin();
+    auto movingObstacle = [&](std::size_t p) {
+        if (pieceObstacleBegin_.size() != np + 1) return false;
+        for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
+            const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
+            if (o.vel.squaredNorm() > 0 || o.angVel.squaredNorm() > 0) return true;
+        }
+        return false;
+    };
+    auto nearSphere = [&](std::size_t p) { return p < w_.spheres.pieceUsed.size() && w_.spheres.pieceUsed[p]; };
+    bool changed = false;
+    for (std::size_t p = 0; p < np; ++p) {
+        if (asleep_[p]) {
+            if (!held_[p] && (fastNeighbour(p) || movingObstacle(p) || nearSphere(p))) {
+                wakeOne(p);
+                changed = true;
+            }
+        } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= w_.settings.sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&
+                   !nearSphere(p)) {
+            putToSleep(p);
+            changed = true;
+        }
+    }
+    if (changed) awakeSetChanged();
+}
+
+void SleepPhase::gravitySet(const Eigen::Vector3d& old, const Eigen::Vector3d& g) {
+    const bool same = g == old || (gravityPending_ && g == loadedGravity_);
+    gravityPending_ = false;
+    if (!same) wakeAll();  // a sleeping piece would not feel the change
+}
+
+bool SleepPhase::obstaclesSet(const std::vector<double>& newSig, const std::vector<double>& oldSig) {
+    const bool same = obstaclesPending_ ? newSig == loadedObstacles_ : newSig == oldSig;
+    obstaclesPending_ = false;
+    if (!same) wakeAll();  // frozen reactions are kept by obstacle index
+    return same;
+}
+
+void SleepPhase::checkLoadedRest() {
+    if (!obstaclesPending_ && !gravityPending_) return;
+    const bool same = (!gravityPending_ || w_.gravity == loadedGravity_) &&
+                      (!obstaclesPending_ || obstacleSignature(w_.obstacles) == loadedObstacles_);
+    gravityPending_ = obstaclesPending_ = false;
+    if (!same) wakeAll();
+}
+
+void SleepPhase::piecesAdded() {
+    const std::size_t np = w_.pieces.size();
+    asleep_.resize(np, 0);
+    slowFor_.resize(np, 0);
+    pieceSpeed2_.resize(np, 0);
+    sleepMoved2_.resize(np, 0);
+    held_.resize(np, 0);
+    frozenReaction_.resize(np);
+    awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
+}
+
+void SleepPhase::stateColumns(StateColumns& c) {
+    c.add("asleep", asleep_);
+    c.add("slowFor", slowFor_);
+    c.add("pieceSpeed2", pieceSpeed2_);
+    c.add("sleepMoved2", sleepMoved2_);
+}
+
+void SleepPhase::saveFields(WorldState& s) const {
+    std::vector<int64_t> start{0};  // frozen obstacle reactions, flattened
+    std::vector<double> flat;
+    for (const auto& fr : frozenReaction_) {
+        flat.insert(flat.end(), fr.begin(), fr.end());
+        start.push_back(static_cast<int64_t>(flat.size()));
+    }
+    s.put("frozenStart", start.data(), start.size());
+    s.put("frozenReaction", flat.data(), flat.size());
+    const std::vector<double> sig = obstacleSignature(w_.obstacles);
+    s.put("obstacles", sig.data(), sig.size());
+    s.put("gravity", w_.gravity.data(), 3);
+    s.put("held", held_.data(), held_.size());
+}
+
+void SleepPhase::checkFields(const WorldState& s) const {
+    const std::vector<int64_t> fs = s.getAll<int64_t>("frozenStart");
+    const std::vector<double> flat = s.getAll<double>("frozenReaction");
+    if (fs.size() != w_.pieces.size() + 1 || fs.back() != static_cast<int64_t>(flat.size()))
+        throw InputError("world state: field 'frozenStart' does not match the pieces");
+    if (s.fields.count("held") > 0) s.check<uint8_t>("held", held_.size());
+}
+
+void SleepPhase::loadFields(const WorldState& s) {
+    const std::vector<int64_t> fs = s.getAll<int64_t>("frozenStart");
+    const std::vector<double> flat = s.getAll<double>("frozenReaction");
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p)
+        frozenReaction_[p].assign(flat.begin() + fs[p], flat.begin() + fs[p + 1]);
+    // (files from before Piece.dynamic have no "held")
+    if (s.fields.count("held") > 0) s.get("held", held_.data(), held_.size());
+    else std::fill(held_.begin(), held_.end(), 0);
+    // Sleeping pieces rest in the obstacles and gravity the state was saved
+    // with (frozen reactions are by obstacle index): if this world gets others
+    // (or the file predates these fields) they are woken at the next step.
+    obstaclesPending_ = s.fields.count("obstacles") > 0;
+    gravityPending_ = s.fields.count("gravity") > 0 && s.fields.find("gravity")->second.size() == 3 * sizeof(double);
+    loadedObstacles_ = obstaclesPending_ ? s.getAll<double>("obstacles") : std::vector<double>{};
+    if (gravityPending_) s.get("gravity", loadedGravity_.data(), 3);
+    if (!obstaclesPending_ || !gravityPending_) wakeAll();
+    awakeSetChanged();
+}
+
+}  // namespace qdem
