@@ -78,6 +78,14 @@ inline double bornDeepRef(bool carried, double oldRef, bool watched, double over
     return watched && overlap > reach + approach ? overlap - approach : 0.0;
 }
 
+// Contact history is keyed by stable ids: the other piece and, within it,
+// 8 * (local triangle id) + closest feature (0 face, 1-3 edge, 4-6 corner),
+// so a history survives any renumbering of the global arrays (pieces added,
+// migrated to another process).  Local triangle t of piece p is global
+// triangle SurfaceIndex::pieceTriStart[p] + t.
+inline int32_t historyKey(int32_t localTri, TriFeature f) { return 8 * localTri + static_cast<int32_t>(f); }
+inline int32_t historyTri(int32_t key) { return key >> 3; }
+
 struct Candidate {
     int32_t tri;
     TriPoint cp;

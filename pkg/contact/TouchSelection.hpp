@@ -76,16 +76,19 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
 // next triangle keeps its spring); -1 = a new contact.  key/kpiece hold the K
 // slots of the previous step; usedOld marks slots already taken.
 inline int historySlot(const int32_t* key, const int32_t* kpiece, const bool* usedOld, int K, int32_t kk, int32_t pb,
-                       const Candidate* cand, const bool* keep, int nc) {
+                       const Candidate* cand, const bool* keep, int nc, const int32_t* triPiece,
+                       const int32_t* pieceTriStart) {
     int slot = -1;
     for (int k = 0; k < K; ++k)
-        if (key[k] == kk && !usedOld[k]) slot = k;
+        if (key[k] == kk && kpiece[k] == pb && !usedOld[k]) slot = k;
     if (slot < 0)
         for (int k = 0; k < K && slot < 0; ++k)
             if (key[k] >= 0 && kpiece[k] == pb && !usedOld[k]) {
                 bool matchedLater = false;
                 for (int j = 0; j < nc; ++j)
-                    if (keep[j] && 8 * cand[j].tri + static_cast<int>(cand[j].cp.feature) == key[k]) matchedLater = true;
+                    if (keep[j] && triPiece[cand[j].tri] == pb &&
+                        historyKey(cand[j].tri - pieceTriStart[pb], cand[j].cp.feature) == key[k])
+                        matchedLater = true;
                 if (!matchedLater) slot = k;
             }
     return slot;

@@ -41,19 +41,20 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                 st_.eeStamp[e] = stamp;
                 continue;
             }
-            int32_t* other = &st_.eeOther[K * e];
+            int32_t* other = &st_.eeOther[K * e];        // the other edge: local id in its piece
+            int32_t* otherPiece = &st_.eePiece[K * e];   // and that piece
             int8_t* side = &st_.eeSide[K * e];
             double* shear = &st_.eeShear[3 * K * e];
             double* ref = &st_.eeRef[K * e];
             const bool watched = st_.eeStamp[e] == stamp - 1;
             if (!watched)  // history is only valid from the previous step
-                for (int k = 0; k < K; ++k) other[k] = -1;
+                for (int k = 0; k < K; ++k) other[k] = -1, otherPiece[k] = -1;
             st_.eeStamp[e] = stamp;
             const Material& ma = w_.materials[w_.pieces[pa].material];
             const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
             const Vector3d p1 = at(w_.pos, a0), q1 = at(w_.pos, a1);
             const double len1 = (q1 - p1).norm();
-            int32_t newOther[K];
+            int32_t newOther[K], newOtherPiece[K];
             int8_t newSide[K];
             Vector3d newShear[K];
             double newRef[K];
@@ -88,8 +89,9 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const Vector3d d = sp.c1 - sp.c2;
                     const double dist = d.norm();
                     int slot = -1;
+                    const int32_t local2 = e2 - S.pieceEdgeStart[pb];  // history by stable id
                     for (int k = 0; k < K; ++k)
-                        if (other[k] == e2) slot = k;
+                        if (other[k] == local2 && otherPiece[k] == pb) slot = k;
                     // Which side of edge 2 edge 1 is on, along the common normal;
                     // remembered so that edges pushed through each other are
                     // pushed back, not let through.
@@ -133,7 +135,8 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                                                   reach, vRel.dot(n), dt);
                     const ContactResult r =
                         lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
-                    newOther[nNew] = e2;
+                    newOther[nNew] = local2;
+                    newOtherPiece[nNew] = pb;
                     newSide[nNew] = static_cast<int8_t>(sUse);
                     newShear[nNew] = sh;
                     newRef[nNew] = r0;
@@ -170,6 +173,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             }
             for (int k = 0; k < K; ++k) {
                 other[k] = k < nNew ? newOther[k] : -1;
+                otherPiece[k] = k < nNew ? newOtherPiece[k] : -1;
                 side[k] = k < nNew ? newSide[k] : 0;
                 ref[k] = k < nNew ? newRef[k] : 0.0;
                 if (k < nNew)

@@ -11,6 +11,7 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../world/World.hpp"
+#include "../world/WorldState.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -354,6 +355,30 @@ void PieceContactPhase::piecesAdded() {
     st_.resizeHistory(w_.surfNodes.size(), w_.surfaceIndex().nEdges());
     frozen_.resize(w_.pieces.size(), 0);
     normalsFresh_.resize(w_.pieces.size(), 0);
+}
+
+// The edge-edge partners' pieces, and the format of the history keys: states
+// saved before the keys were stable ids (no "eePiece") held global triangle
+// and edge ids, converted here.
+void PieceContactPhase::saveFields(WorldState& s) const { s.put("eePiece", st_.eePiece.data(), st_.eePiece.size()); }
+
+void PieceContactPhase::checkFields(const WorldState& s) const {
+    if (s.fields.count("eePiece") > 0) s.check<int32_t>("eePiece", st_.eePiece.size());
+}
+
+void PieceContactPhase::loadFields(const WorldState& s) {
+    const SurfaceIndex& S = w_.surf_;
+    if (s.fields.count("eePiece") > 0) {
+        s.get("eePiece", st_.eePiece.data(), st_.eePiece.size());
+        return;
+    }
+    for (std::size_t k = 0; k < st_.ppKey.size(); ++k)
+        if (st_.ppKey[k] >= 0) st_.ppKey[k] -= 8 * S.pieceTriStart[st_.ppPiece[k]];
+    for (std::size_t k = 0; k < st_.eeOther.size(); ++k) {
+        const int32_t e = st_.eeOther[k];
+        st_.eePiece[k] = e >= 0 ? S.edgePiece[e] : -1;
+        if (e >= 0) st_.eeOther[k] = e - S.pieceEdgeStart[S.edgePiece[e]];
+    }
 }
 
 void PieceContactPhase::stateLoaded() {

@@ -21,6 +21,9 @@ public:
     void stateColumns(StateColumns& c) override;
     void piecesAdded() override;
     void stateLoaded() override;
+    void saveFields(WorldState& s) const override;
+    void checkFields(const WorldState& s) const override;
+    void loadFields(const WorldState& s) override;
 
     // Read by the sleeping logic: neighbour pieces (CSR nbrStart/nbrs) and
     // the node positions of the last list rebuild.

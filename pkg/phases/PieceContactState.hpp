@@ -72,14 +72,17 @@ struct PieceContactState {
     std::vector<PairConst> nbrLaw;
     std::vector<double> pieceRadius;
 
+    // Contact histories are keyed by stable ids (the other piece, and a local
+    // id within it: ContactDetail.hpp historyKey), never by global array
+    // index, so they survive renumbering (pieces added, MPI migration).
     // Point-polygon history: kPP slots per surface node.
     static constexpr int kPP = 6;
-    Column<int32_t> ppKey, ppPiece;   // key = 8 * triangle + feature; -1 = empty
+    Column<int32_t> ppKey, ppPiece;   // key = 8 * local triangle + feature; -1 = empty
     Column<double> ppShear;
     Column<double> ppRef;             // reference overlap of a contact born deep (0: none), doc/contacts.md §5
     // Edge-edge history: kEE slots per surface edge (owned by the lower edge id).
     static constexpr int kEE = 4;
-    Column<int32_t> eeOther;
+    Column<int32_t> eeOther, eePiece;  // the other edge: local edge id, piece; -1 = empty
     Column<int8_t> eeSide;
     Column<double> eeShear;
     Column<double> eeRef;
@@ -92,6 +95,7 @@ struct PieceContactState {
         ppShear.resize(3 * kPP * nSurfNodes, 0.0);
         ppRef.resize(kPP * nSurfNodes, 0.0);
         eeOther.resize(kEE * nEdges, -1);
+        eePiece.resize(kEE * nEdges, -1);
         eeSide.resize(kEE * nEdges, 0);
         eeShear.resize(3 * kEE * nEdges, 0.0);
         eeRef.resize(kEE * nEdges, 0.0);

@@ -217,7 +217,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             // at 25 m/s passed through each other (doc/hard_cases.md).
             if (watched)
                 for (int k = 0; k < K && key[k] >= 0 && nc < kCandidates; ++k) {
-                    const int32_t t = key[k] >> 3;
+                    const int32_t t = S.pieceTriStart[kpiece[k]] + historyTri(key[k]);
                     bool found = false;
                     for (int i = 0; i < nc && !found; ++i) found = cand[i].tri == t;
                     if (found || !active[triPiece[t]]) continue;
@@ -286,7 +286,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     // run stops (below) rather than push the node on through.
                     if (!keep[i] && watched) {
                         bool carried = false;
-                        for (int k = 0; k < K && key[k] >= 0; ++k) carried = carried || (key[k] >> 3) == cand[i].tri;
+                        for (int k = 0; k < K && key[k] >= 0; ++k)
+                            carried = carried ||
+                                      (kpiece[k] == pb && S.pieceTriStart[pb] + historyTri(key[k]) == cand[i].tri);
                         const bool farSide = killedBy >= 0 && Eigen::Map<const Vector3d>(normal + 3 * killedBy)
                                                                       .dot(Eigen::Map<const Vector3d>(
                                                                           normal + 3 * cand[i].tri)) < -0.5;
@@ -314,7 +316,6 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             Vector3d fA = Vector3d::Zero();
             for (int i = 0; i < nc; ++i) {
                 const Candidate& c = cand[i];
-                const int f = static_cast<int>(c.cp.feature);
                 if (!keep[i] || nNew == K) continue;
 
                 const int32_t* tn = &S.tri[3 * c.tri];
@@ -330,8 +331,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 // Tangential history: same surface feature, else inherited from
                 // a contact with the same piece that ended this step (a node
                 // sliding onto the next triangle keeps its spring).
-                const int32_t kk = 8 * c.tri + f;
-                const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc);
+                const int32_t kk = historyKey(c.tri - S.pieceTriStart[pb], c.cp.feature);
+                const int slot =
+                    historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc, triPiece, S.pieceTriStart.data());
                 Vector3d sh = Vector3d::Zero();
                 if (slot >= 0) {
                     usedOld[slot] = true;

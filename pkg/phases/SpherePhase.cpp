@@ -312,8 +312,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     // Contact point on the sphere, half the overlap inside it
                     // (YADE's convention): the lever arm of friction.
                     const Vector3d arm = -std::max(R - 0.5 * ov, 0.0) * nrm;
-                    const int32_t kk = 8 * c.tri + static_cast<int>(c.cp.feature);
-                    const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc);
+                    const int32_t kk = historyKey(c.tri - t0, c.cp.feature);
+                    const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc, surf.triPiece.data(),
+                                                 surf.pieceTriStart.data());
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) {
                         usedOld[slot] = true;

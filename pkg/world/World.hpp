@@ -190,8 +190,9 @@ public:
     } contactCounts;
     const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Point-polygon contacts of the last step: kPP slots per surface node
-    // holding 8 * triangle + feature (-1 = empty); for diagnostics.
+    // holding 8 * (triangle within its piece) + feature (-1 = empty) and that piece; for diagnostics.
     const Column<int32_t>& pointPolygonKeys() const { return pieceContactPhase_.state().ppKey; }
+    const Column<int32_t>& pointPolygonKeyPieces() const { return pieceContactPhase_.state().ppPiece; }
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap = 0;
 

@@ -239,13 +239,16 @@ void bindWorld(py::module_& m) {
             "pointPolygonContacts",
             [](const World& w) {
                 // (node, triangle, feature) of each point-polygon contact of the last step
+                // (history keys are by piece and local triangle: back to global ids)
                 const auto& keys = w.pointPolygonKeys();
+                const auto& kpiece = w.pointPolygonKeyPieces();
+                const auto& triStart = w.surfaceIndex().pieceTriStart;
                 std::vector<int32_t> out;
                 const int K = PieceContactState::kPP;
                 for (std::size_t s = 0; s < w.surfNodes.size(); ++s)
                     for (int k = 0; k < K; ++k) {
                         const int32_t key = keys[K * s + k];
-                        if (key >= 0) out.insert(out.end(), {w.surfNodes[s], key / 8, key % 8});
+                        if (key >= 0) out.insert(out.end(), {w.surfNodes[s], triStart[kpiece[K * s + k]] + key / 8, key % 8});
                     }
                 return copyOut(out, 3);
             },
