@@ -14,7 +14,7 @@ class ElementPhase final : public Phase {
 public:
     using Phase::Phase;
     const char* name() const override { return "elements"; }
-    void run(double dt);
+    void run(double dt) override;
     // Per-thread node force buffers of the last run and the node range each covers.
     const ThreadLayout& layout() const { return layout_; }
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.

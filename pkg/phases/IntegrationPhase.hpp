@@ -14,7 +14,7 @@ class IntegrationPhase final : public Phase {
 public:
     IntegrationPhase(World& world, const ElementPhase& elements) : Phase(world), elements_(elements) {}
     const char* name() const override { return "integrate"; }
-    void run(double dt);
+    void run(double dt) override;
     // Largest squared node speed of a piece in the last run (sleeping on only).
     double maxSpeed2(std::size_t piece) const;
 

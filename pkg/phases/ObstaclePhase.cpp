@@ -33,7 +33,7 @@ void ObstaclePhase::run(double dt) {
     pieceObstacles_.clear();
     pieceObstacleBegin_.clear();
     pairReaction_.clear();
-    w_.contactCounts.wall = 0;
+    contacts_ = 0;
     if (nObs == 0 || w_.surfNodes.size() == 0) return;
 
     // Which obstacles can each piece reach this step (bounding boxes + radius)?
@@ -155,7 +155,7 @@ void ObstaclePhase::run(double dt) {
             for (int d = 0; d < 3; ++d) w_.contactForce_[3 * node + d] += fNode[d];
         }
     }
-    w_.contactCounts.wall = nWall;
+    contacts_ = nWall;
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)

@@ -16,7 +16,11 @@ public:
     const char* name() const override { return "obstacles"; }
     // Contact forces on the awake surface nodes (World::contactForce), the
     // obstacles' reactions (sleeping pieces' frozen ones included), energies.
-    void run(double dt);
+    void run(double dt) override;
+    void report(PhaseReport& r) const override {
+        Phase::report(r);
+        r.counts.push_back({"wall", contacts_});  // surface node - obstacle contacts (awake pieces)
+    }
     void stateColumns(StateColumns& c) override;
     void piecesAdded() override;
     // A loaded state continues a run: its contacts with obstacles are not a
@@ -47,6 +51,7 @@ private:
     std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
     std::vector<int> pieceObstacles_, pieceObstacleBegin_;
     std::vector<double> pairReaction_;      // per (piece, obstacle) pair, 6 each
+    long contacts_ = 0;
 };
 
 }  // namespace qdem

@@ -20,9 +20,9 @@ using Eigen::Vector3d;
 using namespace contact_detail;
 
 void PieceContactPhase::run(double dt) {
-    w_.timings.broadPhase = w_.timings.pointPolygon = w_.timings.edgeEdge = 0;
-    w_.contactCounts.pointPolygon = w_.contactCounts.edgeEdge = 0;
-    w_.maxPieceOverlap = 0;
+    broadSeconds_ = pointPolygonSeconds_ = edgeEdgeSeconds_ = 0;
+    pointPolygonContacts_ = edgeEdgeContacts_ = 0;
+    maxOverlap_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || (!w_.settings.pointPolygonOn && !w_.settings.edgeEdgeOn)) return;
@@ -288,7 +288,7 @@ void PieceContactPhase::run(double dt) {
     if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     const double t1 = omp_get_wtime();
-    w_.timings.broadPhase = t1 - t0;
+    broadSeconds_ = t1 - t0;
 
     double eDamp = 0, eSlip = 0, maxOv = 0;
     long nPP = 0, nEE = 0;
@@ -323,11 +323,11 @@ void PieceContactPhase::run(double dt) {
     }
     const double t3 = omp_get_wtime();
     // The sum of the thread buffers is booked to point-polygon, the main user.
-    w_.timings.pointPolygon = (t2 - t1) + (t3 - tEE);
-    w_.timings.edgeEdge = tEE - t2;
-    w_.contactCounts.pointPolygon = nPP;
-    w_.contactCounts.edgeEdge = nEE;
-    w_.maxPieceOverlap = maxOv;
+    pointPolygonSeconds_ = (t2 - t1) + (t3 - tEE);
+    edgeEdgeSeconds_ = tEE - t2;
+    pointPolygonContacts_ = nPP;
+    edgeEdgeContacts_ = nEE;
+    maxOverlap_ = maxOv;
     if (w_.settings.trackEnergy) {  // (the elastic energy is summed per piece)
         w_.energy.contactDamping += eDamp;
         w_.energy.friction += eSlip;

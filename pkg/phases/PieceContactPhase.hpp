@@ -17,7 +17,21 @@ class PieceContactPhase final : public Phase {
 public:
     using Phase::Phase;
     const char* name() const override { return "pieceContacts"; }
-    void run(double dt);
+    void run(double dt) override;
+    // Its time split into broad phase (lists), point-polygon (with the sum of
+    // the thread buffers) and edge-edge; contacts of each kind; cases A/B:
+    // interior faces tested for nothing, and of them those within reach.
+    void report(PhaseReport& r) const override {
+        r.seconds.push_back({"broadPhase", broadSeconds_});
+        r.seconds.push_back({"pointPolygon", pointPolygonSeconds_});
+        r.seconds.push_back({"edgeEdge", edgeEdgeSeconds_});
+        r.counts.push_back({"pointPolygon", pointPolygonContacts_});
+        r.counts.push_back({"edgeEdge", edgeEdgeContacts_});
+        r.counts.push_back({"interiorFaceTests", interiorFaceTests_});
+        r.counts.push_back({"interiorFaceNear", interiorFaceNear_});
+    }
+    // Largest overlap of a piece-piece contact in the last step [m].
+    double maxOverlap() const { return maxOverlap_; }
     void stateColumns(StateColumns& c) override;
     void piecesAdded() override;
     void stateLoaded() override;
@@ -43,6 +57,8 @@ private:
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
     PieceContactState st_;
+    double broadSeconds_ = 0, pointPolygonSeconds_ = 0, edgeEdgeSeconds_ = 0, maxOverlap_ = 0;
+    long pointPolygonContacts_ = 0, edgeEdgeContacts_ = 0, interiorFaceTests_ = 0, interiorFaceNear_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
 };

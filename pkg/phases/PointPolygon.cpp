@@ -371,8 +371,8 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             }
         }
     }
-    w_.contactCounts.interiorFaceTests = interiorTests;
-    w_.contactCounts.interiorFaceNear = interiorNear;
+    interiorFaceTests_ = interiorTests;
+    interiorFaceNear_ = interiorNear;
     if (tunnel.node >= 0) {
         // Stopping distance of a node of mass m at speed v on a spring kn:
         // v sqrt(m / kn) (doc/hard_cases.md, "Tunnelling").

@@ -19,7 +19,7 @@ public:
     using Phase::Phase;
     const char* name() const override { return "sleep"; }
     // Puts slow pieces to sleep and wakes those something moves near.
-    void run(double dt);
+    void run(double dt) override;
     void stateColumns(StateColumns& c) override;
     void saveFields(WorldState& s) const override;
     void checkFields(const WorldState& s) const override;

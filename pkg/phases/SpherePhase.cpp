@@ -162,12 +162,10 @@ void SpherePhase::buildGrids() {
 }
 
 void SpherePhase::run(double dt) {
-    w_.timings.spheres = 0;
-    w_.contactCounts.sphere = 0;
+    contacts_ = 0;
     SphereSet& S = w_.spheres;
     std::fill(S.forceTorque.begin(), S.forceTorque.end(), 0.0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
-    const double t0 = omp_get_wtime();
     buildGrids();
     w_.beginContactForces();
     const int nth = omp_get_max_threads();
@@ -186,13 +184,12 @@ void SpherePhase::run(double dt) {
             for (int th = 0; th < nth; ++th)
                 for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
-    w_.contactCounts.sphere = count;
+    contacts_ = count;
     if (w_.settings.trackEnergy) {
         w_.energy.contactElastic += eEl;
         w_.energy.contactDamping += eDamp;
         w_.energy.friction += eSlip;
     }
-    w_.timings.spheres = omp_get_wtime() - t0;
 }
 
 template <bool Friction>

@@ -13,7 +13,11 @@ class SpherePhase final : public Phase {
 public:
     using Phase::Phase;
     const char* name() const override { return "spheres"; }
-    void run(double dt);
+    void run(double dt) override;
+    void report(PhaseReport& r) const override {
+        Phase::report(r);
+        r.counts.push_back({"sphere", contacts_});  // YADE sphere - QDEM surface contacts
+    }
     // World::setSpheres: the spheres that may touch pieces, with their
     // (sphere, piece) contact history carried over.
     void setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
@@ -26,6 +30,7 @@ private:
     void buildGrids();
     template <bool Friction>
     void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
+    long contacts_ = 0;
 };
 
 }  // namespace qdem

@@ -8,12 +8,30 @@
 #pragma once
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace qdem {
 
 class World;
 struct WorldState;
+
+// What the phases measured in the last step: wall times [s] and counters,
+// by name (World::timings, World::counts; the Python dicts of the same names).
+struct PhaseReport {
+    std::vector<std::pair<const char*, double>> seconds;
+    std::vector<std::pair<const char*, long>> counts;
+    double second(const std::string& name) const {
+        for (const auto& [n, v] : seconds)
+            if (name == n) return v;
+        return 0;
+    }
+    long count(const std::string& name) const {
+        for (const auto& [n, v] : counts)
+            if (name == n) return v;
+        return 0;
+    }
+};
 
 // Named arrays of a phase's state, by reference, for Checkpoint.cpp.
 struct StateColumns {
@@ -38,6 +56,12 @@ public:
     Phase& operator=(const Phase&) = delete;
 
     virtual const char* name() const = 0;
+    // One step's work.
+    virtual void run(double dt) = 0;
+    // Its wall time (World::step measures it) and counters, by name: the
+    // phase's own name unless it splits its time further.
+    virtual void report(PhaseReport& r) const { r.seconds.push_back({name(), seconds}); }
+    double seconds = 0;  // wall time of the last run [s]
     // What a restart must keep of this phase's state (none by default).
     virtual void stateColumns(StateColumns&) {}
     // Pieces were added: grow per-node / per-piece state (new entries empty).

@@ -173,28 +173,23 @@ public:
     std::size_t nNodes() const { return mass.size(); }
     std::size_t nTets() const { return tetVol0.size(); }
 
-    // Per-phase wall time of the last step [s], for the benchmarks.
-    struct Timings {
-        double obstacles = 0, elements = 0, integrate = 0;
-        double broadPhase = 0, pointPolygon = 0, edgeEdge = 0;
-        double spheres = 0;  // sphere-triangle contacts (grids included)
-    } timings;
+    // What the phases measured in the last step (Phase::report): wall times
+    // [s] by name (obstacles, broadPhase, pointPolygon, edgeEdge, spheres,
+    // elements, integrate, sleep) and counters (contacts: wall,
+    // pointPolygon, edgeEdge, sphere; interiorFaceTests, interiorFaceNear).
+    PhaseReport report() const {
+        PhaseReport r;
+        for (const Phase* p : phases()) p->report(r);
+        return r;
+    }
     long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
-    // Contacts found in the last step (for tests and diagnostics).
-    struct ContactCounts {
-        long pointPolygon = 0, edgeEdge = 0;
-        long sphere = 0;  // YADE sphere - QDEM surface contacts
-        long wall = 0;    // surface node - YADE wall/box/facet contacts (awake pieces)
-        long interiorFaceTests = 0;  // cases A/B: interior faces tested for nothing
-        long interiorFaceNear = 0;   // ... of which within reach (ignored: not surface)
-    } contactCounts;
     const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Point-polygon contacts of the last step: kPP slots per surface node
     // holding 8 * (triangle within its piece) + feature (-1 = empty) and that piece; for diagnostics.
     const Column<int32_t>& pointPolygonKeys() const { return pieceContactPhase_.state().ppKey; }
     const Column<int32_t>& pointPolygonKeyPieces() const { return pieceContactPhase_.state().ppPiece; }
     // Largest overlap of a piece-piece contact in the last step [m].
-    double maxPieceOverlap = 0;
+    double maxPieceOverlap() const { return pieceContactPhase_.maxOverlap(); }
 
     World() = default;
     World(const World&) = delete;

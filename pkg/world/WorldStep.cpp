@@ -1,21 +1,31 @@
-// The step pipeline: obstacle contacts, element forces, leapfrog update.
+// One step of the QDEM world: the phases in order (World.hpp lists them).
 #include <omp.h>
 
-#include <algorithm>
 #include <cmath>
-#include <type_traits>
 
-#include "../contact/ContactLaw.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Threads.hpp"
 #include "World.hpp"
 
 namespace qdem {
 
+namespace {
+
+// Runs one phase and keeps its wall time (Phase::report).
+inline void runTimed(Phase& p, double dt) {
+    const double t0 = omp_get_wtime();
+    p.run(dt);
+    p.seconds = omp_get_wtime() - t0;
+}
+
+}  // namespace
+
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
-    double t0 = omp_get_wtime();
+    // Set-up of the step: a loaded state's sleeping pieces checked against
+    // this world's obstacles and gravity, contact forces and energy states
+    // summed afresh, the pieces' boxes from the current positions.
     sleepPhase_.checkLoadedRest();
     contactsActive_ = false;
     if (settings.trackEnergy) {
@@ -23,22 +33,18 @@ void World::step(double dt) {
         beginPieceEnergy();
     }
     updatePieceBounds();
-    obstaclePhase_.run(dt);
-    const double tObs = omp_get_wtime();
-    pieceContactPhase_.run(dt);
-    spherePhase_.run(dt);
-    double t1 = omp_get_wtime();
-    elementPhase_.run(dt);
-    double t2 = omp_get_wtime();
-    integrationPhase_.run(dt);
+    // Forces: contacts (into contactForce_), then elements (thread buffers).
+    runTimed(obstaclePhase_, dt);
+    runTimed(pieceContactPhase_, dt);
+    runTimed(spherePhase_, dt);
+    runTimed(elementPhase_, dt);
+    // Motion, the energy states of the step, the clock.
+    runTimed(integrationPhase_, dt);
     if (settings.trackEnergy) finishPieceEnergy();
-    double t3 = omp_get_wtime();
-    timings.obstacles = tObs - t0;
-    timings.elements = t2 - t1;
-    timings.integrate = t3 - t2;
     time += dt;
     ++iter;
-    sleepPhase_.run(dt);
+    // Which pieces sleep in the next step.
+    runTimed(sleepPhase_, dt);
 }
 
 }  // namespace qdem

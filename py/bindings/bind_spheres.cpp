@@ -141,7 +141,7 @@ void bindSpheres(py::module_& m) {
                 return true;
             },
             py::arg("lo"), py::arg("hi"))
-        .def_property_readonly("sphereSeconds", [](const World& w) { return w.timings.spheres; },
+        .def_property_readonly("sphereSeconds", [](const World& w) { return w.report().second("spheres"); },
                                "Wall time of the sphere-contact phase of the last step [s].")
         .def_property_readonly("nSpheres", [](const World& w) { return w.spheres.size(); })
         .def(

@@ -175,13 +175,7 @@ void bindWorld(py::module_& m) {
         .def_property_readonly("timings",
                                [](const World& w) {
                                    py::dict d;
-                                   d["obstacles"] = w.timings.obstacles;
-                                   d["elements"] = w.timings.elements;
-                                   d["integrate"] = w.timings.integrate;
-                                   d["broadPhase"] = w.timings.broadPhase;
-                                   d["pointPolygon"] = w.timings.pointPolygon;
-                                   d["edgeEdge"] = w.timings.edgeEdge;
-                                   d["spheres"] = w.timings.spheres;
+                                   for (const auto& [name, v] : w.report().seconds) d[name] = v;
                                    return d;
                                })
         .def_property(
@@ -226,15 +220,10 @@ void bindWorld(py::module_& m) {
         .def_property_readonly("contactCounts",
                                [](const World& w) {
                                    py::dict d;
-                                   d["pointPolygon"] = w.contactCounts.pointPolygon;
-                                   d["edgeEdge"] = w.contactCounts.edgeEdge;
-                                   d["sphere"] = w.contactCounts.sphere;
-                                   d["wall"] = w.contactCounts.wall;
-                                   d["interiorFaceTests"] = w.contactCounts.interiorFaceTests;
-                                   d["interiorFaceNear"] = w.contactCounts.interiorFaceNear;
+                                   for (const auto& [name, v] : w.report().counts) d[name] = v;
                                    return d;
                                })
-        .def_readonly("maxPieceOverlap", &World::maxPieceOverlap)
+        .def_property_readonly("maxPieceOverlap", &World::maxPieceOverlap)
         .def(
             "pointPolygonContacts",
             [](const World& w) {

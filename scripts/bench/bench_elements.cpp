@@ -60,8 +60,9 @@ Figures run(World& w, int threads, int steps, bool viscous) {
     const double t0 = omp_get_wtime();
     for (int i = 0; i < steps; ++i) {
         w.step(dt);
-        el += w.timings.elements;
-        in += w.timings.integrate;
+        const PhaseReport r = w.report();
+        el += r.second("elements");
+        in += r.second("integrate");
     }
     const double total = omp_get_wtime() - t0;
     const double perTetStep = 1e9 / (double(steps) * w.nTets());
