@@ -123,6 +123,15 @@ Vector3d springLaw(const Law& L, const Vector3d& n, double delta, const Vector3d
     return f;
 }
 
+// Whether the first step's trial tangential force exceeds mu Fn (the
+// sliding branch): each friction test below runs one stuck and one sliding
+// case, and checks that it did.
+bool slides(const Law& L, const Vector3d& n, double delta, const Vector3d& vRel, double dt) {
+    const double vn = vRel.dot(n);
+    const Vector3d vt = vRel - vn * n;
+    return (L.kt * vt * dt + L.ct * vt).norm() > L.mu * std::max(0.0, L.kn * delta - L.cn * vn);
+}
+
 // Regularised friction, first step of a new contact (doc/contacts.md §5,
 // "Regularised friction, implicit": v_free = v_t without history).
 Vector3d regularizedLaw(const Law& L, const Vector3d& n, double delta, const Vector3d& vRel, double dt, double vReg,
@@ -523,7 +532,7 @@ TEST(ReferenceForces, PointPolygonFaceDashpotAndFriction) {
     const Vector3d pc(0.2, -0.5, 0), n = Vector3d::UnitZ();
     const auto wk = areaRatios(pc, kB[0], kB[1], kB[2]);
     for (int regularized = 0; regularized < 2; ++regularized)
-        for (const Vector3d& v : {Vector3d(0.02, -0.01, -0.15), Vector3d(0.9, 0.5, -0.15), Vector3d(2e-4, 1e-4, -0.15)}) {
+        for (const Vector3d& v : {Vector3d(0.02, -0.01, -0.15), Vector3d(3, 1.5, -0.15), Vector3d(2e-4, 1e-4, -0.15)}) {
             if (!regularized && v.x() < 1e-3) continue;  // the slow case is for the regularised law
             PairCase c;
             buildPair(c, pc, n);
@@ -536,6 +545,9 @@ TEST(ReferenceForces, PointPolygonFaceDashpotAndFriction) {
             const Law L = pairLaw(c.wa[0], m);
             const Vector3d f = regularized ? regularizedLaw(L, n, kDelta, v, kDt, 1e-3, m)
                                            : springLaw(L, n, kDelta, v, kDt, true);
+            if (!regularized) {
+                EXPECT_EQ(slides(L, n, kDelta, v, kDt), v.x() > 1) << "stuck and sliding cases";
+            }
             const std::string what = std::string(regularized ? "regularised" : "spring") + ", v = (" +
                                      std::to_string(v.x()) + ", " + std::to_string(v.y()) + ")";
             checkPair(c, f, {-wk[0] * f, -wk[1] * f, -wk[2] * f, Vector3d::Zero()}, what, false);
@@ -649,14 +661,17 @@ TEST(ReferenceForces, EdgeEdgeStatic) {
 // A moving rigidly down and sideways: dashpot and friction on the reduced
 // mass of the two crossing points (node masses interpolated along the edges).
 TEST(ReferenceForces, EdgeEdgeDashpotAndFriction) {
-    const Vector3d v(0.03, -0.02, -0.2);
-    EdgeCase c;
-    buildEdgeCase(c);
-    setPieceVelocity(c.w, c.pa, v);
-    c.w.step(kDt);
-    const double m1 = c.ma, m2 = c.mb;  // equal node masses along each edge
-    const Law L = pairLaw(c.aw, m1 * m2 / (m1 + m2));
-    checkEdgeCase(c, springLaw(L, Vector3d::UnitZ(), kDelta, v, kDt, true), "edge-edge moving", false);
+    for (const Vector3d& v : {Vector3d(0.03, -0.02, -0.2), Vector3d(3, -2, -0.2)}) {
+        EdgeCase c;
+        buildEdgeCase(c);
+        setPieceVelocity(c.w, c.pa, v);
+        c.w.step(kDt);
+        const double m1 = c.ma, m2 = c.mb;  // equal node masses along each edge
+        const Law L = pairLaw(c.aw, m1 * m2 / (m1 + m2));
+        EXPECT_EQ(slides(L, Vector3d::UnitZ(), kDelta, v, kDt), v.x() > 1) << "stuck and sliding cases";
+        checkEdgeCase(c, springLaw(L, Vector3d::UnitZ(), kDelta, v, kDt, true),
+                      v.x() > 1 ? "edge-edge sliding" : "edge-edge stuck", false);
+    }
 }
 
 // =====================================================================
@@ -718,14 +733,16 @@ TEST(ReferenceForces, SphereTriangleStatic) {
 // a = -(R - delta/2) n (YADE's contact point), the torque a x F.
 TEST(ReferenceForces, SphereTriangleDashpotFrictionTorque) {
     const Vector3d pc(0.2, -0.5, 0), n = Vector3d::UnitZ();
-    for (const Vector3d& v : {Vector3d(0.01, -0.02, -0.05), Vector3d(0.3, 0.2, -0.05)}) {
+    for (const Vector3d& v : {Vector3d(0.01, -0.02, -0.05), Vector3d(6, 4, -0.05)}) {
         const Vector3d omega(1, 2, -3);
         SphereCase c;
         buildSphereCase(c, pc, v, omega, 0.4);  // a ViscElMat sphere: its restitution counts
         c.w.step(kDt);
         const Vector3d arm = -(c.s.radius - 0.5 * kDelta) * n;
         const Vector3d vRel = v + omega.cross(arm);
-        const Vector3d f = springLaw(sphereLaw(c, c.mb), n, kDelta, vRel, kDt, true);
+        const Law L = sphereLaw(c, c.mb);
+        EXPECT_EQ(slides(L, n, kDelta, vRel, kDt), v.x() > 1) << "stuck and sliding cases";
+        const Vector3d f = springLaw(L, n, kDelta, vRel, kDt, true);
         checkSphere(c, f, arm.cross(f), pc, "sphere moving, v = (" + std::to_string(v.x()) + ", ...)");
     }
 }
