@@ -81,13 +81,13 @@ void setSphere(World& w, const SphereSpec& s, int piece) {
 }
 Vector3d sphereForce(const World& w) { return Eigen::Map<const Vector3d>(w.spheres.forceTorque.data()); }
 Vector3d sphereTorque(const World& w) { return Eigen::Map<const Vector3d>(w.spheres.forceTorque.data() + 3); }
-long ppCount(const World& w) { return w.contactCounts.pointPolygon; }
-long eeCount(const World& w) { return w.contactCounts.edgeEdge; }
-long wallCount(const World& w) { return w.contactCounts.wall; }
-long sphereCount(const World& w) { return w.contactCounts.sphere; }
+long ppCount(const World& w) { return w.report().count("pointPolygon"); }
+long eeCount(const World& w) { return w.report().count("edgeEdge"); }
+long wallCount(const World& w) { return w.report().count("wall"); }
+long sphereCount(const World& w) { return w.report().count("sphere"); }
 void useRegularized(World& w, double vReg) {
-    w.frictionModel = FrictionModel::Regularized;
-    w.frictionRegVelocity = vReg;
+    w.settings.frictionModel = FrictionModel::Regularized;
+    w.settings.frictionRegVelocity = vReg;
 }
 
 // =====================================================================
@@ -297,7 +297,7 @@ TEST(ReferenceForces, WallNormalDashpotAndNoTension) {
         buildObstacleCase(c, wallZ(1), kWallPoint, Vector3d::UnitZ(), kWallPos, Eigen::Quaterniond::Identity(),
                           Vector3d(0, 0, 0.1));
         setPieceVelocity(c.w, c.piece, Vector3d(0, 0, -0.2));
-        c.w.frictionOn = false;
+        c.w.settings.frictionOn = false;
         c.w.step(kDt);
         const Law L = wallLaw(c);
         checkObstacle(c, (L.kn * kDelta + L.cn * 0.3) * Vector3d::UnitZ(), kWallPoint, kWallPos, "approaching");
