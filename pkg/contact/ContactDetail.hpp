@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
@@ -14,42 +15,14 @@ namespace qdem::contact_detail {
 
 using Eigen::Vector3d;
 
-struct PairLaw {
-    double kn, cn, kt, ct, mu, reach;
-};
-
-// The mass-independent part of the contact law of two materials (PairConst,
-// ContactLaw.hpp): computed once per step per material pair, not per contact
-// (it takes a log and three square roots).  pairLaw(PairConst, ...) then gives
-// bit for bit the same parameters as pairLaw(Material, Material, ...).
+// The law's constants of two pieces' materials (ContactModel.hpp):
+// computed once per step per neighbour pair, not per contact (a log and
+// three square roots).
 inline PairConst pairConst(const Material& a, const Material& b) {
-    PairConst c;
-    const double ea = a.young * a.radius, eb = b.young * b.radius;
-    c.kn = 2 * ea * eb / (ea + eb);
-    const double nu = 0.5 * (a.poisson + b.poisson);
-    c.kt = c.kn * 2 * (1 - nu) / (2 - nu);
-    c.xi = dampingRatioFromRestitution(std::sqrt(a.restitution * b.restitution));
-    c.mu = std::min(a.frictionPiece, b.frictionPiece);
-    c.reach = a.radius + b.radius;
-    return c;
+    return mix(materialSide(a, a.frictionPiece), materialSide(b, b.frictionPiece));
 }
 
-// Contact parameters of two particles of masses ma, mb (reduced mass for the
-// dashpots) from their materials' constants.
-inline PairLaw pairLaw(const PairConst& c, double ma, double mb) {
-    PairLaw p;
-    p.kn = c.kn;
-    p.kt = c.kt;
-    const double m = ma * mb / (ma + mb);
-    p.cn = 2 * c.xi * std::sqrt(p.kn * m);
-    p.ct = 2 * c.xi * std::sqrt(p.kt * m);
-    p.mu = c.mu;
-    p.reach = c.reach;
-    return p;
-}
-
-// Contact parameters of two particles of radii ra, rb (YADE's FrictPhys rule
-// for the stiffness), reduced mass for the dashpots.
+// Contact parameters of two particles of materials a, b and masses ma, mb.
 inline PairLaw pairLaw(const Material& a, const Material& b, double ma, double mb) {
     return pairLaw(pairConst(a, b), ma, mb);
 }

@@ -15,7 +15,8 @@ struct Obstacle {
     ObstacleKind kind = ObstacleKind::Wall;
     int bodyId = -1;      // YADE body id (the key of tangential-spring history)
     double young = 0;     // the body material's Young modulus; <= 0 means rigid
-    double friction = -1; // overrides the piece's frictionWall when >= 0
+    double friction = -1; // its Coulomb coefficient (the contact takes the smaller of it and the
+                          // piece's frictionWall, ContactModel.hpp); < 0: none, frictionWall alone
     int axis = 2;         // Wall: normal axis 0/1/2
     int sense = 0;        // Wall: 0 both sides, +1 positive side only, -1 negative side only
     Eigen::Vector3d halfExtents = Eigen::Vector3d::Zero();  // Box

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactModel.hpp"
 #include "../world/World.hpp"
 #include "ObstaclePhase.hpp"
 
@@ -32,6 +33,7 @@ void ObstaclePhase::run(double dt) {
     }
     pieceObstacles_.clear();
     pieceObstacleBegin_.clear();
+    pairConst_.clear();
     pairReaction_.clear();
     contacts_ = 0;
     if (nObs == 0 || w_.surfNodes.size() == 0) return;
@@ -55,7 +57,12 @@ void ObstaclePhase::run(double dt) {
             } else {
                 near = (lo.array() <= o.hi.array()).all() && (hi.array() >= o.lo.array()).all();
             }
-            if (near) pieceObstacles_.push_back(i);
+            if (near) {
+                pieceObstacles_.push_back(i);
+                // The pair's constants (ContactModel.hpp), once per step.
+                const Material& m = w_.materials[w_.pieces[ip].material];
+                pairConst_.push_back(mix(materialSide(m, m.frictionWall), obstacleSide(o.young, o.friction, m.radius)));
+            }
         }
         pieceObstacleBegin_[ip + 1] = static_cast<int>(pieceObstacles_.size());
     }
@@ -112,15 +119,13 @@ void ObstaclePhase::run(double dt) {
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
-                // Scaled by the node's share of the surface area (surfWeight,
-                // World.hpp); the dashpots keep their damping ratio.
-                const double kn = w_.surfWeight[s] * (o.young > 0 ? 2 * m.young * o.young * m.radius / (m.young + o.young)
-                                                               : 2 * m.young * m.radius);
-                const double xi = dampingRatioFromRestitution(m.restitution);
-                const double mu = o.friction >= 0 ? o.friction : m.frictionWall;
-                const double kt = kn * 2 * (1 - m.poisson) / (2 - m.poisson);  // Mindlin's ratio
-                ContactParams cp{kn, 2 * xi * std::sqrt(kn * w_.mass[node]), kt, 2 * xi * std::sqrt(kt * w_.mass[node]),
-                                 mu, w_.settings.frictionRegVelocity, w_.mass[node]};
+                // Springs scaled by the node's share of the surface area
+                // (surfWeight, World.hpp); the dashpots keep their damping ratio.
+                const PairLaw law = pairLaw(pairConst_[j], w_.mass[node]);
+                const double wa = w_.surfWeight[s], swa = std::sqrt(wa);
+                const double mu = law.mu;
+                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, w_.settings.frictionRegVelocity,
+                                 w_.mass[node]};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);

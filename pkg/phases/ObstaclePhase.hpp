@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "../contact/ContactLaw.hpp"
 #include "../core/Column.hpp"
 #include "../world/Phase.hpp"
 
@@ -50,6 +51,7 @@ private:
     std::vector<uint8_t> startChecked_;     // per piece: start overlap checked for this obstacle list
     std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
     std::vector<int> pieceObstacles_, pieceObstacleBegin_;
+    std::vector<PairConst> pairConst_;      // per (piece, obstacle) pair: the contact model's constants
     std::vector<double> pairReaction_;      // per (piece, obstacle) pair, 6 each
     long contacts_ = 0;
 };

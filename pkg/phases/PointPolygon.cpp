@@ -10,6 +10,7 @@
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "../contact/ContactDetail.hpp"
+#include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
 #include "../world/World.hpp"
 #include "PieceContactPhase.hpp"
@@ -19,19 +20,6 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
-namespace {
-// A point behind a triangle's plane (h < 0) is inside the other piece when it
-// lies straight behind the triangle: its closest point is inside the face, or
-// on the face's boundary with the point straight below it (dist = |h|, to
-// rounding).  The second case is a node right behind an edge or corner shared
-// by coplanar triangles of a flat face - every adjacent triangle then reports
-// an edge or corner closest point.  Without it such a node (common: meshes of
-// equal cells meet node under edge) was taken as outside, dropped its contact
-// and let pieces pass through each other (issue 12, doc/hard_cases.md).
-inline bool straightBehind(bool faceFeature, double dist, double h) {
-    return faceFeature || dist + h <= 1e-9 * dist;
-}
-}  // namespace
 // ---------------------------------------------------------------------------
 // Point-polygon: every surface node against the surface triangles of the
 // other pieces.  One thread per surface node (seed §4.1).
@@ -66,7 +54,8 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
-        Candidate cand[kCandidates];
+        CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
+        Candidate* const cand = cl.c;
         TriLanes lanes;
         TriLanesOut near;
 #pragma omp for schedule(dynamic, 64)
@@ -103,36 +92,27 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 return pairConst(ma, w_.materials[w_.pieces[pb].material]);  // listed before the pieces parted
             };
             const Vector3d A = at(w_.pos, node);
-            int nc = 0;
-            bool anyBehind = false;
+            cl.clear();
+            int& nc = cl.n;
+            bool& anyBehind = cl.anyBehind;
             // Candidate triangles: bounding sphere grown by the reach holds the
             // node, and the node is within reach in front of its plane (or
             // behind it: possibly inside that piece).
             auto consider = [&](int32_t t, double reach) {
-                if (nc == kCandidates) return;
                 const int32_t* c = &S.tri[3 * t];
-                const Vector3d a = at(w_.pos, c[0]);
-                const double h = (A - a).dot(Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]));
-                if (h > reach) return;
-                const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
-                const double dist = (A - cp.point).norm();
-                // The seed's inside test: the projection on the plane must fall
-                // in the triangle or on its boundary (closest point at |h|).
-                if (!regions && dist - std::abs(h) > 1e-9 * reach) return;
-                // Behind the face (inside the other piece) can only be told for
-                // a face-interior closest point; an edge or corner closest point
-                // means the node is outside, in that feature's region.
-                const bool behind = h < 0 && straightBehind(cp.feature == TriFeature::Face, dist, h);
-                if (!behind && dist >= reach) return;
-                anyBehind = anyBehind || behind;
-                cand[nc++] = Candidate{t, cp, dist, behind};
+                TriPoint cp;
+                double dist;
+                bool behind;
+                if (pointTriangle(A, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                                  Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions, cp, dist, behind))
+                    cl.add(Candidate{t, cp, dist, behind});
             };
             if (useList) {
                 // The same tests as consider(), the closest points of
                 // kTriLanes listed triangles at a time (SIMD lane code).
                 const int32_t* L = listFlat + listStart[s];
                 const int32_t n = listCount[s];
-                for (int32_t k0 = 0; k0 < n && nc < kCandidates; k0 += kTriLanes) {
+                for (int32_t k0 = 0; k0 < n; k0 += kTriLanes) {
                     const int cnt = std::min<int32_t>(kTriLanes, n - k0);
                     for (int l = 0; l < kTriLanes; ++l) {
                         const int32_t t = L[k0 + (l < cnt ? l : cnt - 1)];
@@ -145,7 +125,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                         }
                     }
                     closestOnTriangles(A.data(), lanes, near);
-                    for (int l = 0; l < cnt && nc < kCandidates; ++l) {
+                    for (int l = 0; l < cnt; ++l) {
                         const int32_t t = L[k0 + l];
                         const int32_t pb = triPiece[t];
                         if (!active[pb]) continue;
@@ -157,14 +137,14 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                         const bool behind =
                             h < 0 && straightBehind(near.feature[l] == static_cast<int32_t>(TriFeature::Face), dist, h);
                         if (!behind && dist >= reach) continue;
-                        anyBehind = anyBehind || behind;
-                        Candidate& cd = cand[nc++];
+                        Candidate cd;
                         cd.tri = t;
                         cd.cp.point = Vector3d(near.point[0][l], near.point[1][l], near.point[2][l]);
                         for (int k = 0; k < 3; ++k) cd.cp.w[k] = near.w[k][l];
                         cd.cp.feature = static_cast<TriFeature>(near.feature[l]);
                         cd.dist = dist;
                         cd.behind = behind;
+                        cl.add(cd);
                     }
                 }
             }
@@ -216,7 +196,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             // (29 mm for 33 mm triangles), the contact was lost and two cubes
             // at 25 m/s passed through each other (doc/hard_cases.md).
             if (watched)
-                for (int k = 0; k < K && key[k] >= 0 && nc < kCandidates; ++k) {
+                for (int k = 0; k < K && key[k] >= 0; ++k) {
                     const int32_t t = S.pieceTriStart[kpiece[k]] + historyTri(key[k]);
                     bool found = false;
                     for (int i = 0; i < nc && !found; ++i) found = cand[i].tri == t;
@@ -232,8 +212,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     // projection now): still the face it went in through.
                     const double reachT = ma.radius + radius[triPiece[t]];
                     if (dist * dist - h * h > reachT * reachT) continue;
-                    anyBehind = true;
-                    cand[nc++] = Candidate{t, cp, dist, true};
+                    cl.add(Candidate{t, cp, dist, true});
                 }
             // Inside test for behind candidates (rare: deep penetration): the
             // node is inside a piece only if no front-facing point of that
@@ -256,13 +235,8 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             const int32_t t = tets ? S.tetFaceTri[4 * id + k] : id;
                             if (t < 0) continue;
                             const int32_t* c = &S.tri[3 * t];
-                            const Vector3d a = at(w_.pos, c[0]);
-                            const double h = (A - a).dot(Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]));
-                            if (h >= db) continue;  // cannot be nearer
-                            const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
-                            const double dw = (A - cp.point).norm();
-                            const bool behind = h < 0 && straightBehind(cp.feature == TriFeature::Face, dw, h);
-                            if (!behind && dw < db) {
+                            if (frontFaceNearer(A, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                                                Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), db)) {
                                 keep[i] = false;
                                 killedBy = t;
                             }

@@ -11,10 +11,12 @@
 #include <unordered_map>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
 #include "../contact/ContactDetail.hpp"
+#include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
 #include "../world/World.hpp"
 #include "SpherePhase.hpp"
@@ -26,24 +28,16 @@ using namespace contact_detail;
 
 namespace {
 
-// Contact parameters of a YADE sphere against a QDEM material (doc/spheres.md):
-// stiffness by YADE's FrictPhys rule, ks/kn the mean of the two materials'
-// ratios, friction the smaller coefficient, restitution QDEM's unless the
-// sphere's material has one (ViscElMat), then the geometric mean.
+// Contact parameters of a YADE sphere against a QDEM material: the contact
+// model (ContactModel.hpp) with the sphere's material as one side
+// (doc/spheres.md); the dashpots on the reduced mass of the sphere and the
+// triangle point.
+ContactSide sphereSide(const SphereSet& S, int32_t i) {
+    return {S.young[i] * S.radius[i], S.ktRatio[i], S.restitution[i], S.friction[i], S.radius[i]};
+}
+
 PairLaw sphereLaw(const SphereSet& S, int32_t i, const Material& b, double mT) {
-    PairLaw p;
-    const double ea = S.young[i] * S.radius[i], eb = b.young * b.radius;
-    p.kn = 2 * ea * eb / (ea + eb);
-    const double ratioQ = 2 * (1 - b.poisson) / (2 - b.poisson);
-    p.kt = p.kn * (S.ktRatio[i] >= 0 ? 0.5 * (S.ktRatio[i] + ratioQ) : ratioQ);
-    const double m = S.mass[i] * mT / (S.mass[i] + mT);
-    const double e = S.restitution[i] > 0 ? std::sqrt(S.restitution[i] * b.restitution) : b.restitution;
-    const double xi = dampingRatioFromRestitution(e);
-    p.cn = 2 * xi * std::sqrt(p.kn * m);
-    p.ct = 2 * xi * std::sqrt(p.kt * m);
-    p.mu = std::min(S.friction[i], b.frictionPiece);
-    p.reach = S.radius[i] + b.radius;
-    return p;
+    return pairLaw(mix(sphereSide(S, i), materialSide(b, b.frictionPiece)), S.mass[i], mT);
 }
 
 }  // namespace
@@ -208,7 +202,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
         std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
         bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
         double* buf = bufv.data();
-        Candidate cand[kCandidates];
+        CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
+        Candidate* const cand = cl.c;
         bool keep[kCandidates];
 #pragma omp for schedule(dynamic, 16)
         for (int32_t i = 0; i < n; ++i) {
@@ -231,8 +226,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
                     overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
-                int nc = 0;
-                bool anyBehind = false;
+                cl.clear();
+                const int& nc = cl.n;
                 const int32_t t0 = surf.pieceTriStart[pb];
                 const double qr = S.pieceTriRadius[pb] + reach;
                 if (overlap) {
@@ -242,31 +237,18 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
-                        const Vector3d a = at(w_.pos, c[0]);
-                        const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
-                        if (h > reach) return;
-                        const TriPoint cp = closestOnTriangle(C, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
-                        const double dist = (C - cp.point).norm();
-                        const bool behind = h < 0 && cp.feature == TriFeature::Face;
-                        if (!behind && dist >= reach) return;
-                        // A sphere larger than the triangles sees many: keep the nearest.
-                        int slot = nc;
-                        if (nc == kCandidates) {
-                            slot = 0;
-                            for (int k = 1; k < nc; ++k)
-                                if (cand[k].dist > cand[slot].dist) slot = k;
-                            if (dist >= cand[slot].dist) return;
-                        } else {
-                            ++nc;
-                        }
-                        cand[slot] = Candidate{t, cp, dist, behind};
+                        TriPoint cp;
+                        double dist;
+                        bool behind;
+                        if (pointTriangle(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                                          Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true, cp, dist, behind))
+                            cl.add(Candidate{t, cp, dist, behind});
                     });
                 }
                 for (int k = 0; k < nc; ++k) keep[k] = true;
-                for (int k = 0; k < nc; ++k) anyBehind = anyBehind || cand[k].behind;
                 // Centre behind a face: inside the piece only if no front-facing
                 // surface point is nearer (as for nodes, PointPolygon.cpp).
-                if (anyBehind)
+                if (cl.anyBehind)
                     for (int k = 0; k < nc; ++k) {
                         if (!cand[k].behind) continue;
                         const double db = cand[k].dist;
@@ -276,12 +258,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                             if (!keep[k]) return;
                             const int32_t t = t0 + local;
                             const int32_t* c = &surf.tri[3 * t];
-                            const Vector3d a = at(w_.pos, c[0]);
-                            const double h = (C - a).dot(Eigen::Map<const Vector3d>(&S.triNormal[3 * t]));
-                            if (h >= db) return;  // cannot be nearer
-                            const TriPoint cp = closestOnTriangle(C, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
-                            const bool behind = h < 0 && cp.feature == TriFeature::Face;
-                            if (!behind && (C - cp.point).norm() < db) keep[k] = false;
+                            if (frontFaceNearer(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                                                Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
+                                keep[k] = false;
                         });
                     }
                 const double eps = 1e-12 * reach;

@@ -19,6 +19,7 @@
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
+#include "../contact/ContactModel.hpp"
 #include "../element/MaterialLaw.hpp"
 #include "World.hpp"
 
@@ -206,14 +207,16 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
             if (o.young <= 0) rigid = true;
             stiffestObstacle = std::max(stiffestObstacle, o.young);
         }
-        // Piece-piece springs are at most 2 E r too (the rigid-wall value).
-        const double kn = (rigid || pieces.size() > 1)
-                              ? 2 * m.young * m.radius
-                              : 2 * m.young * stiffestObstacle * m.radius / (m.young + stiffestObstacle);
+        // The stiffest pair this piece can meet (ContactModel.hpp): a rigid
+        // obstacle, or another piece (piece-piece springs are at most the
+        // rigid-wall 2 E r too), else the stiffest elastic obstacle.
+        const ContactSide other = (rigid || pieces.size() > 1) ? rigidSide()
+                                                               : obstacleSide(stiffestObstacle, -1, m.radius);
+        const PairConst pair = mix(materialSide(m, 0), other);
         // Each node's springs are scaled by its area weight w (surfWeight):
         // the stiffest mode is the largest w kn / m over the surface nodes.
-        wc = std::sqrt(kn / p.minSurfaceMassPerWeight);
-        xic = dampingRatioFromRestitution(m.restitution);
+        wc = std::sqrt(pair.kn / p.minSurfaceMassPerWeight);
+        xic = pair.xi;
     }
     if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {
         // YADE spheres near the piece: their springs on its lightest node.

@@ -272,7 +272,7 @@ Law wallLaw(const ObstacleCase& c, double obstacleYoung = 0, double mu = -1) {
     const double kn0 = obstacleYoung > 0 ? frictPhys(m.young * m.radius, obstacleYoung * m.radius)
                                          : 2 * m.young * m.radius;
     const double kn = c.wApex * kn0, kt = kn * mindlin(m.poisson), xi = xiOf(m.restitution);
-    return {kn, 2 * xi * std::sqrt(kn * c.mNode), kt, 2 * xi * std::sqrt(kt * c.mNode), mu >= 0 ? mu : m.frictionWall};
+    return {kn, 2 * xi * std::sqrt(kn * c.mNode), kt, 2 * xi * std::sqrt(kt * c.mNode), mu >= 0 ? std::min(mu, m.frictionWall) : m.frictionWall};
 }
 
 TEST(ReferenceForces, WallStaticNormalSpring) {
@@ -490,7 +490,7 @@ void buildPair(PairCase& c, const Vector3d& pc, const Vector3d& n) {
 Law pairLaw(double wq, double m) {
     const Material A = matA(), B = matB();
     const double kn = wq * frictPhys(A.young * A.radius, B.young * B.radius);
-    const double kt = kn * mindlin(0.5 * (A.poisson + B.poisson));
+    const double kt = kn * 0.5 * (mindlin(A.poisson) + mindlin(B.poisson));  // the mean of the two ratios
     const double xi = xiOf(std::sqrt(A.restitution * B.restitution));
     return {kn, 2 * xi * std::sqrt(kn * m), kt, 2 * xi * std::sqrt(kt * m), std::min(A.frictionPiece, B.frictionPiece)};
 }
