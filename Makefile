@@ -9,7 +9,7 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py bench accuracy clean
+.PHONY: deps build install demo test test-cpp test-py bench accuracy compare-builds clean
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -44,6 +44,12 @@ bench: build
 accuracy: build
 	@mkdir -p out/accuracy
 	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/run_accuracy.py --out out/accuracy
+
+# Trajectories of this build against another one (OLD=<that build>/python):
+# equal to rounding or it fails (doc/architecture.md); out/arch/compare.json.
+compare-builds: build
+	@test -n "$(OLD)" || (echo "make compare-builds OLD=<other build>/python"; exit 1)
+	@OMP_WAIT_POLICY=passive $(PY) scripts/arch/compare_builds.py --old $(OLD) --new $(CURDIR)/$(BUILD)/python --out out/arch
 
 clean:
 	rm -rf $(BUILD) $(BUILD).cmake.log out
