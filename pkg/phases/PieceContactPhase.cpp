@@ -19,13 +19,34 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
+PieceContactPhase::PieceContactPhase(World& world) : Phase(world) {
+    for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
+}
+
+bool PieceContactPhase::kindOn(const Kind& k) const { return !k.row->on || w_.settings.*(k.row->on); }
+
+void PieceContactPhase::report(PhaseReport& r) const {
+    // The sum of the thread buffers is booked to the first kind (point-polygon, the main user).
+    r.seconds.push_back({"broadPhase", broadSeconds_});
+    for (std::size_t i = 0; i < kinds_.size(); ++i) {
+        r.seconds.push_back({kinds_[i].row->name, kinds_[i].seconds + (i == 0 ? sumSeconds_ : 0.0)});
+        r.counts.push_back({kinds_[i].row->name, kinds_[i].contacts});
+        kinds_[i].kernel->report(r);
+    }
+    // Cases A/B: interior faces tested for nothing, and of them those within reach.
+    r.counts.push_back({"interiorFaceTests", interiorFaceTests_});
+    r.counts.push_back({"interiorFaceNear", interiorFaceNear_});
+}
+
 void PieceContactPhase::run(double dt) {
-    broadSeconds_ = pointPolygonSeconds_ = edgeEdgeSeconds_ = 0;
-    pointPolygonContacts_ = edgeEdgeContacts_ = 0;
+    broadSeconds_ = sumSeconds_ = 0;
+    for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
-    if (np < 2 || (!w_.settings.pointPolygonOn && !w_.settings.edgeEdgeOn)) return;
+    bool anyKind = false;
+    for (const Kind& k : kinds_) anyKind = anyKind || kindOn(k);
+    if (np < 2 || !anyKind) return;
 
     // Which pieces can touch another one at all?  Sweep and prune on x:
     // pieces sorted by the low end of their boxes, each compared only with
@@ -287,12 +308,8 @@ void PieceContactPhase::run(double dt) {
     const int nth = omp_get_max_threads();
     if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
-    const double t1 = omp_get_wtime();
-    broadSeconds_ = t1 - t0;
+    broadSeconds_ = omp_get_wtime() - t0;
 
-    double eDamp = 0, eSlip = 0, maxOv = 0;
-    long nPP = 0, nEE = 0;
-    const bool fric = w_.settings.frictionOn;
     // Thread buffers: only awake pieces' nodes are read (and so zeroed).
     const bool all = w_.sleeping().nAsleep() == 0;
 #pragma omp parallel num_threads(nth)
@@ -303,16 +320,15 @@ void PieceContactPhase::run(double dt) {
             for (std::size_t ip = 0; ip < np; ++ip)
                 if (!w_.sleeping().asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
     }
-    if (w_.settings.pointPolygonOn) {
-        if (fric) pointPolygon<true>(dt, eDamp, eSlip, nPP, maxOv);
-        else pointPolygon<false>(dt, eDamp, eSlip, nPP, maxOv);
+    // The kinds of the table, in order (ContactKind.hpp).
+    KindStep ks{dt, w_.settings.frictionOn, w_, *this, st_, st_.threadForce};
+    for (Kind& k : kinds_) {
+        if (!kindOn(k)) continue;
+        const double tk = omp_get_wtime();
+        k.contacts = k.kernel->run(ks);
+        k.seconds = omp_get_wtime() - tk;
     }
-    const double t2 = omp_get_wtime();
-    if (w_.settings.edgeEdgeOn) {
-        if (fric) edgeEdge<true>(dt, eDamp, eSlip, nEE, maxOv);
-        else edgeEdge<false>(dt, eDamp, eSlip, nEE, maxOv);
-    }
-    const double tEE = omp_get_wtime();
+    const double tSum = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
     const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
 #pragma omp parallel for schedule(static) num_threads(nth)
@@ -321,13 +337,9 @@ void PieceContactPhase::run(double dt) {
         for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
     }
-    const double t3 = omp_get_wtime();
-    // The sum of the thread buffers is booked to point-polygon, the main user.
-    pointPolygonSeconds_ = (t2 - t1) + (t3 - tEE);
-    edgeEdgeSeconds_ = tEE - t2;
-    pointPolygonContacts_ = nPP;
-    edgeEdgeContacts_ = nEE;
-    maxOverlap_ = maxOv;
+    sumSeconds_ = omp_get_wtime() - tSum;
+    maxOverlap_ = ks.maxOverlap;
+    const double eDamp = ks.eDamp, eSlip = ks.eSlip;
     if (w_.settings.trackEnergy) {  // (the elastic energy is summed per piece)
         w_.energy.contactDamping += eDamp;
         w_.energy.friction += eSlip;
@@ -349,10 +361,12 @@ void PieceContactPhase::stateColumns(StateColumns& c) {
     c.add("eeShear", st_.eeShear);
     c.add("eeRef", st_.eeRef);
     c.add("eeStamp", st_.eeStamp);
+    for (Kind& k : kinds_) k.kernel->stateColumns(c);
 }
 
 void PieceContactPhase::piecesAdded() {
     st_.resizeHistory(w_.surfNodes.size(), w_.surfaceIndex().nEdges());
+    for (Kind& k : kinds_) k.kernel->piecesAdded(w_);
     frozen_.resize(w_.pieces.size(), 0);
     normalsFresh_.resize(w_.pieces.size(), 0);
 }

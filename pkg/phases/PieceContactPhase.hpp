@@ -8,28 +8,24 @@
 #include <cstdint>
 #include <vector>
 
+#include <memory>
+
 #include "../world/Phase.hpp"
+#include "ContactKind.hpp"
 #include "PieceContactState.hpp"
 
 namespace qdem {
 
 class PieceContactPhase final : public Phase {
 public:
-    using Phase::Phase;
+    // Makes one kernel per row of the contact-kinds table (ContactKind.hpp).
+    explicit PieceContactPhase(World& world);
     const char* name() const override { return "pieceContacts"; }
     void run(double dt) override;
     // Its time split into broad phase (lists), point-polygon (with the sum of
     // the thread buffers) and edge-edge; contacts of each kind; cases A/B:
     // interior faces tested for nothing, and of them those within reach.
-    void report(PhaseReport& r) const override {
-        r.seconds.push_back({"broadPhase", broadSeconds_});
-        r.seconds.push_back({"pointPolygon", pointPolygonSeconds_});
-        r.seconds.push_back({"edgeEdge", edgeEdgeSeconds_});
-        r.counts.push_back({"pointPolygon", pointPolygonContacts_});
-        r.counts.push_back({"edgeEdge", edgeEdgeContacts_});
-        r.counts.push_back({"interiorFaceTests", interiorFaceTests_});
-        r.counts.push_back({"interiorFaceNear", interiorFaceNear_});
-    }
+    void report(PhaseReport& r) const override;
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxOverlap() const { return maxOverlap_; }
     void stateColumns(StateColumns& c) override;
@@ -50,15 +46,27 @@ public:
         if (awake) frozen_[piece] = 0;
     }
 
-private:
+    // The kernels of the seed's two kinds (rows of ContactKinds.cpp).
+    static std::unique_ptr<ContactKind> makePointPolygonKind();
+    static std::unique_ptr<ContactKind> makeEdgeEdgeKind();
     template <bool Friction>
     void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     template <bool Friction>
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
+private:
+    struct Kind {
+        const ContactKindRow* row;
+        std::unique_ptr<ContactKind> kernel;
+        double seconds = 0;
+        long contacts = 0;
+    };
+    std::vector<Kind> kinds_;  // in table order
+    bool kindOn(const Kind& k) const;
+
     PieceContactState st_;
-    double broadSeconds_ = 0, pointPolygonSeconds_ = 0, edgeEdgeSeconds_ = 0, maxOverlap_ = 0;
-    long pointPolygonContacts_ = 0, edgeEdgeContacts_ = 0, interiorFaceTests_ = 0, interiorFaceNear_ = 0;
+    double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0;
+    long interiorFaceTests_ = 0, interiorFaceNear_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
 };

@@ -367,4 +367,21 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
 template void PieceContactPhase::pointPolygon<true>(double, double&, double&, long&, double&);
 template void PieceContactPhase::pointPolygon<false>(double, double&, double&, long&, double&);
 
+namespace {
+
+// The row's kernel (ContactKinds.cpp): the phase's pointPolygon with or without friction.
+class PointPolygonKind final : public ContactKind {
+public:
+    long run(KindStep& s) override {
+        long n = 0;
+        if (s.friction) s.phase.pointPolygon<true>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
+        else s.phase.pointPolygon<false>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
+        return n;
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<ContactKind> PieceContactPhase::makePointPolygonKind() { return std::make_unique<PointPolygonKind>(); }
+
 }  // namespace qdem

@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "core/Errors.hpp"
+#include "phases/ContactKind.hpp"
 #include "world/World.hpp"
 
 namespace py = pybind11;
@@ -66,6 +67,13 @@ void assign(T& member, const py::object& value, const char* name, const SettingR
     }
 }
 
+// Is b the member a points at (only bool members can be switches)?
+template <class T>
+bool sameMember(bool Settings::*a, T Settings::*b) {
+    if constexpr (std::is_same_v<T, bool>) return a == b;
+    else return false;
+}
+
 }  // namespace
 
 void bindSettings(py::module_& m, py::class_<World>& world) {
@@ -91,4 +99,22 @@ void bindSettings(py::module_& m, py::class_<World>& world) {
     QDEM_SETTINGS(QDEM_BIND_SETTING)
 #undef QDEM_BIND_SETTING
     m.attr("settings") = table;
+
+    // The contact-kinds table (pkg/phases/ContactKind.hpp), each row with the
+    // name of the setting that switches it (its engine attribute: settings).
+    py::list kinds;
+    for (const ContactKindRow& row : contactKinds()) {
+        py::dict d;
+        d["name"] = row.name;
+        d["registers"] = row.registers;
+        d["history"] = row.history;
+        py::object sw = py::none();
+#define QDEM_SWITCH_NAME(T, name, engineName, def, range, doc) \
+    if (sameMember(row.on, &Settings::name)) sw = py::str(#name);
+        QDEM_SETTINGS(QDEM_SWITCH_NAME)
+#undef QDEM_SWITCH_NAME
+        d["switch"] = sw;
+        kinds.append(d);
+    }
+    m.attr("contactKinds") = kinds;
 }

@@ -69,3 +69,18 @@ def test_core_refuses_bad_values_too(scene):
         core.frictionModel = 2
     with pytest.raises(ValueError, match="World.localDamping=nan is invalid"):
         core.localDamping = float("nan")
+
+
+def test_contact_kinds_come_from_the_table_with_their_switches(scene):
+    """The piece-piece contact kinds are rows of one table (pkg/phases/ContactKind.hpp);
+    each row's switch is a declared setting, hence an engine attribute."""
+    kinds = {k["name"]: k for k in _core.contactKinds}
+    assert list(kinds)[:2] == ["pointPolygon", "edgeEdge"]
+    byMember = {d["name"]: d for d in _core.settings}
+    e = qdem.QdemEngine()
+    for k in kinds.values():
+        assert k["registers"] and k["history"]
+        d = byMember[k["switch"]]
+        assert d["kind"] == "bool" and d["engineName"] in e.dict()
+        # the switch turns the kind off: its counter is reported either way
+        assert k["name"] in qdem.defaultWorld().core.contactCounts

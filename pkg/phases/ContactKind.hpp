@@ -1,0 +1,67 @@
+// Kinds of contact between pieces, as rows of one table (ContactKinds.cpp).
+//
+// A row names the kind, says what the broad phase registers for it and how
+// its history is laid out, points at its switch (a Settings member) and makes
+// its kernel: a ContactKind object that PieceContactPhase runs once per step,
+// in table order, after the broad phase (neighbour pieces, their boxes and
+// the Verlet/cell lists of the seed's two kinds).  A kind adds its forces on
+// surface nodes into the per-thread buffers of KindStep and its energies and
+// contact count into the step's tallies; it declares its own restart columns
+// and counters.  Adding a kind: one file with its ContactKind class, and one
+// row (addContactKind, or a line in ContactKinds.cpp) - doc/architecture.md;
+// tests/cpp/test_contact_kind_table.cpp adds a test-only kind that way.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "../world/Phase.hpp"
+#include "../world/Settings.hpp"
+
+namespace qdem {
+
+class PieceContactPhase;
+struct PieceContactState;
+
+// What a kind gets and gives in one step.
+struct KindStep {
+    double dt;
+    bool friction;                     // settings.frictionOn
+    World& world;
+    PieceContactPhase& phase;
+    const PieceContactState& lists;    // neighbour pieces (nbrStart/nbrs), active pieces, Verlet lists
+    // Per thread, 3 per surface node (index into World::surfNodes): the
+    // forces this step's kinds add; summed into the nodes after the last kind.
+    std::vector<std::vector<double>>& threadForce;
+    // Tallies: dissipated by dashpots and sliding [J], largest overlap [m].
+    double eDamp = 0, eSlip = 0, maxOverlap = 0;
+};
+
+class ContactKind {
+public:
+    virtual ~ContactKind() = default;
+    // The narrow phase: forces into threadForce, energies into the tallies;
+    // returns the number of contacts.
+    virtual long run(KindStep& s) = 0;
+    // Growth of its history with the surfaces (pieces added).
+    virtual void piecesAdded(const World&) {}
+    virtual void stateColumns(StateColumns&) {}
+    virtual void report(PhaseReport&) const {}
+};
+
+struct ContactKindRow {
+    const char* name;       // its counter and timing name
+    const char* registers;  // what the broad phase registers for it
+    const char* history;    // its contact history (keys by stable ids)
+    bool Settings::*on;     // its switch; nullptr: always on
+    std::unique_ptr<ContactKind> (*make)();
+};
+
+// The table: the seed's point-polygon and edge-edge kinds, then rows added
+// with addContactKind (worlds created afterwards run them).
+const std::vector<ContactKindRow>& contactKinds();
+void addContactKind(const ContactKindRow& row);
+void removeContactKind(const std::string& name);  // (tests)
+
+}  // namespace qdem
