@@ -69,6 +69,14 @@ struct CandidateList {
     bool anyBehind = false;
 
     void clear() { n = 0, anyBehind = false; }
+    // Adds the candidate P makes with triangle tri (a, b, c, normal nrm), if any.
+    void consider(const Eigen::Vector3d& P, int32_t tri, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                  const Eigen::Vector3d& c3, const Eigen::Vector3d& nrm, double reach, bool regions) {
+        TriPoint cp;
+        double dist;
+        bool behind;
+        if (pointTriangle(P, a, b, c3, nrm, reach, regions, cp, dist, behind)) add(Candidate{tri, cp, dist, behind});
+    }
     void add(const Candidate& x) {
         int slot = n;
         if (n == kCandidates) {

@@ -186,21 +186,4 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
 template void PieceContactPhase::edgeEdge<true>(double, double&, double&, long&, double&);
 template void PieceContactPhase::edgeEdge<false>(double, double&, double&, long&, double&);
 
-namespace {
-
-// The row's kernel (ContactKinds.cpp): the phase's edgeEdge with or without friction.
-class EdgeEdgeKind final : public ContactKind {
-public:
-    long run(KindStep& s) override {
-        long n = 0;
-        if (s.friction) s.phase.edgeEdge<true>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        else s.phase.edgeEdge<false>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        return n;
-    }
-};
-
-}  // namespace
-
-std::unique_ptr<ContactKind> PieceContactPhase::makeEdgeEdgeKind() { return std::make_unique<EdgeEdgeKind>(); }
-
 }  // namespace qdem

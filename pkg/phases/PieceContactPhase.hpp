@@ -46,9 +46,8 @@ public:
         if (awake) frozen_[piece] = 0;
     }
 
-    // The kernels of the seed's two kinds (rows of ContactKinds.cpp).
-    static std::unique_ptr<ContactKind> makePointPolygonKind();
-    static std::unique_ptr<ContactKind> makeEdgeEdgeKind();
+    // The narrow phases of the seed's two kinds (their rows' kernels call
+    // them: ContactKinds.cpp).
     template <bool Friction>
     void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     template <bool Friction>

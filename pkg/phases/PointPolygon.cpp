@@ -100,12 +100,8 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             // behind it: possibly inside that piece).
             auto consider = [&](int32_t t, double reach) {
                 const int32_t* c = &S.tri[3 * t];
-                TriPoint cp;
-                double dist;
-                bool behind;
-                if (pointTriangle(A, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
-                                  Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions, cp, dist, behind))
-                    cl.add(Candidate{t, cp, dist, behind});
+                cl.consider(A, t, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                            Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions);
             };
             if (useList) {
                 // The same tests as consider(), the closest points of
@@ -366,22 +362,5 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
 
 template void PieceContactPhase::pointPolygon<true>(double, double&, double&, long&, double&);
 template void PieceContactPhase::pointPolygon<false>(double, double&, double&, long&, double&);
-
-namespace {
-
-// The row's kernel (ContactKinds.cpp): the phase's pointPolygon with or without friction.
-class PointPolygonKind final : public ContactKind {
-public:
-    long run(KindStep& s) override {
-        long n = 0;
-        if (s.friction) s.phase.pointPolygon<true>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        else s.phase.pointPolygon<false>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        return n;
-    }
-};
-
-}  // namespace
-
-std::unique_ptr<ContactKind> PieceContactPhase::makePointPolygonKind() { return std::make_unique<PointPolygonKind>(); }
 
 }  // namespace qdem

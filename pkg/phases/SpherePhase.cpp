@@ -237,12 +237,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
-                        TriPoint cp;
-                        double dist;
-                        bool behind;
-                        if (pointTriangle(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
-                                          Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true, cp, dist, behind))
-                            cl.add(Candidate{t, cp, dist, behind});
+                        cl.consider(C, t, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                                    Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true);
                     });
                 }
                 for (int k = 0; k < nc; ++k) keep[k] = true;
