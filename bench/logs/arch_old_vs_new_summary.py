@@ -22,8 +22,14 @@ limit = float(sys.argv[5]) if len(sys.argv) > 5 else 2.5
 # RAW: one raw file or several, comma-separated (sittings one after the
 # other); a pair is an old and a new run of the same round of the same sitting.
 runsAll = []
-for i, path in enumerate(raw.split(",")):
-    for run in json.load(open(path))["runs"]:
+# arch_old_vs_new.json itself (raw runs under "sittings") works as RAW too:
+# its sittings that have no "not in the summary" note are read.
+sittings = []
+for path in raw.split(","):
+    x = json.load(open(path))
+    sittings += [s for s in x["sittings"] if "not in the summary" not in s.get("note", "")] if "sittings" in x else [x]
+for i, x in enumerate(sittings):
+    for run in x["runs"]:
         runsAll.append(dict(run, round="%d.%s" % (i, run["round"])))
 d = {"runs": runsAll}
 
