@@ -72,9 +72,9 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
     X(double, edgeFadeAngle, "edgeFadeAngle", 0.17453292519943295, within(1e-6, 1.5707963267948966),               \
       "Edge-edge forces fade out as edges become parallel (the point-polygon contacts at their ends carry such "    \
       "a contact): full at or above this angle [rad] between the edges, zero when parallel.")                       \
-    X(double, edgeFeatureAngle, "edgeFeatureAngle", 0.5235987755982988, within(0, 3.141592653589793),               \
+    X(double, edgeFeatureAngle, "edgeFeatureAngle", 0.5235987755982988, atLeast(0),                                  \
       "Edge-edge contacts are sought between feature edges only: those whose two faces meet at more than this "     \
-      "angle [rad] in the reference shape.")                                                                        \
+      "angle [rad] in the reference shape (above pi: none).")                                                       \
     X(double, verletSkin, "verletSkin", 0.5, atLeast(0),                                                             \
       "Verlet-list skin of the default broad phase, as a fraction of the largest particle radius: larger = "        \
       "rarer rebuilds, longer lists.")                                                                               \
