@@ -1,4 +1,5 @@
-// Shared pieces of the piece-piece contact phases (internal to pkg/world).
+// Shared pieces of the contact phases (point-polygon, edge-edge, spheres):
+// candidate records, history keys by stable ids, the born-deep rule.
 #pragma once
 #include <Eigen/Core>
 #include <algorithm>

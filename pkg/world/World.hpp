@@ -1,8 +1,9 @@
 // The QDEM world: every piece's nodes and tetrahedra in shared struct-of-
 // arrays storage, the rigid obstacles they touch, and the step pipeline.
 //
-// One step (World::step) = obstacle contacts -> element forces -> leapfrog.
-// Each phase runs only when the scene needs it (no viscous term for a piece
+// One step (World::step, WorldStep.cpp) runs the phases of pkg/phases in
+// order: obstacles, piece contacts, spheres, elements, integration, sleep
+// (doc/architecture.md).  Each phase runs only when the scene needs it (no viscous term for a piece
 // with viscosity 0, no friction work at friction 0, no obstacle loop without
 // obstacles, no energy sums unless tracked).
 #pragma once
@@ -210,12 +211,13 @@ private:
     ElementPhase elementPhase_{*this};
     IntegrationPhase integrationPhase_{*this, elementPhase_};
     SleepPhase sleepPhase_{*this};
-    // In the order of the step; Checkpoint.cpp and addPiece visit them.
-    std::vector<Phase*> phases() {
-        return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_, &sleepPhase_};
-    }
-    std::vector<const Phase*> phases() const {
-        return {&obstaclePhase_, &pieceContactPhase_, &spherePhase_, &elementPhase_, &integrationPhase_, &sleepPhase_};
+    // In the order of the step; Checkpoint.cpp, addPiece and report() visit
+    // them (a fixed array: report() is called every step from Python).
+    const std::array<Phase*, 6> phases_{&obstaclePhase_,    &pieceContactPhase_, &spherePhase_,
+                                        &elementPhase_,     &integrationPhase_,  &sleepPhase_};
+    const std::array<Phase*, 6>& phases() { return phases_; }
+    std::array<const Phase*, 6> phases() const {
+        return {phases_[0], phases_[1], phases_[2], phases_[3], phases_[4], phases_[5]};
     }
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();

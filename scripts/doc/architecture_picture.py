@@ -3,7 +3,7 @@ they share and the state each owns (doc/architecture.md).
 
     /usr/bin/python3.11 scripts/doc/architecture_picture.py [--out doc/img/architecture.png]
 
-The phase list is read from pkg/world/World.hpp (World::phases) so the picture
+The phase list is read from pkg/world/World.hpp (World::phases_) so the picture
 follows the code; the script fails if a phase in the picture is not in it."""
 import argparse
 import os
@@ -29,7 +29,7 @@ PHASES = [
 
 def phasesInCode():
     src = open(os.path.join(ROOT, "pkg", "world", "World.hpp")).read()
-    m = re.search(r"std::vector<Phase\*> phases\(\) \{\s*return \{([^}]*)\}", src)
+    m = re.search(r"std::array<Phase\*, \d+> phases_\{([^}]*)\}", src)
     return [s.strip().lstrip("&") for s in m.group(1).split(",")]
 
 

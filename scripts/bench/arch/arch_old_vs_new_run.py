@@ -4,7 +4,7 @@ alternating from round to round and from benchmark to benchmark, the load
 average read before and after every run.  Raw figures go to the JSON file
 (rewritten after every run, so an interrupted sitting keeps what it measured).
 
-    /usr/bin/python3.11 bench/logs/arch_old_vs_new_run.py OLD_BUILD NEW_BUILD ROUNDS OUT.json SHOGI_CACHE.npz
+    /usr/bin/python3.11 scripts/bench/arch/arch_old_vs_new_run.py OLD_BUILD NEW_BUILD ROUNDS OUT.json SHOGI_CACHE.npz
 """
 import json
 import os
@@ -14,7 +14,7 @@ import sys
 import time
 
 old, new, rounds, outPath, shogiCache = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5]
-root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 tmp = "/tmp/archbench/runs"
 os.makedirs(tmp, exist_ok=True)
 
@@ -30,7 +30,7 @@ def commands(build, tag, r):
         "elements": ([os.path.join(build, "bench_elements")] + ELEMENT_ARGS, None),
         "cubes27": (["/usr/bin/python3.11", "scripts/bench/bench_cubes27.py", "--steps", CUBES_STEPS,
                      "--out", out + "_cubes"], os.path.join(out + "_cubes", "cubes27.json")),
-        "shogi": (["/usr/bin/python3.11", "bench/logs/arch_shogi_cached.py", shogiCache, SHOGI_STEPS], None),
+        "shogi": (["/usr/bin/python3.11", "scripts/bench/arch/arch_shogi_cached.py", shogiCache, SHOGI_STEPS], None),
         "spheres": (["yade", "-j", "2", "-n", "-x", "scripts/bench/bench_spheres.py"] + SPHERE_ARGS
                     + ["--out", out + "_spheres"], os.path.join(out + "_spheres", "spheres.json")),
     }

@@ -1,6 +1,6 @@
 """Figures, ratios and verdicts from arch_old_vs_new_run.py's raw JSON.
 
-    /usr/bin/python3.11 bench/logs/arch_old_vs_new_summary.py RAW.json[,RAW2.json...] OUT.json OUT.md SUBSET [LOAD_LIMIT=2.5]
+    /usr/bin/python3.11 scripts/bench/arch/arch_old_vs_new_summary.py RAW.json[,RAW2.json...] OUT.json OUT.md SUBSET [LOAD_LIMIT=2.5]
 
 SUBSET picks the runs the figures are taken over: "load" - the runs whose
 1-minute load average read just before was at most LOAD_LIMIT (2 cores,
