@@ -1,0 +1,81 @@
+// How QDEM's nodes and tetrahedra are split across MPI ranks (the seed's
+// §4.3, doc/parallel.md): along the Hilbert curve of the global box, into
+// contiguous key ranges of equal weight.  Pure data and geometry: no MPI here,
+// so every rank computes the same split from the same (replicated) set-up,
+// and the scaling model runs the very same code for 16,384 ranks on one core.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+namespace qdem {
+
+// What the partitioner reads: the nodes and tets of all pieces in the world's
+// global numbering (World.hpp).  Pointers, not copies: the arrays are large.
+struct PartitionInput {
+    int32_t nNodes = 0, nTets = 0;
+    const double* pos = nullptr;        // 3 per node (current positions)
+    const int32_t* tetNodes = nullptr;  // 4 per tet
+    int32_t nPieces = 0;
+    const int32_t* pieceNodeBegin = nullptr;  // nPieces + 1: piece p owns nodes [begin[p], begin[p+1])
+    // Extra work per node on top of its elements (contact work measured per
+    // surface node, in units of one tet); nullptr: none.
+    const double* nodeExtraWeight = nullptr;
+};
+
+struct PartitionOptions {
+    int nRanks = 1;
+    // A piece whose weight is at most this fraction of one rank's share is
+    // keyed as a whole (all its nodes at its centroid's key) and a cut that
+    // falls inside it is moved to its nearer end when the ranks on either side
+    // stay within `tolerance` of the share: small pieces stay whole where
+    // balance allows, big ones are split along the curve.
+    double wholePieceFraction = 0.5;
+    double tolerance = 0.05;
+};
+
+struct Partition {
+    int nRanks = 1;
+    std::vector<int32_t> nodeOwner;  // per node: its rank
+    std::vector<int32_t> tetOwner;   // per tet: the rank computing it (the lowest owner of its nodes)
+    std::vector<double> rankWeight;  // per rank: tets + extra weight it owns
+    std::vector<uint64_t> keyStart;  // per rank + 1: the key range [keyStart[r], keyStart[r+1]) (diagnostics)
+
+    double imbalance() const;  // max / mean of rankWeight (1 = perfect)
+};
+
+// The weighted Hilbert split.  Deterministic: the same input gives the same
+// split on every rank (ties broken by node id).
+Partition partitionHilbert(const PartitionInput& in, const PartitionOptions& opt);
+// Slabs of equal weight along the longest axis of the box (for comparison).
+Partition partitionSlabs(const PartitionInput& in, const PartitionOptions& opt);
+
+// One rank's view of a partition: which of its nodes others read (sent
+// forward each step) and which of theirs it reads (ghosts).  Lists are per
+// neighbour rank, neighbours ascending, node ids ascending in each list; the
+// relation is symmetric: send[r][s] == recv[s][r].
+struct Halo {
+    int rank = 0;
+    std::vector<int32_t> ownedNodes;  // ascending
+    std::vector<int32_t> ownedTets;   // ascending
+    std::vector<int> neighbours;      // ascending
+    std::vector<std::vector<int32_t>> recv;  // per neighbour: ghost nodes owned by it that this rank reads
+    std::vector<std::vector<int32_t>> send;  // per neighbour: owned nodes it reads
+    std::size_t nGhosts() const;
+};
+
+// The element halo of rank r: ghosts are the nodes of r's tets owned by other
+// ranks (each tet is computed once, by its owner; partial forces on ghosts go
+// back to their owners, their positions and velocities come forward).
+// extraRecv (optional, sorted, node ids owned elsewhere): further ghosts r
+// reads, e.g. its contact halo; the send lists follow from every rank's
+// reads, so all ranks' extra ghosts must be given to make the lists
+// symmetric: haloAll does that.
+Halo elementHalo(const Partition& p, const PartitionInput& in, int rank);
+// The halos of all ranks at once (what the model and the tests use), with a
+// contact halo: every surface node of another rank within `contactReach`
+// [m] of a surface node rank r owns is also a ghost of r (0: none).
+// surfNodes: the surface node ids (nSurf of them).
+std::vector<Halo> haloAll(const Partition& p, const PartitionInput& in, const int32_t* surfNodes, int32_t nSurf,
+                          double contactReach);
+
+}  // namespace qdem
