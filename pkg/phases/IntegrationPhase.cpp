@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../parallel/Domain.hpp"
 #include "../world/World.hpp"
 #include "IntegrationPhase.hpp"
 
@@ -24,11 +25,13 @@ void IntegrationPhase::run(double dt) {
     const double* Fext = w_.extForce.data();
     const double* Fc = w_.contactForce_.data();
     const double* M = w_.mass.data();
+    // Under MPI: what other ranks computed on this rank's nodes (Domain.hpp).
+    const double* Fg = w_.domain() ? w_.domain()->ghostForce() : nullptr;
     const uint8_t* blk = w_.blocked.data();
     double ek = 0, eg = 0, ed = 0;
     const double damp = w_.settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
-    const bool all = w_.sleeping().nAsleep() == 0;
+    const bool all = w_.sleeping().everything();
     const int32_t* ids = w_.sleeping().awakeNodes().data();
     const auto count = all ? N : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
     const bool sleepOn = w_.settings.sleepVelocity > 0;
@@ -52,6 +55,8 @@ void IntegrationPhase::run(double dt) {
                 }
             if (withContacts)
                 for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
+            if (Fg)
+                for (int d = 0; d < 3; ++d) f[d] += Fg[3 * n + d];
             const double invM = 1.0 / M[n];
             for (int d = 0; d < 3; ++d) {
                 Fout[3 * n + d] = f[d];

@@ -79,7 +79,7 @@ void ObstaclePhase::run(double dt) {
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
     // Sleeping pieces' nodes are skipped (their history kept as it is).
-    const bool all = w_.sleeping().nAsleep() == 0;
+    const bool all = w_.sleeping().everything();
     const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
     const int32_t* awakeSurf = w_.sleeping().awakeSurf().data();
 

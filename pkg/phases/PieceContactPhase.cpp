@@ -113,7 +113,7 @@ void PieceContactPhase::run(double dt) {
                    st_.listActive.size() != np;
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
     if (!rebuild) {
-        const bool all = w_.sleeping().nAsleep() == 0;  // else only the awake pieces' nodes move
+        const bool all = w_.sleeping().everything();  // else only the awake pieces' nodes move
         const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
         double moved2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
@@ -311,7 +311,7 @@ void PieceContactPhase::run(double dt) {
     broadSeconds_ = omp_get_wtime() - t0;
 
     // Thread buffers: only awake pieces' nodes are read (and so zeroed).
-    const bool all = w_.sleeping().nAsleep() == 0;
+    const bool all = w_.sleeping().everything();
 #pragma omp parallel num_threads(nth)
     {
         auto& b = st_.threadForce[omp_get_thread_num()];

@@ -10,6 +10,7 @@
 #include "SleepPhase.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
+#include "../parallel/Domain.hpp"
 
 namespace qdem {
 
@@ -20,15 +21,28 @@ void SleepPhase::awakeSetChanged() {
     awakeNodes_.clear();
     awakeSurf_.clear();
     nAsleep_ = 0;
+    const Domain* d = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
             ++nAsleep_;
             continue;
         }
-        awakeTets_.push_back({static_cast<int32_t>(p), w_.pieces[p].tetBegin, w_.pieces[p].tetEnd});
-        for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
-        for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) awakeSurf_.push_back(s);
+        if (!d) {
+            awakeTets_.push_back({static_cast<int32_t>(p), w_.pieces[p].tetBegin, w_.pieces[p].tetEnd});
+            for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
+            for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) awakeSurf_.push_back(s);
+            continue;
+        }
+        // Under MPI (Domain.hpp) a rank steps only what it owns: the tets it
+        // computes, the nodes it integrates, the surface nodes whose obstacle
+        // contacts it keeps.
+        d->ownedTetRuns(static_cast<int32_t>(p), awakeTets_);
+        for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n)
+            if (d->owns(n)) awakeNodes_.push_back(n);
+        for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
+            if (d->owns(w_.surfNodes[s])) awakeSurf_.push_back(s);
     }
+    everything_ = nAsleep_ == 0 && !d;
 }
 
 void SleepPhase::wakeOne(std::size_t p) {

@@ -30,6 +30,9 @@ public:
     bool asleep(std::size_t piece) const { return piece < asleep_.size() && asleep_[piece]; }
     long nAsleep() const { return nAsleep_; }
     long version() const { return version_; }  // bumped whenever the awake set changes
+    // Every tet, node and surface node is in the awake set (nothing asleep,
+    // no MPI domain): phases then loop over all of them without the lists.
+    bool everything() const { return everything_; }
     const std::vector<TetSegment>& awakeTets() const { return awakeTets_; }  // per awake piece, its tets
     const std::vector<int32_t>& awakeNodes() const { return awakeNodes_; }   // ids of their nodes
     const std::vector<int32_t>& awakeSurf() const { return awakeSurf_; }     // indices into surfNodes
@@ -83,6 +86,7 @@ private:
     bool obstaclesPending_ = false;
     bool gravityPending_ = false;
     long nAsleep_ = 0;
+    bool everything_ = true;
     long version_ = 0;
     std::vector<TetSegment> awakeTets_;
     std::vector<int32_t> awakeNodes_, awakeSurf_;

@@ -21,6 +21,7 @@ StateColumns World::stateColumns() {
 }
 
 WorldState World::saveState() const {
+    requireGathered("saveState");
     WorldState s;
     const int64_t counts[4] = {static_cast<int64_t>(nNodes()), static_cast<int64_t>(nTets()),
                                static_cast<int64_t>(pieces.size()), static_cast<int64_t>(surfNodes.size())};

@@ -10,6 +10,7 @@
 namespace qdem {
 
 InversionCount World::countInverted() const {
+    requireGathered("countInverted");
     InversionCount r;
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         if (asleep(i)) continue;  // does not move: counted while it was awake

@@ -139,6 +139,7 @@ double World::elementOmegaMax(const PieceInfo& p) const {
 
 void World::checkCurrentDt(double dt) const {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+    requireGathered("checkCurrentDt");
     stableDt();  // fills the reference frequencies
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         if (asleep(i)) continue;  // does not move: checked while it was awake, and again when it wakes

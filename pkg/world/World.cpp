@@ -8,6 +8,7 @@
 #include "../core/Format.hpp"
 #include "../element/Tetra.hpp"
 #include "../mesh/Components.hpp"
+#include "../parallel/Domain.hpp"
 
 namespace qdem {
 
@@ -120,6 +121,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     surf_.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
     surf_.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
     omegaCache_.clear();
+    if (domain_) domain_->invalidate();  // split again at the next step
     for (Phase* ph : phases()) ph->piecesAdded();
     pieceEnergy_.resize(3 * pieces.size(), 0.0);
     return pieceId;
@@ -154,7 +156,14 @@ void World::setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quate
     o.updateDerived();
 }
 
+void World::requireGathered(const char* what) const {
+    if (!stateCurrent())
+        throw InputError(cat(what, " under MPI reads every node: call gatherAll() on every rank first (QdemEngine does "
+                             "so before its checks and output)"));
+}
+
 void World::checkFinite() const {
+    requireGathered("checkFinite");
     const std::size_t n = 3 * nNodes();
     for (std::size_t i = 0; i < n; ++i)
         if (!std::isfinite(pos[i]) || !std::isfinite(vel[i]))
@@ -204,6 +213,52 @@ void World::setGravity(const Eigen::Vector3d& g) {
 void World::setDynamic(std::size_t p, bool dynamic) {
     if (p >= pieces.size()) throw InputError(cat("setDynamic: no piece ", p));
     sleepPhase_.setDynamic(p, dynamic);
+}
+
+}  // namespace qdem
+
+// ---------------------------------------------------------------------------
+// MPI (pkg/parallel/Domain.hpp)
+
+namespace qdem {
+
+World::World() = default;
+World::~World() = default;
+
+void World::setCommunicator(std::shared_ptr<Communicator> comm) {
+    if (comm && comm->size() > 1) domain_ = std::make_unique<Domain>(*this, std::move(comm));
+    else domain_.reset();
+    sleepPhase_.awakeSetChanged();
+}
+
+// What is not distributed yet is refused before the first split, on every
+// rank alike (they all built the same scene), so no rank waits for another.
+void World::prepareDomain() {
+    if (domain_->built()) return;
+    const std::string where = cat("QDEM under MPI (", domain_->size(), " ranks)");
+    if (settings.sleepVelocity > 0)
+        throw InputError(where + " does not put pieces to sleep yet: set QdemEngine.sleepVelocity = 0, or run on one "
+                                 "process");
+    if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn))
+        throw InputError(where + " does not compute contacts between pieces yet: switch them off with "
+                                 "QdemEngine(pointPolygon=False, edgeEdge=False) if the pieces never touch, or run "
+                                 "on one process");
+    if (!spheres.id.empty())
+        throw InputError(where + " does not couple YADE spheres yet: run on one process");
+    domain_->build(partitionOptions);
+    sleepPhase_.awakeSetChanged();
+    energyTotal_ = energy;
+}
+
+void World::gatherAll() {
+    if (domain_ && domain_->built()) domain_->gatherAll();
+    gatheredIter_ = iter;
+}
+
+std::string World::agreeOnError(const std::string& error) const {
+    if (!domain_) return error;
+    const std::string m = domain_->agree(error.empty() ? error : "S" + error);
+    return m.empty() ? m : m.substr(1);
 }
 
 }  // namespace qdem

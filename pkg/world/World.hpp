@@ -9,6 +9,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,8 @@
 #include "../material/Material.hpp"
 #include "../mesh/Surface.hpp"
 #include "../mesh/TetMesh.hpp"
+#include "../parallel/Communicator.hpp"
+#include "../parallel/Partition.hpp"
 #include "Energy.hpp"
 #include "../phases/ElementPhase.hpp"
 #include "../phases/IntegrationPhase.hpp"
@@ -31,6 +34,8 @@
 #include "WorldState.hpp"
 
 namespace qdem {
+
+class Domain;
 
 struct PieceInfo {
     int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
@@ -114,9 +119,36 @@ public:
     WorldState saveState() const;
     void loadState(const WorldState& s);
 
+    // ---- MPI (pkg/parallel, doc/parallel.md) --------------------------------
+    // Splits the world across the communicator's ranks from the next step on
+    // (nullptr or a 1-rank communicator: back to one process).  Every rank
+    // must have built the same scene; the split is made at the next step, and
+    // again after pieces are added.
+    void setCommunicator(std::shared_ptr<Communicator> comm);
+    Domain* domain() { return domain_.get(); }
+    const Domain* domain() const { return domain_.get(); }
+    PartitionOptions partitionOptions;
+    // Every rank learns every node's position and velocity (under MPI a rank
+    // keeps only its own nodes and ghosts current); a no-op on one process.
+    // Collective: every rank must call it.
+    void gatherAll();
+    // Every node's position, velocity and force is current on this rank
+    // (always on one process; under MPI right after gatherAll()).
+    bool stateCurrent() const { return !domain_ || gatheredIter_ == iter; }
+    // The energies of the whole world: under MPI the sum over ranks (in rank
+    // order) made at the end of each step; `energy` is then this rank's share.
+    const Energy& energyTotal() const { return domain_ ? energyTotal_ : energy; }
+    void resetEnergy() { energy = energyTotal_ = Energy(); }
+    // The lowest failing rank's error on every rank ("" if none failed); on
+    // one process, the error itself.  Collective under MPI.
+    std::string agreeOnError(const std::string& error) const;
+
     // ---- output -----------------------------------------------------------
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
-    void computeStress(double* out) const { elementPhase_.stress(out); }
+    void computeStress(double* out) const {
+        requireGathered("computeStress");
+        elementPhase_.stress(out);
+    }
 
     // ---- data (struct of arrays; 3 doubles per node for vectors) ----------
     Column<double> pos, vel, refPos, force, extForce, mass;
@@ -192,7 +224,8 @@ public:
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap() const { return pieceContactPhase_.maxOverlap(); }
 
-    World() = default;
+    World();
+    ~World();
     World(const World&) = delete;
     World& operator=(const World&) = delete;
 
@@ -205,6 +238,7 @@ private:
     friend class PieceContactPhase;
     friend class SpherePhase;
     friend class SleepPhase;
+    friend class Domain;
     ObstaclePhase obstaclePhase_{*this};
     PieceContactPhase pieceContactPhase_{*this};
     SpherePhase spherePhase_{*this};
@@ -229,6 +263,13 @@ private:
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
 
+    // Under MPI: this rank's share of the world and its exchanges.
+    std::unique_ptr<Domain> domain_;
+    Energy energyTotal_;
+    long gatheredIter_ = -1;  // the step gatherAll() last made every node current at
+    void prepareDomain();
+    // Throws InputError under MPI unless gatherAll() made every node current this step.
+    void requireGathered(const char* what) const;
     // Energy states per piece (elastic, contact with obstacles, contact with
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;

@@ -5,6 +5,7 @@
 
 #include "../core/Errors.hpp"
 #include "../core/Threads.hpp"
+#include "../parallel/Domain.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -23,6 +24,22 @@ inline void runTimed(Phase& p, double dt) {
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
+    if (domain_) prepareDomain();
+    // Under MPI a phase's error is kept and the step goes on through its
+    // exchanges, so every rank reaches the end-of-step agreement and throws
+    // the same error (Domain::finishStep) instead of waiting for the failed one.
+    std::string error;
+    const auto run = [&](Phase& p) {
+        if (!error.empty()) return;
+        if (!domain_) return runTimed(p, dt);
+        try {
+            runTimed(p, dt);
+        } catch (const InputError& e) {
+            error = std::string("I") + e.what();  // the kind travels as the first character
+        } catch (const std::exception& e) {
+            error = std::string("S") + e.what();
+        }
+    };
     // Set-up of the step: a loaded state's sleeping pieces checked against
     // this world's obstacles and gravity, contact forces and energy states
     // summed afresh, the pieces' boxes from the current positions.
@@ -34,17 +51,22 @@ void World::step(double dt) {
     }
     updatePieceBounds();
     // Forces: contacts (into contactForce_), then elements (thread buffers).
-    runTimed(obstaclePhase_, dt);
-    runTimed(pieceContactPhase_, dt);
-    runTimed(spherePhase_, dt);
-    runTimed(elementPhase_, dt);
+    run(obstaclePhase_);
+    run(pieceContactPhase_);
+    run(spherePhase_);
+    run(elementPhase_);
+    // Under MPI: partial forces on ghosts to their owners.
+    if (domain_) domain_->returnGhostForces(elementPhase_.layout(), contactForce_.data(), contactsActive_);
     // Motion, the energy states of the step, the clock.
-    runTimed(integrationPhase_, dt);
-    if (settings.trackEnergy) finishPieceEnergy();
+    run(integrationPhase_);
+    if (settings.trackEnergy && error.empty()) finishPieceEnergy();
+    // Under MPI: the moved nodes to the ranks that read them.
+    if (domain_) domain_->sendStates();
     time += dt;
     ++iter;
     // Which pieces sleep in the next step.
-    runTimed(sleepPhase_, dt);
+    run(sleepPhase_);
+    if (domain_) domain_->finishStep(error);
 }
 
 }  // namespace qdem

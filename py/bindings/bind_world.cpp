@@ -16,6 +16,7 @@ using qdem::py_::columnView;
 using qdem::py_::flatten;
 
 void bindSettings(py::module_& m, py::class_<World>& world);
+void bindParallel(py::module_& m, py::class_<World>& world);
 
 namespace {
 
@@ -80,6 +81,7 @@ void bindWorld(py::module_& m) {
 
     py::class_<World> world(m, "World", "All QDEM pieces of a scene and their step pipeline.");
     bindSettings(m, world);
+    bindParallel(m, world);
     world.def(py::init<>())
         .def(
             "addMaterial",
@@ -170,8 +172,8 @@ void bindWorld(py::module_& m) {
                  return a;
              },
              "Cauchy stress per tet (xx, yy, zz, yz, xz, xy), elastic plus viscous.")
-        .def_property_readonly("energy", [](const World& w) { return energyDict(w.energy); })
-        .def("resetEnergy", [](World& w) { w.energy = Energy(); })
+        .def_property_readonly("energy", [](const World& w) { return energyDict(w.energyTotal()); })
+        .def("resetEnergy", [](World& w) { w.resetEnergy(); })
         .def_property_readonly("timings",
                                [](const World& w) {
                                    py::dict d;

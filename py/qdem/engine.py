@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, lifecycle, setupcheck, yadeglue
+from . import _core, lifecycle, parallel, setupcheck, yadeglue
 from .spheres import SphereCoupling
 from .attrs import Attr, AttrObject, WorldSetting, documented, worldSettings
 from .yadeclass import EngineMeta
@@ -60,6 +60,11 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
                          "needs an InsertionSortCollider in O.engines, before this engine.")
     sphereMask = Attr(-1, "groupMask of the proxy bodies that find spheres near pieces: only spheres "
                           "whose mask shares a bit with it touch QDEM pieces (-1 = all).")
+    gatherPeriod = Attr(1, "Under MPI (doc/parallel.md): every this many steps every rank learns every node's "
+                           "position, velocity and force, so that scripts, recorders and checks read them as "
+                           "serially (0 = only before checks).  Larger is faster; piece arrays read between "
+                           "gathers raise an error instead of giving stale values.  No effect on one process.",
+                        lambda v: None if v >= 0 else "must be >= 0")
     sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
                              "larger = fewer proxy moves (each forces a collider run), more spheres read.",
                         lambda v: None if 0.01 <= v <= 10 else "must lie in [0.01, 10]")
@@ -233,6 +238,8 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
+        if parallel.launchedSize() > 1 and core.mpiSize == 1:
+            parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
         if core.iter == 0:
             from .recorder import initialFrames
             initialFrames(self.world)  # the t = 0 frame, before the first step
@@ -247,12 +254,15 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             for k, v in core.energy.items():
                 if k in ENERGY_KEYS:
                     O.energy[ENERGY_KEYS[k]] = v
-        if self.checkPeriod and core.iter % self.checkPeriod == 0:
+        checking = self.checkPeriod and core.iter % self.checkPeriod == 0
+        if core.mpiSize > 1 and (checking or (self.gatherPeriod and core.iter % self.gatherPeriod == 0)):
+            core.gatherAll()  # every rank sees every node: the checks agree, scripts read current arrays
+        if checking:
             self._checkInverted(core, dt)  # first: an inverted element is named as inverted
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
-        if self.progressPeriod and core.iter % self.progressPeriod == 0:
+        if self.progressPeriod and core.iter % self.progressPeriod == 0 and parallel.isWriter():
             self._progress(core)
 
     def _checkInverted(self, core, dt):
@@ -264,14 +274,14 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         self._lastCheckTime = core.time
         if n:
             inv["time"] += since  # inverted at this check: counted for the whole period before it
-            if not inv["now"]:
+            if not inv["now"] and parallel.isWriter():
                 inv["first"] = (r["piece"], r["element"], r["volumeRatio"])
                 warnings.warn("qdem: at t=%.6g s (step %d) %d element(s) inverted, the first tetrahedron %d of "
                               "piece %d (volume ratio %.3g); the material law pushes them back "
                               "(QdemEngine.inverted counts them)."
                               % (core.time, core.iter, n, r["element"], r["piece"], r["volumeRatio"]),
                               RuntimeWarning, stacklevel=2)
-        elif inv["now"]:
+        elif inv["now"] and parallel.isWriter():
             print("qdem: at t=%.6g s (step %d) all inverted elements have recovered (at most %d, inverted for "
                   "%.3g s in all)" % (core.time, core.iter, inv["max"], inv["time"]), flush=True)
         inv["now"] = n

@@ -23,6 +23,7 @@ class Piece:
     # -- views -----------------------------------------------------------------
     def _nodes(self, name):
         """A node array of the world restricted to this piece (no waking)."""
+        _requireCurrent(self.world.core, name)
         return getattr(self.world.core, name)[self.nodeSlice]
 
     def _writable(self, name):
@@ -30,6 +31,7 @@ class Piece:
         takes effect; read-only while the piece is not dynamic (it is held
         where it is: set dynamic = True first)."""
         core = self.world.core
+        _requireCurrent(core, name)
         a = getattr(core, name)[self.nodeSlice]
         if not core.dynamic(self.id):
             a = a.view()
@@ -70,6 +72,7 @@ class Piece:
     @property
     def force(self):
         """Total force on each node in the last step (n,3) [N], read-only view."""
+        _requireCurrent(self.world.core, "force")
         return self.world.core.force[self.nodeSlice]
 
     @property
@@ -153,3 +156,14 @@ class Piece:
     def __repr__(self):
         return "<qdem.Piece %d: %d nodes, %d tets>" % (
             self.id, self.nodeSlice.stop - self.nodeSlice.start, self.tetSlice.stop - self.tetSlice.start)
+
+
+def _requireCurrent(core, name):
+    """Under MPI a rank keeps only its own nodes and their halo current
+    between gathers (QdemEngine.gatherPeriod, doc/parallel.md): reading a
+    stale array would be a silently wrong answer."""
+    if not core.stateCurrent:
+        raise RuntimeError(
+            "qdem: piece.%s on rank %d of %d is not current at step %d: under MPI every rank learns every node's "
+            "state only every QdemEngine.gatherPeriod steps. Read it at those steps, set gatherPeriod=1, or call "
+            "world.core.gatherAll() on every rank first." % (name, core.mpiRank, core.mpiSize, core.iter))

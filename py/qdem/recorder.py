@@ -6,7 +6,7 @@ import os
 import numpy as np
 from yade import PyRunner
 
-from . import lifecycle
+from . import lifecycle, parallel
 from .attrs import Attr, AttrObject, documented
 from .stress import vonMises
 from .vtu import TENSOR6, writePvd, writeVtu
@@ -132,17 +132,21 @@ class VtkRecorder(PyRunner, metaclass=EngineMeta):
         return False
 
     def record(self):
-        """Write one frame now."""
-        d = os.path.dirname(self.fileBase)
-        if d:
-            os.makedirs(d, exist_ok=True)
+        """Write one frame now (under MPI: rank 0 writes, every rank keeps the list)."""
         core = self.world.core
         path = "%s%06d.vtu" % (self.fileBase, core.iter)
-        writeFrame(self.world, path)
+        if core.mpiSize > 1 and not core.stateCurrent:
+            core.gatherAll()  # collective: every rank records at the same steps
+        if parallel.isWriter():
+            d = os.path.dirname(self.fileBase)
+            if d:
+                os.makedirs(d, exist_ok=True)
+            writeFrame(self.world, path)
         self.frames = [f for f in self.frames if f[1] != os.path.basename(path)]  # a rewritten step replaces its frame
         self.frames.append((core.time, os.path.basename(path)))
         self._last = (core.iter, core.time)
-        writePvd(self.pvdPath(), self.frames)
+        if parallel.isWriter():
+            writePvd(self.pvdPath(), self.frames)
 
     def pvdPath(self):
         """The ParaView collection: fileBase + '.pvd' (trailing '-', '_' or '.' dropped)."""

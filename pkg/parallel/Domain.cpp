@@ -1,0 +1,192 @@
+#include "Domain.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "../core/Errors.hpp"
+#include "../world/World.hpp"
+
+namespace qdem {
+
+Domain::Domain(World& w, std::shared_ptr<Communicator> comm) : w_(w), comm_(std::move(comm)) {}
+
+void Domain::build(const PartitionOptions& optIn) {
+    PartitionOptions opt = optIn;
+    opt.nRanks = size();
+    std::vector<int32_t> pieceBegin(w_.pieces.size() + 1, 0);
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p) pieceBegin[p + 1] = w_.pieces[p].nodeEnd;
+    PartitionInput in;
+    in.nNodes = static_cast<int32_t>(w_.nNodes());
+    in.nTets = static_cast<int32_t>(w_.nTets());
+    in.pos = w_.pos.data();
+    in.tetNodes = w_.tetNodes.data();
+    in.nPieces = static_cast<int32_t>(w_.pieces.size());
+    in.pieceNodeBegin = pieceBegin.data();
+    // Every rank holds the same positions here (the same script built them,
+    // or gatherAll made them so): every rank computes the same split.
+    part_ = partitionHilbert(in, opt);
+    halo_ = elementHalo(part_, in, rank());
+    ghostForce_.assign(3 * w_.nNodes(), 0.0);
+    const std::size_t nb = halo_.neighbours.size();
+    sendBuf_.assign(nb, {});
+    recvBuf_.assign(nb, {});
+    built_ = true;
+}
+
+void Domain::ownedTetRuns(int32_t piece, std::vector<TetSegment>& out) const {
+    const PieceInfo& p = w_.pieces[piece];
+    int32_t t = p.tetBegin;
+    while (t < p.tetEnd) {
+        while (t < p.tetEnd && !ownsTet(t)) ++t;
+        const int32_t t0 = t;
+        while (t < p.tetEnd && ownsTet(t)) ++t;
+        if (t > t0) out.push_back({piece, t0, t});
+    }
+}
+
+void Domain::exchange(std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) {
+    const double t0 = omp_get_wtime();
+    const long b0 = comm_->bytesSent, m0 = comm_->messagesSent;
+    comm_->exchange(halo_.neighbours, send, recv);
+    stepBytes += comm_->bytesSent - b0;
+    stepMessages += comm_->messagesSent - m0;
+    seconds += omp_get_wtime() - t0;
+}
+
+void Domain::returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts) {
+    stepBytes = stepMessages = 0;
+    seconds = 0;
+    const std::size_t nb = halo_.neighbours.size();
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& ghosts = halo_.recv[i];
+        std::vector<double>& b = sendBuf_[i];
+        b.assign(3 * ghosts.size(), 0.0);
+        for (std::size_t j = 0; j < ghosts.size(); ++j) {
+            const int32_t n = ghosts[j];
+            double* f = &b[3 * j];
+            // The buffers in thread order, as the owner's integration sums its own.
+            for (int t = 0; t < layout.nThreads; ++t)
+                if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
+                    const double* s = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+                    f[0] += s[0], f[1] += s[1], f[2] += s[2];
+                }
+            if (contacts)
+                for (int d = 0; d < 3; ++d) f[d] += contactForce[3 * n + d];
+        }
+        recvBuf_[i].resize(3 * halo_.send[i].size());
+    }
+    exchange(sendBuf_, recvBuf_);
+    // Summed in neighbour (= rank) order: the same on every run.
+    for (std::size_t i = 0; i < nb; ++i)
+        for (const int32_t n : halo_.send[i])
+            for (int d = 0; d < 3; ++d) ghostForce_[3 * n + d] = 0.0;
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& mine = halo_.send[i];
+        for (std::size_t j = 0; j < mine.size(); ++j)
+            for (int d = 0; d < 3; ++d) ghostForce_[3 * mine[j] + d] += recvBuf_[i][3 * j + d];
+    }
+}
+
+void Domain::sendStates() {
+    const std::size_t nb = halo_.neighbours.size();
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& mine = halo_.send[i];
+        std::vector<double>& b = sendBuf_[i];
+        b.resize(6 * mine.size());
+        for (std::size_t j = 0; j < mine.size(); ++j)
+            for (int d = 0; d < 3; ++d) {
+                b[6 * j + d] = w_.pos[3 * mine[j] + d];
+                b[6 * j + 3 + d] = w_.vel[3 * mine[j] + d];
+            }
+        recvBuf_[i].resize(6 * halo_.recv[i].size());
+    }
+    exchange(sendBuf_, recvBuf_);
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& ghosts = halo_.recv[i];
+        for (std::size_t j = 0; j < ghosts.size(); ++j)
+            for (int d = 0; d < 3; ++d) {
+                w_.pos[3 * ghosts[j] + d] = recvBuf_[i][6 * j + d];
+                w_.vel[3 * ghosts[j] + d] = recvBuf_[i][6 * j + 3 + d];
+            }
+    }
+}
+
+std::string Domain::agree(const std::string& error) {
+    double failed = error.empty() ? 0.0 : 1.0;
+    comm_->allreduceMax(&failed, 1);
+    if (failed == 0) return "";
+    std::vector<uint8_t> mine(error.begin(), error.end()), all;
+    std::vector<int> counts;
+    comm_->allgatherv(mine, all, counts);
+    std::size_t at = 0;
+    for (int r = 0; r < size(); ++r) {
+        if (counts[r] > 0)
+            return std::string(1, static_cast<char>(all[at])) + "QDEM rank " + std::to_string(r) + " of " +
+                   std::to_string(size()) + ": " + std::string(all.begin() + at + 1, all.begin() + at + counts[r]);
+        at += counts[r];
+    }
+    return "SQDEM: a rank failed without a message";
+}
+
+void Domain::finishStep(const std::string& error) {
+    const double t0 = omp_get_wtime();
+    // [failed, reactions (6 per obstacle), energies (10)] of every rank, in rank order.
+    const std::size_t no = w_.obstacles.size();
+    const bool energyOn = w_.settings.trackEnergy;
+    std::vector<double> v(1 + 6 * no + (energyOn ? 10 : 0));
+    v[0] = error.empty() ? 0.0 : 1.0;
+    for (std::size_t i = 0; i < no; ++i)
+        for (int d = 0; d < 3; ++d) {
+            v[1 + 6 * i + d] = w_.obstacles[i].reactionForce[d];
+            v[1 + 6 * i + 3 + d] = w_.obstacles[i].reactionTorque[d];
+        }
+    if (energyOn) {
+        const Energy& e = w_.energy;
+        const double es[10] = {e.kinetic, e.elastic,  e.gravity,      e.viscous,      e.contactElastic,
+                               e.contactDamping, e.friction, e.boundaryWork, e.localDamping, e.sleep};
+        std::copy(es, es + 10, v.begin() + 1 + 6 * no);
+    }
+    orderedSum(*comm_, v.data(), static_cast<int>(v.size()));
+    seconds += omp_get_wtime() - t0;
+    if (v[0] > 0) {
+        const std::string msg = agree(error);
+        if (msg[0] == 'I') throw InputError(msg.substr(1));
+        throw StabilityError(msg.substr(1));
+    }
+    for (std::size_t i = 0; i < no; ++i)
+        for (int d = 0; d < 3; ++d) {
+            w_.obstacles[i].reactionForce[d] = v[1 + 6 * i + d];
+            w_.obstacles[i].reactionTorque[d] = v[1 + 6 * i + 3 + d];
+        }
+    if (energyOn) {
+        const double* s = v.data() + 1 + 6 * no;
+        w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
+    }
+}
+
+void Domain::gatherAll() {
+    // Owned nodes' (id, x, v, f) of every rank, then written everywhere.
+    constexpr std::size_t kRec = sizeof(int32_t) + 9 * sizeof(double);
+    const double* cols[3] = {w_.pos.data(), w_.vel.data(), w_.force.data()};
+    std::vector<uint8_t> mine, all;
+    mine.reserve(halo_.ownedNodes.size() * kRec);
+    for (const int32_t n : halo_.ownedNodes) {
+        const std::size_t at = mine.size();
+        mine.resize(at + kRec);
+        std::memcpy(&mine[at], &n, sizeof n);
+        for (int c = 0; c < 3; ++c) std::memcpy(&mine[at + sizeof n + 3 * c * sizeof(double)], cols[c] + 3 * n, 3 * sizeof(double));
+    }
+    std::vector<int> counts;
+    comm_->allgatherv(mine, all, counts);
+    double* out[3] = {w_.pos.data(), w_.vel.data(), w_.force.data()};
+    for (std::size_t at = 0; at + kRec <= all.size(); at += kRec) {
+        int32_t n;
+        std::memcpy(&n, &all[at], sizeof n);
+        if (n < 0 || n >= static_cast<int32_t>(w_.nNodes())) throw InputError("gatherAll: node id out of range");
+        for (int c = 0; c < 3; ++c) std::memcpy(out[c] + 3 * n, &all[at + sizeof n + 3 * c * sizeof(double)], 3 * sizeof(double));
+    }
+}
+
+}  // namespace qdem

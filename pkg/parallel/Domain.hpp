@@ -1,0 +1,84 @@
+// This rank's share of the world under MPI (doc/parallel.md): which nodes
+// and tets it owns (Partition.hpp: a weighted Hilbert split that every rank
+// computes alike from the replicated set-up), its halo, and the three
+// exchanges of a step:
+//   after the force phases  - partial forces on ghost nodes go to their
+//                             owners (summed there in rank order);
+//   after integration       - owned positions and velocities go forward to
+//                             the ranks that read them as ghosts;
+//   at the end of the step  - one gather of the step's globals: obstacle
+//                             reactions, energies, and the error status, so
+//                             an error on one rank stops every rank with its
+//                             message instead of leaving them waiting.
+// Storage stays at the world's full size on every rank (the script builds
+// the whole scene everywhere); only owned and ghost entries are current, the
+// rest are stale until gatherAll().
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "../world/ThreadLayout.hpp"
+#include "Communicator.hpp"
+#include "Partition.hpp"
+
+namespace qdem {
+
+class World;
+
+class Domain {
+public:
+    Domain(World& w, std::shared_ptr<Communicator> comm);
+    int rank() const { return comm_->rank(); }
+    int size() const { return comm_->size(); }
+    Communicator& comm() { return *comm_; }
+
+    // Splits the world as it stands (all pieces added) and builds the halo.
+    void build(const PartitionOptions& opt);
+    bool built() const { return built_; }
+    void invalidate() { built_ = false; }
+
+    const Partition& partition() const { return part_; }
+    const Halo& halo() const { return halo_; }
+    bool owns(int32_t node) const { return part_.nodeOwner[node] == rank(); }
+    // Per piece, its owned tets as runs [t0, t1) (what the element phase computes).
+    void ownedTetRuns(int32_t piece, std::vector<TetSegment>& out) const;
+    bool ownsTet(int32_t tet) const { return part_.tetOwner[tet] == rank(); }
+
+    // ---- the step's exchanges ----------------------------------------------
+    // Partial forces on ghosts (element buffers of `layout`, plus contact
+    // forces when `contacts`) to their owners; ghostForce() then holds, for
+    // owned nodes, the sum of what the other ranks computed (0 elsewhere).
+    void returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts);
+    const double* ghostForce() const { return ghostForce_.data(); }
+    // Owned positions and velocities forward to the ghosts that read them.
+    void sendStates();
+    // The step's globals: obstacle reactions summed over ranks (each owner
+    // added its nodes' pushes), energy totals, and the error agreement.
+    void finishStep(const std::string& error);
+    // Every rank learns every node's position and velocity (output, Python
+    // reads, restarts): one gather of the owned nodes.
+    void gatherAll();
+
+    // The lowest failing rank's message on every rank ("" when none failed).
+    // Messages start with their kind: 'I' (InputError) or 'S' (any other).
+    std::string agree(const std::string& error);
+
+    // Counted costs of the last step's halo (for doc/parallel.md).
+    long stepBytes = 0, stepMessages = 0;
+    double seconds = 0;  // wall time in exchanges last step [s]
+
+private:
+    void exchange(std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
+
+    World& w_;
+    std::shared_ptr<Communicator> comm_;
+    bool built_ = false;
+    Partition part_;
+    Halo halo_;
+    std::vector<double> ghostForce_;
+    std::vector<std::vector<double>> sendBuf_, recvBuf_;
+};
+
+}  // namespace qdem

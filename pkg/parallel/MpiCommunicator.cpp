@@ -1,0 +1,74 @@
+#include "MpiCommunicator.hpp"
+
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace qdem {
+
+namespace {
+constexpr int kHaloTag = 0x5144;  // "QD"; the duplicated communicator keeps it apart anyway
+
+void check(int rc, const char* what) {
+    if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("QDEM MPI: ") + what + " failed");
+}
+}  // namespace
+
+MpiCommunicator::MpiCommunicator(MPI_Comm comm) {
+    int ok = 0;
+    MPI_Initialized(&ok);
+    if (!ok) throw std::runtime_error("QDEM MPI: MPI is not initialised (import mpi4py.MPI first)");
+    check(MPI_Comm_dup(comm, &comm_), "MPI_Comm_dup");
+    MPI_Comm_rank(comm_, &rank_);
+    MPI_Comm_size(comm_, &size_);
+}
+
+MpiCommunicator::~MpiCommunicator() {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && comm_ != MPI_COMM_NULL) MPI_Comm_free(&comm_);
+}
+
+void MpiCommunicator::exchange(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
+                               std::vector<std::vector<double>>& recv) {
+    const std::size_t nb = neighbours.size();
+    requests_.assign(2 * nb, MPI_REQUEST_NULL);
+    // Receives posted first, then the sends; all complete together.
+    for (std::size_t i = 0; i < nb; ++i)
+        check(MPI_Irecv(recv[i].data(), static_cast<int>(recv[i].size()), MPI_DOUBLE, neighbours[i], kHaloTag, comm_,
+                        &requests_[i]),
+              "MPI_Irecv");
+    for (std::size_t i = 0; i < nb; ++i) {
+        check(MPI_Isend(send[i].data(), static_cast<int>(send[i].size()), MPI_DOUBLE, neighbours[i], kHaloTag, comm_,
+                        &requests_[nb + i]),
+              "MPI_Isend");
+        bytesSent += static_cast<long>(send[i].size() * sizeof(double));
+        ++messagesSent;
+    }
+    check(MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+}
+
+void MpiCommunicator::allgather(const double* mine, int n, double* all) {
+    check(MPI_Allgather(mine, n, MPI_DOUBLE, all, n, MPI_DOUBLE, comm_), "MPI_Allgather");
+}
+
+void MpiCommunicator::allgatherv(const std::vector<uint8_t>& mine, std::vector<uint8_t>& all, std::vector<int>& counts) {
+    const int n = static_cast<int>(mine.size());
+    counts.assign(size_, 0);
+    check(MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "MPI_Allgather");
+    std::vector<int> displ(size_, 0);
+    for (int r = 1; r < size_; ++r) displ[r] = displ[r - 1] + counts[r - 1];
+    all.resize(static_cast<std::size_t>(displ[size_ - 1]) + counts[size_ - 1]);
+    check(MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displ.data(), MPI_BYTE, comm_),
+          "MPI_Allgatherv");
+}
+
+void MpiCommunicator::allreduceMax(double* v, int n) {
+    check(MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, comm_), "MPI_Allreduce");
+}
+
+void MpiCommunicator::allreduceMin(double* v, int n) {
+    check(MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MIN, comm_), "MPI_Allreduce");
+}
+
+}  // namespace qdem

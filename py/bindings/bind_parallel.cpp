@@ -1,0 +1,99 @@
+// MPI for the QDEM world (doc/parallel.md): the communicator comes from
+// mpi4py (qdem/parallel.py hands over MPI.COMM_WORLD, or mpy's) and is
+// duplicated in the core.  Without MPI at build time, setCommunicator
+// refuses with the reason and everything else runs on one process.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "core/Errors.hpp"
+#include "parallel/Domain.hpp"
+#include "world/World.hpp"
+
+#ifdef QDEM_HAVE_MPI
+#include <mpi4py/mpi4py.h>
+
+#include "parallel/MpiCommunicator.hpp"
+#endif
+
+namespace py = pybind11;
+using namespace qdem;
+
+void bindParallel(py::module_& m, py::class_<World>& world) {
+#ifdef QDEM_HAVE_MPI
+    m.attr("hasMPI") = true;
+#else
+    m.attr("hasMPI") = false;
+#endif
+    world.def(
+        "setCommunicator",
+        [](World& w, py::object comm) {
+            if (comm.is_none()) return w.setCommunicator(nullptr);
+#ifdef QDEM_HAVE_MPI
+            static bool imported = false;
+            if (!imported) {
+                if (import_mpi4py() < 0) throw py::error_already_set();
+                imported = true;
+            }
+            MPI_Comm* c = PyMPIComm_Get(comm.ptr());
+            if (!c) throw py::error_already_set();
+            w.setCommunicator(std::make_shared<MpiCommunicator>(*c));
+#else
+            throw InputError("this build of qdem has no MPI (Open MPI or mpi4py were missing when it was built): "
+                             "install libopenmpi-dev openmpi-bin python3-mpi4py and build again");
+#endif
+        },
+        py::arg("comm"),
+        "Splits the world across the ranks of an mpi4py communicator (duplicated inside) from the next step on; "
+        "None: back to one process.  Every rank must have built the same scene.");
+    world.def(
+        "gatherAll",
+        [](World& w) {
+            py::gil_scoped_release nogil;
+            w.gatherAll();
+        },
+        "Under MPI: every rank learns every node's position and velocity (collective: call it on every rank). "
+        "A no-op on one process.");
+    world.def_property_readonly("stateCurrent", &World::stateCurrent,
+                                "Is every node's pos, vel and force current on this rank?  Always on one process; "
+                                "under MPI right after gatherAll().");
+    world.def_property_readonly(
+        "mpiRank", [](const World& w) { return w.domain() ? w.domain()->rank() : 0; }, "This process's rank (0 alone).");
+    world.def_property_readonly(
+        "mpiSize", [](const World& w) { return w.domain() ? w.domain()->size() : 1; }, "Number of ranks (1 alone).");
+    world.def_property_readonly(
+        "nodeOwner",
+        [](const World& w) {
+            py::array_t<int32_t> a(static_cast<py::ssize_t>(w.nNodes()));
+            int32_t* o = a.mutable_data();
+            const Domain* d = w.domain();
+            for (std::size_t i = 0; i < w.nNodes(); ++i)
+                o[i] = d && d->built() ? d->partition().nodeOwner[i] : 0;
+            return a;
+        },
+        "Per node, the rank that owns it (all 0 on one process or before the first step).");
+    world.def_property_readonly(
+        "partitionStats",
+        [](const World& w) {
+            py::dict s;
+            const Domain* d = w.domain();
+            if (!d || !d->built()) {
+                s["ranks"] = 1;
+                return s;
+            }
+            const Halo& h = d->halo();
+            s["ranks"] = d->size();
+            s["rank"] = d->rank();
+            s["ownedNodes"] = h.ownedNodes.size();
+            s["ownedTets"] = h.ownedTets.size();
+            s["ghosts"] = h.nGhosts();
+            s["neighbours"] = h.neighbours;
+            s["imbalance"] = d->partition().imbalance();
+            s["stepBytes"] = d->stepBytes;
+            s["stepMessages"] = d->stepMessages;
+            s["exchangeSeconds"] = d->seconds;
+            return s;
+        },
+        "This rank's share (dict: ranks, rank, ownedNodes, ownedTets, ghosts, neighbours, imbalance = max/mean "
+        "load over ranks) and its halo's cost in the last step (stepBytes, stepMessages sent, exchangeSeconds).");
+}

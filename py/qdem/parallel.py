@@ -1,0 +1,70 @@
+"""QDEM across MPI ranks (doc/parallel.md).
+
+The same script runs serially and under ``mpiexec -n P yade -n -x script.py``:
+every rank builds the whole scene, and at its first step the QdemEngine splits
+the QDEM nodes and tetrahedra along the Hilbert curve, one contiguous share
+per rank (qdem._core.World.setCommunicator).  Each rank computes its share and
+exchanges its halo; walls, boxes and facets are known on every rank, their
+reactions summed over the ranks.  After each step (QdemEngine.gatherPeriod)
+every rank learns every node's state again, so scripts read ``piece.pos`` as
+usual; rank 0 alone writes files."""
+import os
+import sys
+
+from . import _core
+
+
+def launchedSize():
+    """Number of ranks mpiexec started (1 without mpiexec), read from the
+    environment so that a serial run never loads MPI."""
+    for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"):
+        v = os.environ.get(var)
+        if v:
+            try:
+                return int(v)
+            except ValueError:
+                pass
+    return 1
+
+
+def rank():
+    """This process's rank among those mpiexec started (0 without mpiexec)."""
+    for var in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "MV2_COMM_WORLD_RANK"):
+        v = os.environ.get(var)
+        if v:
+            try:
+                return int(v)
+            except ValueError:
+                pass
+    return 0
+
+
+def isWriter():
+    """True on the rank that writes files (rank 0, or the only process)."""
+    return rank() == 0
+
+
+def _mpyInUse():
+    mp = sys.modules.get("yade.mpy")
+    return mp is not None and getattr(mp, "comm", None) is not None and (getattr(mp, "numThreads", 1) or 1) > 1
+
+
+def attach(world):
+    """Splits `world` across the ranks mpiexec started (a no-op serially, and
+    when it is already split).  Called by QdemEngine at its first step."""
+    size = launchedSize()
+    core = world.core
+    if size <= 1 or core.mpiSize > 1:
+        return
+    if _mpyInUse():
+        raise RuntimeError(
+            "qdem: the scene runs under yade.mpy (mp.mpirun), which splits YADE bodies only; QDEM under mpy is not "
+            "supported yet. Run the same script with plain `mpiexec -n P yade -n -x script.py` (QDEM pieces with "
+            "walls, boxes and facets), or serially when YADE spheres share the scene.")
+    if not _core.hasMPI:
+        raise RuntimeError(
+            "qdem: started by mpiexec with %d ranks, but this build of qdem has no MPI (Open MPI or mpi4py were "
+            "missing when it was built): apt-get install libopenmpi-dev openmpi-bin python3-mpi4py, then make "
+            "build again (or run without mpiexec)" % size)
+    from mpi4py import MPI
+    core.setCommunicator(MPI.COMM_WORLD)
