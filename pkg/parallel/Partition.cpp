@@ -102,17 +102,14 @@ Partition partitionByKey(const PartitionInput& in, const PartitionOptions& opt, 
     // Weight of each piece (its tets plus its nodes' extra weight), which
     // decides whether it is keyed as a whole.  Every tet lies inside one
     // piece, so a quarter per tet node sums to the piece's tet count.
+    std::vector<int32_t> place(N, 0);  // tets per node for now; below: node -> position in the order
+    for (int64_t t = 0; t < 4 * int64_t(in.nTets); ++t) ++place[in.tetNodes[t]];
     std::vector<double> pieceWeight(std::max(0, in.nPieces), 0.0);
     double total = in.nTets;
     for (int32_t n = 0; n < N; ++n) total += extraOf(in, n);
-    if (in.nPieces > 0) {
-        for (int32_t t = 0; t < in.nTets; ++t) {
-            const int32_t p = pieceOf(in, in.tetNodes[4 * t]);
-            if (p >= 0) pieceWeight[p] += 1;
-        }
-        for (int32_t p = 0; p < in.nPieces; ++p)
-            for (int32_t n = pieceRange(in, p).begin; n < pieceRange(in, p).end; ++n) pieceWeight[p] += extraOf(in, n);
-    }
+    for (int32_t p = 0; p < in.nPieces; ++p)
+        for (int32_t n = pieceRange(in, p).begin; n < pieceRange(in, p).end; ++n)
+            pieceWeight[p] += 0.25 * place[n] + extraOf(in, n);
     const double share = total / P;
 
     // Keys: a whole piece's nodes all take the key of its centroid, so the
@@ -140,7 +137,6 @@ Partition partitionByKey(const PartitionInput& in, const PartitionOptions& opt, 
     // quarter to each): the cumulative weight between two cuts is then exactly
     // the rank's tets, not off by the half of the tets straddling a cut that
     // the lower rank takes on top of its share.
-    std::vector<int32_t> place(N);  // node -> position in the order
     for (int32_t j = 0; j < N; ++j) place[order[j].node] = j;
     std::vector<double> prefix(static_cast<std::size_t>(N) + 1, 0.0);  // prefix[j+1]: weight at position j for now
     for (int32_t t = 0; t < in.nTets; ++t) {
