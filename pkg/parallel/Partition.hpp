@@ -26,9 +26,11 @@ struct PartitionOptions {
     int nRanks = 1;
     // A piece whose weight is at most this fraction of one rank's share is
     // keyed as a whole (all its nodes at its centroid's key) and a cut that
-    // falls inside it is moved to its nearer end when the ranks on either side
-    // stay within `tolerance` of the share: small pieces stay whole where
-    // balance allows, big ones are split along the curve.
+    // falls inside it is moved to its nearer end (else its farther one) when
+    // the ranks on either side stay within `tolerance` above the share: small
+    // pieces stay whole where balance allows, big ones are split along the
+    // curve.  So no rank exceeds (1 + tolerance) x its share because of a
+    // whole piece.
     double wholePieceFraction = 0.5;
     double tolerance = 0.05;
 };
