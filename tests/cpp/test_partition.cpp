@@ -385,3 +385,38 @@ TEST(Partition, ContactHaloReadsTheFacingSurface) {
     EXPECT_EQ(hs[a].send[0], faceA);
     EXPECT_EQ(hs[b].recv[0], faceA);
 }
+
+// The model computes halos for a sample of ranks: each must equal the one
+// computed with all ranks (the send lists need every rank's reads).
+TEST(Partition, HalosOfSomeRanksEqualTheirsAmongAll) {
+    auto s = cubes(3, 3);
+    s->add(9, 3.0, 1.1, 1.1, -2.2);
+    const PartitionInput in = s->input();
+    const Partition p = partitionHilbert(in, ranks(9));
+    const std::vector<Halo> all = s->halos(p, in, 0.15);
+    checkHalos(p, in, all);
+    const std::vector<int> some = {1, 4, 8};
+    const std::vector<Halo> part =
+        haloOf(p, in, s->w->surfNodes.data(), static_cast<int32_t>(s->w->surfNodes.size()), 0.15, some);
+    ASSERT_EQ(part.size(), some.size());
+    for (std::size_t i = 0; i < some.size(); ++i) {
+        const Halo &a = part[i], &b = all[some[i]];
+        EXPECT_EQ(a.rank, b.rank);
+        EXPECT_EQ(a.ownedNodes, b.ownedNodes);
+        EXPECT_EQ(a.ownedTets, b.ownedTets);
+        EXPECT_EQ(a.neighbours, b.neighbours);
+        EXPECT_EQ(a.recv, b.recv);
+        EXPECT_EQ(a.send, b.send);
+    }
+    // elementHalo: the same without the contact reads.
+    const std::vector<Halo> noContact = s->halos(p, in, 0.0);
+    for (int r : some) {
+        const Halo e = elementHalo(p, in, r);
+        EXPECT_EQ(e.neighbours, noContact[r].neighbours);
+        EXPECT_EQ(e.recv, noContact[r].recv);
+        EXPECT_EQ(e.send, noContact[r].send);
+    }
+    size_t contactGhosts = 0, elementGhosts = 0;
+    for (int r = 0; r < 9; ++r) contactGhosts += all[r].nGhosts(), elementGhosts += noContact[r].nGhosts();
+    EXPECT_GT(contactGhosts, elementGhosts);
+}
