@@ -26,9 +26,11 @@ struct PartitionOptions {
     int nRanks = 1;
     // A piece whose weight is at most this fraction of one rank's share is
     // keyed as a whole (all its nodes at its centroid's key) and a cut that
-    // falls inside it is moved to its nearer end when the ranks on either side
-    // stay within `tolerance` of the share: small pieces stay whole where
-    // balance allows, big ones are split along the curve.
+    // falls inside it is moved to its nearer end (else its farther one) when
+    // the ranks on either side stay within `tolerance` above the share: small
+    // pieces stay whole where balance allows, big ones are split along the
+    // curve.  So no rank exceeds (1 + tolerance) x its share because of a
+    // whole piece.
     double wholePieceFraction = 0.5;
     double tolerance = 0.05;
 };
@@ -44,15 +46,28 @@ struct Partition {
 };
 
 // The weighted Hilbert split.  Deterministic: the same input gives the same
-// split on every rank (ties broken by node id).
+// split on every rank (ties broken by node id).  O(N log N) (one sort).
+// The key is taken in the cube around the nodes' box, so a long box does not
+// stretch the curve; flat boxes and nodes all at one point are fine (equal
+// keys: the order is then by node id).  Each tet's weight goes to its node
+// that comes first on the curve (whose owner is the tet's lowest owner), so
+// the weight between two cuts is exactly the tets the rank will own: the
+// balance is exact to one node's weight, except where a small piece is kept
+// whole (then within `tolerance`).  More ranks than nodes, or than the
+// weight can feed, leave some ranks empty (no nodes, weight 0): legal.
 Partition partitionHilbert(const PartitionInput& in, const PartitionOptions& opt);
-// Slabs of equal weight along the longest axis of the box (for comparison).
+// Slabs of equal weight along the longest axis of the box (for comparison):
+// the same engine with the coordinate on that axis as the key.
 Partition partitionSlabs(const PartitionInput& in, const PartitionOptions& opt);
+// Pieces whose nodes have more than one owner.
+int32_t countSplitPieces(const Partition& p, const PartitionInput& in);
 
 // One rank's view of a partition: which of its nodes others read (sent
 // forward each step) and which of theirs it reads (ghosts).  Lists are per
 // neighbour rank, neighbours ascending, node ids ascending in each list; the
-// relation is symmetric: send[r][s] == recv[s][r].
+// relation is symmetric: send[r][s] == recv[s][r].  recv[i] and send[i]
+// belong to neighbours[i]; one of them may be empty (element reads go one
+// way: a tet is computed by the lowest owner of its nodes).
 struct Halo {
     int rank = 0;
     std::vector<int32_t> ownedNodes;  // ascending
@@ -66,16 +81,22 @@ struct Halo {
 // The element halo of rank r: ghosts are the nodes of r's tets owned by other
 // ranks (each tet is computed once, by its owner; partial forces on ghosts go
 // back to their owners, their positions and velocities come forward).
-// extraRecv (optional, sorted, node ids owned elsewhere): further ghosts r
-// reads, e.g. its contact halo; the send lists follow from every rank's
-// reads, so all ranks' extra ghosts must be given to make the lists
-// symmetric: haloAll does that.
+// Element reads only: contact ghosts depend on every rank's surface, so
+// they come with haloAll / haloOf (the send lists follow from all ranks'
+// reads).  O(nTets + nNodes).
 Halo elementHalo(const Partition& p, const PartitionInput& in, int rank);
 // The halos of all ranks at once (what the model and the tests use), with a
-// contact halo: every surface node of another rank within `contactReach`
-// [m] of a surface node rank r owns is also a ghost of r (0: none).
-// surfNodes: the surface node ids (nSurf of them).
+// contact halo: every surface node of another rank and another piece within
+// `contactReach` [m] of a surface node rank r owns is also a ghost of r (0:
+// none; nodes of one piece never touch each other, PieceContactPhase).
+// surfNodes: the surface node ids (nSurf of them).  The contact search is a
+// cell grid of side contactReach: O(nSurf) for a bounded surface density.
 std::vector<Halo> haloAll(const Partition& p, const PartitionInput& in, const int32_t* surfNodes, int32_t nSurf,
                           double contactReach);
+// The same for some ranks only (ascending, distinct), each halo complete and
+// exact (what the model uses at thousands of ranks): one pass over the tets
+// and the surface, the sorting limited to reads involving those ranks.
+std::vector<Halo> haloOf(const Partition& p, const PartitionInput& in, const int32_t* surfNodes, int32_t nSurf,
+                         double contactReach, const std::vector<int>& ranks);
 
 }  // namespace qdem
