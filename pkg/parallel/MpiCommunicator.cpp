@@ -33,12 +33,16 @@ void MpiCommunicator::exchange(const std::vector<int>& neighbours, const std::ve
                                std::vector<std::vector<double>>& recv) {
     const std::size_t nb = neighbours.size();
     requests_.assign(2 * nb, MPI_REQUEST_NULL);
-    // Receives posted first, then the sends; all complete together.
+    // Receives posted first, then the sends; all complete together.  Empty
+    // ones are skipped on both sides (the lists are symmetric: a rank sends
+    // nothing exactly where its neighbour expects nothing).
     for (std::size_t i = 0; i < nb; ++i)
-        check(MPI_Irecv(recv[i].data(), static_cast<int>(recv[i].size()), MPI_DOUBLE, neighbours[i], kHaloTag, comm_,
+        if (!recv[i].empty())
+            check(MPI_Irecv(recv[i].data(), static_cast<int>(recv[i].size()), MPI_DOUBLE, neighbours[i], kHaloTag, comm_,
                         &requests_[i]),
               "MPI_Irecv");
     for (std::size_t i = 0; i < nb; ++i) {
+        if (send[i].empty()) continue;
         check(MPI_Isend(send[i].data(), static_cast<int>(send[i].size()), MPI_DOUBLE, neighbours[i], kHaloTag, comm_,
                         &requests_[nb + i]),
               "MPI_Isend");

@@ -177,6 +177,23 @@ void World::updatePieceBounds(bool all) {
     const std::size_t np = pieces.size();
     pieceLo_.resize(3 * np);
     pieceHi_.resize(3 * np);
+    if (domain_ && domain_->built()) {
+        // Under MPI only this rank's surface nodes are current: its boxes hold
+        // them (what this rank's nodes of the piece can reach), empty boxes
+        // (lo > hi, touching nothing) for pieces it owns no surface of.
+        for (std::size_t ip = 0; ip < np; ++ip)
+            for (int d = 0; d < 3; ++d) pieceLo_[3 * ip + d] = 1e300, pieceHi_[3 * ip + d] = -1e300;
+        for (const int32_t s : sleepPhase_.awakeSurf()) {
+            const int32_t n = surfNodes[s];
+            const int32_t ip = nodePiece[n];
+            const double r = materials[pieces[ip].material].radius;
+            for (int d = 0; d < 3; ++d) {
+                pieceLo_[3 * ip + d] = std::min(pieceLo_[3 * ip + d], pos[3 * n + d] - r);
+                pieceHi_[3 * ip + d] = std::max(pieceHi_[3 * ip + d], pos[3 * n + d] + r);
+            }
+        }
+        return;
+    }
     for (std::size_t ip = 0; ip < np; ++ip) {
         if (sleepPhase_.asleep(ip) && !all) continue;  // has not moved
         const PieceInfo& p = pieces[ip];

@@ -1,0 +1,61 @@
+"""Run by tests/python/test_mpi.py under mpiexec -n P: an error raised on one
+rank stops every rank with its message (never a deadlock).  Rank 0 prints
+'RESULT {json}' with what each rank caught."""
+import json
+import os
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import qdem  # noqa: E402
+import scenes  # noqa: E402
+
+comm = MPI.COMM_WORLD
+
+
+def caught(f):
+    try:
+        f()
+    except Exception as e:  # noqa: BLE001 - the test reports the type
+        return type(e).__name__, str(e)
+    return None, ""
+
+
+# (a) A piece that starts 3 cm through the floor: refused by the rank(s)
+# owning its bottom; every rank raises the same error at the same step.
+w = scenes.contactFree()
+mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000.0, radius=0.004)
+w.addPiece(qdem.boxMesh((0.05, 0.05, 0.05), (2, 2, 2)), mat, pos=(0.6, 0.6, 0.0))
+w.core.setCommunicator(comm)
+dt = 0.5 * w.stableDt()["combined"]
+a = caught(lambda: w.core.step(dt, 5))
+
+# (b) A NaN velocity on one node of the last rank only: the forward exchange
+# and the gather carry it, and the finiteness check stops every rank.
+w = scenes.contactFree()
+w.core.setCommunicator(comm)
+w.core.step(dt, 3)
+owner = np.array(w.core.nodeOwner)
+node = int(np.nonzero(owner == comm.size - 1)[0][0])
+if comm.rank == comm.size - 1:
+    w.core.vel[node, 0] = float("nan")
+w.core.step(dt, 2)
+
+
+def check():
+    w.core.gatherAll()
+    w.core.checkFinite()
+
+
+b = caught(check)
+
+# (c) What is not distributed yet is refused on every rank alike, naming the fix.
+w = scenes.contactFree()
+w.core.pointPolygonOn = True
+w.core.setCommunicator(comm)
+c = caught(lambda: w.core.step(dt, 1))
+everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c}, root=0)
+if comm.rank == 0:
+    print("RESULT " + json.dumps({"ranks": comm.size, "caught": everything, "nanNode": node}), flush=True)

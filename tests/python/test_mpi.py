@@ -1,0 +1,87 @@
+"""QDEM split across MPI ranks (doc/parallel.md), against serial runs.
+
+Each test launches mpiexec -n P (oversubscribed, one thread per rank, passive
+waits, a timeout: a deadlock fails instead of hanging)."""
+import numpy as np
+import pytest
+
+from mpi_launch import mpirun, python, requireMpi, result
+
+
+@pytest.mark.parametrize("P", [2, 3, 4])
+def test_contact_free_scene_matches_serial(P):
+    requireMpi()
+    rc, out = mpirun(P, python("tests/mpi/check_contact_free.py"))
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    # Every node owned exactly once, by the rank the (common) split names.
+    assert r["sameSplitEverywhere"]
+    assert r["ownedPerRank"] == r["ownedByOwnerArray"]
+    assert sum(r["ownedPerRank"]) == r["nNodes"]
+    assert sum(r["tetsPerRank"]) == r["nTets"]
+    assert all(n > 0 for n in r["tetsPerRank"])
+    assert r["imbalance"] <= 1.05 + 1e-12
+    # Neighbour relation symmetric.
+    for a, nb in enumerate(r["neighbours"]):
+        for b in nb:
+            assert a in r["neighbours"][b]
+    # Trajectories: only the order of the partial force sums differs from
+    # serial (a ghost's partial force is added after the owner's own tets).
+    assert r["maxDisplacement"] > 0.01
+    assert r["dx"] <= 1e-13 * r["maxDisplacement"]
+    assert r["dv"] <= 1e-10 * r["vmax"]
+    # Floor reaction (summed over the ranks) and energies as serial.
+    s, ss = np.array(r["series"]), np.array(r["serialSeries"])
+    fmax = np.abs(ss[:, :3]).max()
+    assert fmax > 1.0, "the scene must push on the floor during the run"
+    assert np.abs(s[:, :6] - ss[:, :6]).max() <= 1e-9 * fmax
+    assert np.abs(s[:, 6:] - ss[:, 6:]).max() <= 1e-10 * np.abs(ss[:, 6:]).max()
+
+
+@pytest.mark.parametrize("P", [2, 3])
+def test_error_on_one_rank_stops_every_rank(P):
+    requireMpi()
+    rc, out = mpirun(P, python("tests/mpi/check_errors.py"), timeout=120)
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    caught = r["caught"]
+    assert len(caught) == P
+    # (a) the start-overlap refusal of the rank(s) owning the piece: the same
+    # message on every rank, naming the rank and the fix.
+    msgs = {tuple(c["a"]) for c in caught}
+    assert len(msgs) == 1
+    kind, msg = msgs.pop()
+    assert kind == "ValueError" and "starts inside obstacle" in msg and msg.startswith("QDEM rank ")
+    # (b) a NaN on one rank's node: every rank stops with the same StabilityError.
+    msgs = {tuple(c["b"]) for c in caught}
+    assert len(msgs) == 1
+    kind, msg = msgs.pop()
+    assert kind == "StabilityError" and "not finite" in msg
+    # (c) piece contacts are refused on every rank with the fix.
+    for c in caught:
+        assert c["c"][0] == "ValueError" and "pointPolygon=False" in c["c"][1]
+
+
+def test_yade_floor_force_under_mpiexec_equals_serial():
+    # The issue's measurement: under mpiexec -n 3 every rank stepped the whole
+    # QDEM world, and the floor force was 3x the serial one.
+    requireMpi()
+    import subprocess
+    from mpi_launch import ROOT, env
+    ser = subprocess.run(["timeout", "300", "yade", "-n", "-x", "tests/mpi/yade_floor.py"], cwd=ROOT, env=env(),
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert ser.returncode == 0, ser.stdout[-3000:]
+    s = result(ser.stdout)
+    rc, out = mpirun(3, ["yade", "-n", "-x", "tests/mpi/yade_floor.py"], timeout=300)
+    assert rc == 0, out[-4000:]
+    m = result(out)
+    assert s["ranks"] == 1 and m["ranks"] == 3
+    assert m["iter"] == s["iter"]
+    # At rest: the floor carries the weight, as serially.
+    assert s["floor"][2] == pytest.approx(-s["weight"], rel=1e-6)
+    # Local damping's sign switch (YADE's rule) turns rounding-level
+    # differences of the force sums into ~1e-9 ones at rest: equal to that.
+    assert m["floor"][2] == pytest.approx(s["floor"][2], rel=1e-7)
+    assert m["floor"][2] == pytest.approx(-s["weight"], rel=1e-6)
+    assert m["zmin"] == pytest.approx(s["zmin"], abs=1e-9)
+    assert m["energy"] == pytest.approx(s["energy"], rel=1e-7)
