@@ -20,6 +20,11 @@ public:
     // One message per neighbour and direction; no ANY_SOURCE.
     virtual void exchange(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
                           std::vector<std::vector<double>>& recv) = 0;
+    // As exchange, for messages whose size the receiver does not know: each
+    // recv[i] is resized to what neighbours[i] sent (a probe on that rank,
+    // never ANY_SOURCE).
+    virtual void exchangeSized(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
+                               std::vector<std::vector<double>>& recv) = 0;
     // Every rank's n values, in rank order, into all[size * n]: sums taken
     // from it in rank order are the same on every rank and every run.
     virtual void allgather(const double* mine, int n, double* all) = 0;

@@ -7,6 +7,7 @@
 
 #include "../core/Errors.hpp"
 #include "../world/World.hpp"
+#include <cmath>
 
 namespace qdem {
 
@@ -32,7 +33,111 @@ void Domain::build(const PartitionOptions& optIn) {
     const std::size_t nb = halo_.neighbours.size();
     sendBuf_.assign(nb, {});
     recvBuf_.assign(nb, {});
+    elementGhost_.assign(w_.nNodes(), 0);
+    for (const auto& g : halo_.recv)
+        for (const int32_t n : g) elementGhost_[n] = 1;
+    contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
+    cNbr_.clear(), cRecv_.clear(), cSend_.clear();
     built_ = true;
+    markCurrent();
+    if (contactHalo_) sendContactHalo();  // collective: every rank builds at the same step
+}
+
+void Domain::markCurrent() {
+    current_.assign(w_.nNodes(), 0);
+    for (const int32_t n : halo_.ownedNodes) current_[n] = 1;
+    for (const auto& g : halo_.recv)
+        for (const int32_t n : g) current_[n] = 1;
+    for (const auto& g : cRecv_)
+        for (const int32_t n : g) current_[n] = 1;
+    currentSurf_.clear();
+    for (std::size_t i = 0; i < w_.surfNodes.size(); ++i)
+        if (current_[w_.surfNodes[i]]) currentSurf_.push_back(static_cast<int32_t>(i));
+    ++currentVersion_;
+}
+
+void Domain::sendContactHalo() {
+    const double t0 = omp_get_wtime();
+    const long b0 = comm_->bytesSent, m0 = comm_->messagesSent;
+    const SurfaceIndex& S = w_.surfaceIndex();
+    // This rank's box of owned surface nodes, its longest surface edge now,
+    // the largest particle radius: gathered from every rank.
+    double mine[8] = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300, 0, 0};
+    for (const int32_t n : halo_.ownedNodes) {
+        if (S.surfIndexOfNode[n] < 0) continue;
+        for (int d = 0; d < 3; ++d) {
+            mine[d] = std::min(mine[d], w_.pos[3 * n + d]);
+            mine[3 + d] = std::max(mine[3 + d], w_.pos[3 * n + d]);
+        }
+    }
+    for (std::size_t e = 0; e < S.nEdges(); ++e) {
+        const int32_t a = S.edge[2 * e], b = S.edge[2 * e + 1];
+        if (!owns(a)) continue;
+        double l2 = 0;
+        for (int d = 0; d < 3; ++d) l2 += (w_.pos[3 * a + d] - w_.pos[3 * b + d]) * (w_.pos[3 * a + d] - w_.pos[3 * b + d]);
+        mine[6] = std::max(mine[6], l2);
+    }
+    mine[6] = std::sqrt(mine[6]);
+    for (const PieceInfo& p : w_.pieces) mine[7] = std::max(mine[7], w_.materials[p.material].radius);
+    const int P = size(), me = rank();
+    std::vector<double> all(8 * static_cast<std::size_t>(P));
+    comm_->allgather(mine, 8, all.data());
+    double hMax = 0, rMax = 0;
+    for (int r = 0; r < P; ++r) hMax = std::max(hMax, all[8 * r + 6]), rMax = std::max(rMax, all[8 * r + 7]);
+    // 5 % over the width: positions are the same on both sides, this is no
+    // skin, only room for rounding in the box tests.
+    const double width = 1.05 * (2 * rMax + 2 * hMax);
+    const auto boxOf = [&](int r) { return &all[8 * static_cast<std::size_t>(r)]; };
+    const auto reaches = [&](const double* a, const double* b) {  // a grown by width meets b
+        for (int d = 0; d < 3; ++d)
+            if (a[d] - width > b[3 + d] || b[d] > a[3 + d] + width) return false;
+        return true;
+    };
+    // Neighbours: the relation is symmetric (both boxes grown alike).
+    cNbr_.clear();
+    for (int r = 0; r < P; ++r)
+        if (r != me && boxOf(r)[0] <= boxOf(r)[3] && boxOf(me)[0] <= boxOf(me)[3] && reaches(boxOf(r), boxOf(me)))
+            cNbr_.push_back(r);
+    const std::size_t nb = cNbr_.size();
+    std::vector<std::vector<int32_t>> oldRecv = std::move(cRecv_);
+    std::vector<int> oldNbr = cNbrPrev_;
+    cSend_.assign(nb, {});
+    cSendBuf_.assign(nb, {});
+    cRecvBuf_.assign(nb, {});
+    for (std::size_t i = 0; i < nb; ++i) {
+        const double* b = boxOf(cNbr_[i]);
+        std::vector<double>& buf = cSendBuf_[i];
+        for (const int32_t n : halo_.ownedNodes) {
+            if (S.surfIndexOfNode[n] < 0) continue;
+            const double* x = &w_.pos[3 * n];
+            bool in = true;
+            for (int d = 0; d < 3 && in; ++d) in = x[d] >= b[d] - width && x[d] <= b[3 + d] + width;
+            if (!in) continue;
+            cSend_[i].push_back(n);
+            buf.push_back(static_cast<double>(n));  // exact: ids are below 2^31
+            buf.insert(buf.end(), {x[0], x[1], x[2], w_.vel[3 * n], w_.vel[3 * n + 1], w_.vel[3 * n + 2]});
+        }
+    }
+    comm_->exchangeSized(cNbr_, cSendBuf_, cRecvBuf_);
+    cRecv_.assign(nb, {});
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<double>& buf = cRecvBuf_[i];
+        for (std::size_t at = 0; at + 7 <= buf.size(); at += 7) {
+            const auto n = static_cast<int32_t>(buf[at]);
+            cRecv_[i].push_back(n);
+            for (int d = 0; d < 3; ++d) {
+                w_.pos[3 * n + d] = buf[at + 1 + d];
+                w_.vel[3 * n + d] = buf[at + 4 + d];
+            }
+        }
+    }
+    // A new set of ghosts: the contact lists are rebuilt (nodes that left are
+    // stale from now on and must not be read).
+    if (cRecv_ != oldRecv || cNbr_ != oldNbr) markCurrent();
+    cNbrPrev_ = cNbr_;
+    stepBytes += comm_->bytesSent - b0;
+    stepMessages += comm_->messagesSent - m0;
+    seconds += omp_get_wtime() - t0;
 }
 
 void Domain::ownedTetRuns(int32_t piece, std::vector<TetSegment>& out) const {
@@ -78,15 +183,42 @@ void Domain::returnGhostForces(const ThreadLayout& layout, const double* contact
         recvBuf_[i].resize(3 * halo_.send[i].size());
     }
     exchange(sendBuf_, recvBuf_);
-    // Summed in neighbour (= rank) order: the same on every run.
-    for (std::size_t i = 0; i < nb; ++i)
-        for (const int32_t n : halo_.send[i])
-            for (int d = 0; d < 3; ++d) ghostForce_[3 * n + d] = 0.0;
-    for (std::size_t i = 0; i < nb; ++i) {
-        const std::vector<int32_t>& mine = halo_.send[i];
-        for (std::size_t j = 0; j < mine.size(); ++j)
-            for (int d = 0; d < 3; ++d) ghostForce_[3 * mine[j] + d] += recvBuf_[i][3 * j + d];
+    // Contact ghosts: the contact force on each ghost received last time
+    // (zero for element ghosts, whose contact force went above).
+    const std::size_t nc = cNbr_.size();
+    if (contactHalo_) {
+        const double t0 = omp_get_wtime();
+        const long b0 = comm_->bytesSent, m0 = comm_->messagesSent;
+        for (std::size_t i = 0; i < nc; ++i) {
+            std::vector<double>& b = cSendBuf_[i];
+            b.assign(3 * cRecv_[i].size(), 0.0);
+            if (contacts)
+                for (std::size_t j = 0; j < cRecv_[i].size(); ++j) {
+                    const int32_t n = cRecv_[i][j];
+                    if (!elementGhost_[n])
+                        for (int d = 0; d < 3; ++d) b[3 * j + d] = contactForce[3 * n + d];
+                }
+            cRecvBuf_[i].resize(3 * cSend_[i].size());
+        }
+        comm_->exchange(cNbr_, cSendBuf_, cRecvBuf_);
+        stepBytes += comm_->bytesSent - b0;
+        stepMessages += comm_->messagesSent - m0;
+        seconds += omp_get_wtime() - t0;
     }
+    // Summed in neighbour (= rank) order, element halo first: the same on
+    // every run.  What the last step wrote is cleared first (the contact
+    // halo's nodes change from step to step).
+    for (const int32_t n : ghostTouched_)
+        for (int d = 0; d < 3; ++d) ghostForce_[3 * n + d] = 0.0;
+    ghostTouched_.clear();
+    const auto add = [&](const std::vector<int32_t>& mine, const std::vector<double>& f) {
+        for (std::size_t j = 0; j < mine.size(); ++j) {
+            for (int d = 0; d < 3; ++d) ghostForce_[3 * mine[j] + d] += f[3 * j + d];
+            ghostTouched_.push_back(mine[j]);
+        }
+    };
+    for (std::size_t i = 0; i < nb; ++i) add(halo_.send[i], recvBuf_[i]);
+    for (std::size_t i = 0; i < nc && contactHalo_; ++i) add(cSend_[i], cRecvBuf_[i]);
 }
 
 void Domain::sendStates() {

@@ -54,6 +54,26 @@ public:
     const double* ghostForce() const { return ghostForce_.data(); }
     // Owned positions and velocities forward to the ghosts that read them.
     void sendStates();
+    // The contact halo (when pieces may touch): every rank's box of owned
+    // surface nodes is gathered; to each rank whose box, grown by the contact
+    // halo width, reaches this rank's, go the owned surface nodes within that
+    // width of its box, ids with states.  Width: twice the largest particle
+    // radius (node-face and edge-edge reach) plus two of the longest surface
+    // edges now (a triangle or edge within reach, and its neighbour faces, is
+    // then whole on the reading rank).  Renewed every step: no skin to trust.
+    void sendContactHalo();
+    bool contactHalo() const { return contactHalo_; }
+
+    // Nodes whose state is current on this rank: owned, element ghosts and
+    // contact ghosts.  version() changes whenever the set does (the contact
+    // lists are then rebuilt: PieceContactPhase).
+    bool current(int32_t node) const { return current_[node] != 0; }
+    const std::vector<uint8_t>& currentMask() const { return current_; }
+    long currentVersion() const { return currentVersion_; }
+    // Surface nodes (indices into World::surfNodes) that are current.
+    const std::vector<int32_t>& currentSurf() const { return currentSurf_; }
+    // The rank that owns a node.
+    int owner(int32_t node) const { return part_.nodeOwner[node]; }
     // The step's globals: obstacle reactions summed over ranks (each owner
     // added its nodes' pushes), energy totals, and the error agreement.
     void finishStep(const std::string& error);
@@ -72,12 +92,24 @@ public:
 private:
     void exchange(std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
 
+    void markCurrent();
+
     World& w_;
     std::shared_ptr<Communicator> comm_;
+    bool contactHalo_ = false;
+    std::vector<uint8_t> current_, elementGhost_;
+    std::vector<int32_t> currentSurf_;
+    long currentVersion_ = 0;
+    // Contact halo: neighbours and, per neighbour, the ghosts received from it
+    // and the owned nodes sent to it in the last sendContactHalo.
+    std::vector<int> cNbr_, cNbrPrev_;
+    std::vector<std::vector<int32_t>> cRecv_, cSend_;
+    std::vector<std::vector<double>> cSendBuf_, cRecvBuf_;
     bool built_ = false;
     Partition part_;
     Halo halo_;
     std::vector<double> ghostForce_;
+    std::vector<int32_t> ghostTouched_;  // nodes ghostForce_ holds values for
     std::vector<std::vector<double>> sendBuf_, recvBuf_;
 };
 

@@ -7,7 +7,8 @@
 namespace qdem {
 
 namespace {
-constexpr int kHaloTag = 0x5144;  // "QD"; the duplicated communicator keeps it apart anyway
+constexpr int kHaloTag = 0x5144;   // "QD"; the duplicated communicator keeps it apart anyway
+constexpr int kSizedTag = 0x5145;  // messages of unknown size (contact halo)
 
 void check(int rc, const char* what) {
     if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("QDEM MPI: ") + what + " failed");
@@ -48,6 +49,30 @@ void MpiCommunicator::exchange(const std::vector<int>& neighbours, const std::ve
               "MPI_Isend");
         bytesSent += static_cast<long>(send[i].size() * sizeof(double));
         ++messagesSent;
+    }
+    check(MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+}
+
+void MpiCommunicator::exchangeSized(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
+                                    std::vector<std::vector<double>>& recv) {
+    const std::size_t nb = neighbours.size();
+    requests_.assign(nb, MPI_REQUEST_NULL);
+    // Every neighbour gets a message, empty or not: the receiver cannot know.
+    for (std::size_t i = 0; i < nb; ++i) {
+        check(MPI_Isend(send[i].data(), static_cast<int>(send[i].size()), MPI_DOUBLE, neighbours[i], kSizedTag, comm_,
+                        &requests_[i]),
+              "MPI_Isend");
+        bytesSent += static_cast<long>(send[i].size() * sizeof(double));
+        ++messagesSent;
+    }
+    for (std::size_t i = 0; i < nb; ++i) {
+        MPI_Status st;
+        check(MPI_Probe(neighbours[i], kSizedTag, comm_, &st), "MPI_Probe");
+        int count = 0;
+        MPI_Get_count(&st, MPI_DOUBLE, &count);
+        recv[i].resize(count);
+        check(MPI_Recv(recv[i].data(), count, MPI_DOUBLE, neighbours[i], kSizedTag, comm_, MPI_STATUS_IGNORE),
+              "MPI_Recv");
     }
     check(MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
 }

@@ -20,6 +20,8 @@ public:
     int size() const override { return size_; }
     void exchange(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
                   std::vector<std::vector<double>>& recv) override;
+    void exchangeSized(const std::vector<int>& neighbours, const std::vector<std::vector<double>>& send,
+                       std::vector<std::vector<double>>& recv) override;
     void allgather(const double* mine, int n, double* all) override;
     void allgatherv(const std::vector<uint8_t>& mine, std::vector<uint8_t>& all, std::vector<int>& counts) override;
     void allreduceMax(double* v, int n) override;

@@ -8,6 +8,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
+#include "../parallel/Domain.hpp"
 #include "../world/World.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -28,6 +29,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     const double sinFade2 = std::pow(std::sin(w_.settings.edgeFadeAngle), 2);
     const long stamp = w_.iter;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
@@ -68,6 +70,8 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const Material& mb = w_.materials[w_.pieces[pb].material];
                     const double reach = ma.radius + mb.radius;
                     const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
+                    // Under MPI one rank computes the pair: the owner of its lowest node id.
+                    if (dom && dom->owner(std::min(std::min(a0, a1), std::min(b0, b1))) != dom->rank()) return;
                     const Vector3d p2 = at(w_.pos, b0), q2 = at(w_.pos, b1);
                     const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
                     constexpr double kEnd = 1e-9;

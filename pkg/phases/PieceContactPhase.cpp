@@ -10,6 +10,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
+#include "../parallel/Domain.hpp"
 #include "../world/World.hpp"
 #include "../world/WorldState.hpp"
 #include "PieceContactPhase.hpp"
@@ -109,16 +110,23 @@ void PieceContactPhase::run(double dt) {
     // more than half the skin, pieces were added, or a piece became active.
     const bool verlet = !tetItems;
     const double skin = w_.settings.verletSkin * rMax;
+    // Under MPI (Domain.hpp) only owned and ghost nodes are current: what is
+    // registered must be current, and lists are rebuilt when the set changes.
+    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    const uint8_t* cur = dom ? dom->currentMask().data() : nullptr;
     bool rebuild = !verlet || !st_.listValid || st_.listTris != S.nTris() || st_.listSkin != skin ||
-                   st_.listActive.size() != np;
+                   st_.listActive.size() != np || (dom && listDomainVersion_ != dom->currentVersion());
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
     if (!rebuild) {
-        const bool all = w_.sleeping().everything();  // else only the awake pieces' nodes move
-        const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
+        // Only the awake pieces' nodes move; under MPI the current ones (the
+        // owned and the ghosts: a ghost face moving in counts as much).
+        const bool all = w_.sleeping().everything();
+        const std::vector<int32_t>& moving = dom ? dom->currentSurf() : w_.sleeping().awakeSurf();
+        const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(moving.size());
         double moved2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
         for (int32_t j = 0; j < ns; ++j) {
-            const int32_t i = all ? j : w_.sleeping().awakeSurf()[j];
+            const int32_t i = all ? j : moving[j];
             const int32_t n = w_.surfNodes[i];
             if (!st_.pieceActive[w_.nodePiece[n]]) continue;
             moved2 = std::max(moved2, (at(w_.pos, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
@@ -146,6 +154,9 @@ void PieceContactPhase::run(double dt) {
     st_.itemGrid.resize(np), st_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
     auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
+        if (cur)
+            for (int k = 0; k < n; ++k)
+                if (!cur[nodes[k]]) return;
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
         for (int k = 0; k < n; ++k) {
             const Vector3d x = at(w_.pos, nodes[k]);
@@ -182,6 +193,7 @@ void PieceContactPhase::run(double dt) {
         if (st_.pieceActive[ip] && w_.settings.edgeEdgeOn && edgeRebuild) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
+                if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
                 const Vector3d a = at(w_.pos, S.edge[2 * e]), b = at(w_.pos, S.edge[2 * e + 1]);
                 // Box grown by r (+ half the skin): two edges within reach
                 // r_a + r_b (+ skin) share a cell.
@@ -234,7 +246,7 @@ void PieceContactPhase::run(double dt) {
             const int32_t pa = w_.nodePiece[node];
             const Vector3d A = at(w_.pos, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
-            if (!st_.pieceActive[pa]) continue;
+            if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
             const double ra = w_.materials[w_.pieces[pa].material].radius;
             int count = 0;
             for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
@@ -276,6 +288,7 @@ void PieceContactPhase::run(double dt) {
         st_.listTris = S.nTris();
         st_.listValid = true;
         ++st_.listBuilds;
+        if (dom) listDomainVersion_ = dom->currentVersion();
     }
     if (verlet && edgeRebuild && w_.settings.edgeEdgeOn) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
@@ -330,10 +343,12 @@ void PieceContactPhase::run(double dt) {
     }
     const double tSum = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
-    const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
+    // (Under MPI the ghosts' too: their owners get them back, Domain.hpp.)
+    const std::vector<int32_t>& summed = dom ? dom->currentSurf() : w_.sleeping().awakeSurf();
+    const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(summed.size());
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t j = 0; j < ns; ++j) {
-        const int32_t s = all ? j : w_.sleeping().awakeSurf()[j];
+        const int32_t s = all ? j : summed[j];
         for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
     }

@@ -54,6 +54,7 @@ public:
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
 private:
+    long listDomainVersion_ = -1;  // Domain::currentVersion the Verlet lists were built for
     struct Kind {
         const ContactKindRow* row;
         std::unique_ptr<ContactKind> kernel;

@@ -12,6 +12,7 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
+#include "../parallel/Domain.hpp"
 #include "../world/World.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -45,6 +46,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const int32_t* tri = S.tri.data();
     const double* normal = st_.triNormal.data();
     const double* X = w_.pos.data();
+    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
     struct Tunnel {
         int32_t node = -1, pa = -1, pb = -1;
         double depth = 0, speed = 0, mass = 0, kn = 0;
@@ -61,6 +63,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
 #pragma omp for schedule(dynamic, 64)
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = w_.surfNodes[s];
+            if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
             const int32_t pa = w_.nodePiece[node];
             if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
                 st_.ppStamp[s] = stamp;

@@ -178,12 +178,12 @@ void World::updatePieceBounds(bool all) {
     pieceLo_.resize(3 * np);
     pieceHi_.resize(3 * np);
     if (domain_ && domain_->built()) {
-        // Under MPI only this rank's surface nodes are current: its boxes hold
-        // them (what this rank's nodes of the piece can reach), empty boxes
-        // (lo > hi, touching nothing) for pieces it owns no surface of.
+        // Under MPI only this rank's surface nodes and its ghosts are current:
+        // its boxes hold them (what this rank's contacts of the piece can
+        // reach), empty boxes (lo > hi, touching nothing) for the others.
         for (std::size_t ip = 0; ip < np; ++ip)
             for (int d = 0; d < 3; ++d) pieceLo_[3 * ip + d] = 1e300, pieceHi_[3 * ip + d] = -1e300;
-        for (const int32_t s : sleepPhase_.awakeSurf()) {
+        for (const int32_t s : domain_->currentSurf()) {
             const int32_t n = surfNodes[s];
             const int32_t ip = nodePiece[n];
             const double r = materials[pieces[ip].material].radius;
@@ -256,10 +256,10 @@ void World::prepareDomain() {
     if (settings.sleepVelocity > 0)
         throw InputError(where + " does not put pieces to sleep yet: set QdemEngine.sleepVelocity = 0, or run on one "
                                  "process");
-    if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn))
-        throw InputError(where + " does not compute contacts between pieces yet: switch them off with "
-                                 "QdemEngine(pointPolygon=False, edgeEdge=False) if the pieces never touch, or run "
-                                 "on one process");
+    if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) &&
+        settings.broadPhase != BroadPhase::Triangles)
+        throw InputError(where + " finds piece contacts with the default broad phase only: set "
+                                 "QdemEngine.broadPhase = 'triangles' (the seed's cases A/B/C run on one process)");
     if (!spheres.id.empty())
         throw InputError(where + " does not couple YADE spheres yet: run on one process");
     domain_->build(partitionOptions);
@@ -277,5 +277,12 @@ std::string World::agreeOnError(const std::string& error) const {
     const std::string m = domain_->agree(error.empty() ? error : "S" + error);
     return m.empty() ? m : m.substr(1);
 }
+
+}  // namespace qdem
+
+namespace qdem {
+
+// (Before the first split every rank holds the whole set-up.)
+bool World::stateCurrent() const { return !domain_ || !domain_->built() || gatheredIter_ == iter; }
 
 }  // namespace qdem

@@ -134,7 +134,7 @@ public:
     void gatherAll();
     // Every node's position, velocity and force is current on this rank
     // (always on one process; under MPI right after gatherAll()).
-    bool stateCurrent() const { return !domain_ || gatheredIter_ == iter; }
+    bool stateCurrent() const;
     // The energies of the whole world: under MPI the sum over ranks (in rank
     // order) made at the end of each step; `energy` is then this rank's share.
     const Energy& energyTotal() const { return domain_ ? energyTotal_ : energy; }

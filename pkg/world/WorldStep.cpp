@@ -61,7 +61,10 @@ void World::step(double dt) {
     run(integrationPhase_);
     if (settings.trackEnergy && error.empty()) finishPieceEnergy();
     // Under MPI: the moved nodes to the ranks that read them.
-    if (domain_) domain_->sendStates();
+    if (domain_) {
+        domain_->sendStates();
+        if (domain_->contactHalo()) domain_->sendContactHalo();
+    }
     time += dt;
     ++iter;
     // Which pieces sleep in the next step.

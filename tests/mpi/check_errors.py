@@ -53,7 +53,7 @@ b = caught(check)
 
 # (c) What is not distributed yet is refused on every rank alike, naming the fix.
 w = scenes.contactFree()
-w.core.pointPolygonOn = True
+w.core.sleepVelocity = 1e-3
 w.core.setCommunicator(comm)
 c = caught(lambda: w.core.step(dt, 1))
 everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c}, root=0)

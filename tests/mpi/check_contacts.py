@@ -1,0 +1,58 @@
+"""Run by tests/python/test_mpi.py under mpiexec -n P: pieces in contact
+across rank boundaries (tests/mpi/scenes.py withContacts: a block sliding
+across the slab, cubes resting on it, crossed edges) on P ranks against the
+same scene serially with 1 and 2 threads in rank 0's process.  Rank 0 prints
+'RESULT {json}'."""
+import json
+import os
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scenes  # noqa: E402
+from qdem import _core  # noqa: E402
+
+STEPS, CHUNK = int(os.environ.get("QDEM_MPI_STEPS", 400)), 25
+comm = MPI.COMM_WORLD
+KINDS = ("pointPolygon", "edgeEdge", "wall")
+
+
+def run(w, record, reduce):
+    dt = 0.5 * w.stableDt()["combined"]
+    for _ in range(STEPS // CHUNK):
+        w.core.step(dt, CHUNK)
+        counts = [w.core.contactCounts[k] for k in KINDS]
+        record.append(reduce(counts) + [float(x) for x in w.core.obstacleReactions()[0][:3]] +
+                      [w.core.energy["total"]])
+
+
+def summed(counts):
+    return [int(x) for x in comm.allreduce(np.array(counts), op=MPI.SUM)]
+
+
+dist = scenes.withContacts()
+x0 = np.array(dist.core.pos, copy=True)
+dist.core.setCommunicator(comm)
+series = []
+run(dist, series, summed)
+dist.core.gatherAll()
+x, v = scenes.positions(dist)
+stats = comm.gather(dist.core.partitionStats, root=0)
+if comm.rank == 0:
+    ref = {}
+    for threads in (1, 2):
+        _core.setThreads(threads)
+        s = scenes.withContacts()
+        ss = []
+        run(s, ss, lambda c: c)
+        ref[threads] = (scenes.positions(s), ss)
+    (xs, vs), sseries = ref[1]
+    (x2, _), _ = ref[2]
+    out = {"ranks": comm.size, "steps": STEPS, "maxDisplacement": float(np.abs(xs - x0).max()),
+           "dx": float(np.abs(x - xs).max()), "dxThreads": float(np.abs(x2 - xs).max()),
+           "series": series, "serialSeries": sseries,
+           "ghosts": [s["ghosts"] for s in stats], "stepBytes": [s["stepBytes"] for s in stats],
+           "stepMessages": [s["stepMessages"] for s in stats]}
+    print("RESULT " + json.dumps(out), flush=True)
