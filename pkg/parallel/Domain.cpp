@@ -25,9 +25,26 @@ void Domain::build(const PartitionOptions& optIn) {
     in.tetNodes = w_.tetNodes.data();
     in.nPieces = static_cast<int32_t>(w_.pieces.size());
     in.pieceNodeBegin = pieceBegin.data();
+    // The contact work of each surface node: its contacts of the last step,
+    // read from the history columns (slots holding a contact are >= 0).
+    std::vector<double> extra;
+    if (w_.settings.contactWork > 0 && w_.iter > 0) {
+        extra.assign(w_.nNodes(), 0.0);
+        const std::size_t ns = w_.surfNodes.size();
+        for (const auto& c : w_.stateColumns().refs) {
+            if ((c.name != "slotBody" && c.name != "ppKey") || ns == 0) continue;
+            const auto* key = static_cast<const int32_t*>(c.data);
+            const std::size_t k = c.count / ns;
+            for (std::size_t i = 0; i < ns; ++i)
+                for (std::size_t j = 0; j < k; ++j)
+                    if (key[i * k + j] >= 0) extra[w_.surfNodes[i]] += w_.settings.contactWork;
+        }
+        in.nodeExtraWeight = extra.data();
+    }
     // Every rank holds the same positions here (the same script built them,
     // or gatherAll made them so): every rank computes the same split.
     part_ = partitionHilbert(in, opt);
+    checkSameEverywhere(in);
     halo_ = elementHalo(part_, in, rank());
     ghostForce_.assign(3 * w_.nNodes(), 0.0);
     const std::size_t nb = halo_.neighbours.size();
@@ -37,10 +54,36 @@ void Domain::build(const PartitionOptions& optIn) {
     for (const auto& g : halo_.recv)
         for (const int32_t n : g) elementGhost_[n] = 1;
     contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
-    cNbr_.clear(), cRecv_.clear(), cSend_.clear();
+    cNbr_.clear(), cNbrPrev_.clear(), cRecv_.clear(), cSend_.clear();
+    ghostTouched_.clear();
     built_ = true;
     markCurrent();
     if (contactHalo_) sendContactHalo();  // collective: every rank builds at the same step
+}
+
+// The split is computed by every rank alone: it must come out the same
+// everywhere, or the halos do not match and messages would be cut.  A
+// script that builds other scenes on other ranks (unseeded random positions)
+// is told so here, on every rank, before anything is exchanged.
+void Domain::checkSameEverywhere(const PartitionInput& in) const {
+    uint64_t h = 1469598103934665603ull;  // FNV-1a over sizes, positions and owners
+    const auto mixBytes = [&](const void* p, std::size_t n) {
+        const auto* b = static_cast<const uint8_t*>(p);
+        for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    };
+    mixBytes(&in.nNodes, sizeof in.nNodes);
+    mixBytes(&in.nTets, sizeof in.nTets);
+    mixBytes(in.pos, 3 * sizeof(double) * static_cast<std::size_t>(in.nNodes));
+    mixBytes(part_.nodeOwner.data(), part_.nodeOwner.size() * sizeof(int32_t));
+    // Two exact halves (32 bits each fit a double), compared by min and max.
+    double lo[2] = {double(h >> 32), double(h & 0xffffffffu)}, hi[2] = {lo[0], lo[1]};
+    comm_->allreduceMin(lo, 2);
+    comm_->allreduceMax(hi, 2);
+    if (lo[0] != hi[0] || lo[1] != hi[1])
+        throw InputError("QDEM under MPI: the ranks hold different scenes (other pieces, node positions or states), "
+                         "so they cannot share one split. Every rank must build the same scene: seed random numbers "
+                         "alike on every rank (e.g. random.seed(1) before placing pieces), and change pieces on "
+                         "every rank, not on one");
 }
 
 void Domain::markCurrent() {
@@ -264,11 +307,13 @@ std::string Domain::agree(const std::string& error) {
 
 void Domain::finishStep(const std::string& error) {
     const double t0 = omp_get_wtime();
-    // [failed, reactions (6 per obstacle), energies (10)] of every rank, in rank order.
-    const std::size_t no = w_.obstacles.size();
+        const std::size_t no = w_.obstacles.size();
     const bool energyOn = w_.settings.trackEnergy;
-    std::vector<double> v(1 + 6 * no + (energyOn ? 10 : 0));
+    // [failed, reactions (6 per obstacle), energies (10), load] of every rank, in rank order.
+    const std::size_t nv = 1 + 6 * no + (energyOn ? 10 : 0) + 1;
+    std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
+    v[nv - 1] = load();
     for (std::size_t i = 0; i < no; ++i)
         for (int d = 0; d < 3; ++d) {
             v[1 + 6 * i + d] = w_.obstacles[i].reactionForce[d];
@@ -280,7 +325,17 @@ void Domain::finishStep(const std::string& error) {
                                e.contactDamping, e.friction, e.boundaryWork, e.localDamping, e.sleep};
         std::copy(es, es + 10, v.begin() + 1 + 6 * no);
     }
-    orderedSum(*comm_, v.data(), static_cast<int>(v.size()));
+    const int P = size();
+    std::vector<double> all(nv * P);
+    comm_->allgather(v.data(), static_cast<int>(nv), all.data());
+    for (std::size_t i = 0; i + 1 < nv; ++i) {  // summed in rank order: the same everywhere
+        double sum = 0;
+        for (int r = 0; r < P; ++r) sum += all[nv * r + i];
+        v[i] = sum;
+    }
+    double maxLoad = 0, sumLoad = 0;
+    for (int r = 0; r < P; ++r) maxLoad = std::max(maxLoad, all[nv * r + nv - 1]), sumLoad += all[nv * r + nv - 1];
+    loadImbalance = sumLoad > 0 ? maxLoad * P / sumLoad : 1.0;
     seconds += omp_get_wtime() - t0;
     if (v[0] > 0) {
         const std::string msg = agree(error);
@@ -296,6 +351,65 @@ void Domain::finishStep(const std::string& error) {
         const double* s = v.data() + 1 + 6 * no;
         w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
     }
+}
+
+double Domain::load() const {
+    long contacts = 0;
+    if (w_.settings.contactWork > 0) {
+        const PhaseReport r = w_.report();
+        contacts = r.count("wall") + r.count("pointPolygon") + r.count("edgeEdge");
+    }
+    return static_cast<double>(halo_.ownedTets.size()) + w_.settings.contactWork * static_cast<double>(contacts);
+}
+
+void Domain::rebalance(const PartitionOptions& opt) {
+    gatherAll();  // positions, velocities, forces: every rank alike
+    // Every row of every migrating state column from the rank that held it
+    // true.  Every rank knows the owners, so the rows travel without ids.
+    StateColumns cols = w_.stateColumns();
+    const SurfaceIndex& S = w_.surfaceIndex();
+    const auto nRows = [&](Rows k) -> std::size_t {
+        switch (k) {
+            case Rows::Node: return w_.nNodes();
+            case Rows::SurfaceNode: return w_.surfNodes.size();
+            case Rows::Edge: return S.nEdges();
+            default: return 0;
+        }
+    };
+    const auto ownerOf = [&](Rows k, std::size_t row) -> int {
+        switch (k) {
+            case Rows::Node: return owner(static_cast<int32_t>(row));
+            case Rows::SurfaceNode: return owner(w_.surfNodes[row]);
+            default: return owner(std::min(S.edge[2 * row], S.edge[2 * row + 1]));
+        }
+    };
+    std::vector<uint8_t> mine, all;
+    for (const auto& c : cols.refs) {
+        const std::size_t n = nRows(c.rows);
+        if (n == 0 || c.count == 0) continue;
+        const std::size_t rowBytes = c.count * c.elemSize / n;
+        const auto* data = static_cast<const uint8_t*>(c.data);
+        for (std::size_t row = 0; row < n; ++row)
+            if (ownerOf(c.rows, row) == rank()) mine.insert(mine.end(), data + row * rowBytes, data + (row + 1) * rowBytes);
+    }
+    std::vector<int> counts;
+    comm_->allgatherv(mine, all, counts);
+    std::size_t at = 0;
+    for (int r = 0; r < size(); ++r)
+        for (const auto& c : cols.refs) {
+            const std::size_t n = nRows(c.rows);
+            if (n == 0 || c.count == 0) continue;
+            const std::size_t rowBytes = c.count * c.elemSize / n;
+            auto* data = static_cast<uint8_t*>(c.data);
+            for (std::size_t row = 0; row < n; ++row)
+                if (ownerOf(c.rows, row) == r) {
+                    if (at + rowBytes > all.size()) throw InputError("rebalance: the ranks' states differ in size");
+                    std::memcpy(data + row * rowBytes, &all[at], rowBytes);
+                    at += rowBytes;
+                }
+        }
+    ++rebalances;
+    build(opt);  // the same new split on every rank: they now hold the same state
 }
 
 void Domain::gatherAll() {

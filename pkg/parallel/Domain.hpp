@@ -77,6 +77,16 @@ public:
     // The step's globals: obstacle reactions summed over ranks (each owner
     // added its nodes' pushes), energy totals, and the error agreement.
     void finishStep(const std::string& error);
+    // This rank's load: owned tets + contactWork x contacts of the last step.
+    double load() const;
+    // max / mean of the ranks' loads at the end of the last step.
+    double loadImbalance = 1;
+    // Splits again from the current positions, the contact work of each
+    // surface node weighing in; every state row (positions, velocities,
+    // contact histories: Phase::stateColumns) goes from the rank that held
+    // it to every rank first.  Collective.
+    void rebalance(const PartitionOptions& opt);
+    long rebalances = 0;
     // Every rank learns every node's position and velocity (output, Python
     // reads, restarts): one gather of the owned nodes.
     void gatherAll();
@@ -93,6 +103,7 @@ private:
     void exchange(std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
 
     void markCurrent();
+    void checkSameEverywhere(const PartitionInput& in) const;
 
     World& w_;
     std::shared_ptr<Communicator> comm_;

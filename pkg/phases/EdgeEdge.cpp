@@ -70,8 +70,10 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const Material& mb = w_.materials[w_.pieces[pb].material];
                     const double reach = ma.radius + mb.radius;
                     const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
-                    // Under MPI one rank computes the pair: the owner of its lowest node id.
-                    if (dom && dom->owner(std::min(std::min(a0, a1), std::min(b0, b1))) != dom->rank()) return;
+                    // Under MPI one rank computes the pair: the owner of the lower
+                    // node of this edge, the one whose slots keep the pair's history
+                    // (so a history row has one owner: Domain::rebalance).
+                    if (dom && dom->owner(std::min(a0, a1)) != dom->rank()) return;
                     const Vector3d p2 = at(w_.pos, b0), q2 = at(w_.pos, b1);
                     const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
                     constexpr double kEnd = 1e-9;

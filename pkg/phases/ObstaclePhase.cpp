@@ -179,9 +179,9 @@ void ObstaclePhase::run(double dt) {
 }
 
 void ObstaclePhase::stateColumns(StateColumns& c) {
-    c.add("slotBody", slotBody_);
-    c.add("slotShear", slotShear_);
-    c.add("slotSide", slotSide_);
+    c.add("slotBody", slotBody_, Rows::SurfaceNode);
+    c.add("slotShear", slotShear_, Rows::SurfaceNode);
+    c.add("slotSide", slotSide_, Rows::SurfaceNode);
 }
 
 void ObstaclePhase::piecesAdded() {

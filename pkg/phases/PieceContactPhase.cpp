@@ -366,16 +366,17 @@ void PieceContactPhase::run(double dt) {
 namespace qdem {
 
 void PieceContactPhase::stateColumns(StateColumns& c) {
-    c.add("ppKey", st_.ppKey);
-    c.add("ppPiece", st_.ppPiece);
-    c.add("ppShear", st_.ppShear);
-    c.add("ppRef", st_.ppRef);
-    c.add("ppStamp", st_.ppStamp);
-    c.add("eeOther", st_.eeOther);
-    c.add("eeSide", st_.eeSide);
-    c.add("eeShear", st_.eeShear);
-    c.add("eeRef", st_.eeRef);
-    c.add("eeStamp", st_.eeStamp);
+    c.add("ppKey", st_.ppKey, Rows::SurfaceNode);
+    c.add("ppPiece", st_.ppPiece, Rows::SurfaceNode);
+    c.add("ppShear", st_.ppShear, Rows::SurfaceNode);
+    c.add("ppRef", st_.ppRef, Rows::SurfaceNode);
+    c.add("ppStamp", st_.ppStamp, Rows::SurfaceNode);
+    c.add("eeOther", st_.eeOther, Rows::Edge);
+    c.add("eeSide", st_.eeSide, Rows::Edge);
+    c.add("eeShear", st_.eeShear, Rows::Edge);
+    c.add("eeRef", st_.eeRef, Rows::Edge);
+    c.add("eeStamp", st_.eeStamp, Rows::Edge);
+    c.add("eePiece", st_.eePiece, Rows::Edge, false);  // saved as a field (older files lack it)
     for (Kind& k : kinds_) k.kernel->stateColumns(c);
 }
 

@@ -11,10 +11,10 @@ namespace qdem {
 // world's own, then each phase's (Phase::stateColumns).
 StateColumns World::stateColumns() {
     StateColumns c;
-    c.add("pos", pos);
-    c.add("vel", vel);
-    c.add("extForce", extForce);
-    c.add("blocked", blocked);
+    c.add("pos", pos, Rows::Node);
+    c.add("vel", vel, Rows::Node);
+    c.add("extForce", extForce, Rows::Node);
+    c.add("blocked", blocked, Rows::Node);
     c.add("pieceEnergy", pieceEnergy_);
     for (Phase* p : phases()) p->stateColumns(c);
     return c;
@@ -35,7 +35,8 @@ WorldState World::saveState() const {
                           energy.localDamping,   energy.sleep};
     s.put("energy", e, 10);
     // (the columns are only read here)
-    for (const auto& r : const_cast<World*>(this)->stateColumns().refs) s.putBytes(r.name, r.data, r.count, r.elemSize);
+    for (const auto& r : const_cast<World*>(this)->stateColumns().refs)
+        if (r.restart) s.putBytes(r.name, r.data, r.count, r.elemSize);
     for (const Phase* p : phases()) p->saveFields(s);
     return s;
 }
@@ -56,9 +57,11 @@ void World::loadState(const WorldState& s) {
     s.check<int64_t>("iter", 3);
     s.check<double>("energy", 10);
     const StateColumns cols = stateColumns();
-    for (const auto& r : cols.refs) s.checkBytes(r.name, r.count, r.elemSize);
+    for (const auto& r : cols.refs)
+        if (r.restart) s.checkBytes(r.name, r.count, r.elemSize);
     for (const Phase* p : phases()) p->checkFields(s);
-    for (const auto& r : cols.refs) s.getBytes(r.name, r.data, r.count, r.elemSize);
+    for (const auto& r : cols.refs)
+        if (r.restart) s.getBytes(r.name, r.data, r.count, r.elemSize);
     double clock[1];
     int64_t steps[3];
     double e[10];

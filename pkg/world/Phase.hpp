@@ -33,18 +33,25 @@ struct PhaseReport {
     }
 };
 
-// Named arrays of a phase's state, by reference, for Checkpoint.cpp.
+// Named arrays of a phase's state, by reference, for Checkpoint.cpp and for
+// migration between MPI ranks (Domain::rebalance): what each row belongs to
+// says which rank holds the true row (the owner of that node, surface node,
+// or of the edge's lower node: the rank computing its edge-edge contacts).
+enum class Rows { Node, SurfaceNode, Edge, Other };
+
 struct StateColumns {
     struct Ref {
         std::string name;
         void* data;
         std::size_t count;     // values
         std::size_t elemSize;  // bytes per value
+        Rows rows;
+        bool restart;          // saved in restarts (false: only migrated)
     };
     std::vector<Ref> refs;
     template <class C>
-    void add(const char* name, C& column) {
-        refs.push_back({name, static_cast<void*>(column.data()), column.size(), sizeof(*column.data())});
+    void add(const char* name, C& column, Rows rows = Rows::Other, bool restart = true) {
+        refs.push_back({name, static_cast<void*>(column.data()), column.size(), sizeof(*column.data()), rows, restart});
     }
 };
 

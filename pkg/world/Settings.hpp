@@ -84,7 +84,13 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
       "until a neighbour piece moves faster than this, an obstacle near it moves or a sphere comes near.  0 "       \
       "(default) = never.  doc/sleeping.md: choice and error.")                                                      \
     X(double, sleepTime, "sleepTime", 0.01, atLeast(0),                                                              \
-      "How long [s] a piece must stay slower than sleepVelocity before it sleeps.")
+      "How long [s] a piece must stay slower than sleepVelocity before it sleeps.")                                \
+    X(double, rebalanceThreshold, "rebalance", 1.15, atLeast(0),                                                     \
+      "Under MPI: the nodes are split again along the Hilbert curve (with their contact histories) when the "     \
+      "largest rank's load exceeds this multiple of the mean (load = owned tetrahedra + contactWork x contacts). " \
+      "0 = never.  doc/parallel.md.")                                                                                \
+    X(double, contactWork, "contactWork", 4.0, atLeast(0),                                                           \
+      "Under MPI: the work of one contact in units of one tetrahedron's, for the load that balances the ranks.")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;

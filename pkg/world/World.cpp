@@ -267,6 +267,13 @@ void World::prepareDomain() {
     energyTotal_ = energy;
 }
 
+void World::rebalance() {
+    if (!domain_ || !domain_->built()) return;
+    domain_->rebalance(partitionOptions);
+    sleepPhase_.awakeSetChanged();
+    gatheredIter_ = iter;  // rebalance gathered every node
+}
+
 void World::gatherAll() {
     if (domain_ && domain_->built()) domain_->gatherAll();
     gatheredIter_ = iter;

@@ -132,6 +132,11 @@ public:
     // keeps only its own nodes and ghosts current); a no-op on one process.
     // Collective: every rank must call it.
     void gatherAll();
+    // Under MPI: splits the world again along the Hilbert curve from the
+    // current positions and contact work, moving every node's state and
+    // contact history to its new owner (collective; the step does it when
+    // the load drifts past settings.rebalanceThreshold).  No-op on one process.
+    void rebalance();
     // Every node's position, velocity and force is current on this rank
     // (always on one process; under MPI right after gatherAll()).
     bool stateCurrent() const;

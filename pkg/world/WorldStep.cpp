@@ -69,7 +69,11 @@ void World::step(double dt) {
     ++iter;
     // Which pieces sleep in the next step.
     run(sleepPhase_);
-    if (domain_) domain_->finishStep(error);
+    if (domain_) {
+        domain_->finishStep(error);
+        // Every rank saw the same loads: they all split again, or none does.
+        if (settings.rebalanceThreshold > 0 && domain_->loadImbalance > settings.rebalanceThreshold) rebalance();
+    }
 }
 
 }  // namespace qdem

@@ -54,6 +54,15 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
         },
         "Under MPI: every rank learns every node's position and velocity (collective: call it on every rank). "
         "A no-op on one process.");
+    world.def(
+        "rebalance",
+        [](World& w) {
+            py::gil_scoped_release nogil;
+            w.rebalance();
+        },
+        "Under MPI: splits the world again along the Hilbert curve from the current positions and contact work, "
+        "moving every node's state and contact history to its new owner (collective: every rank calls it; the "
+        "step does so by itself when the load drifts past rebalanceThreshold).  A no-op on one process.");
     world.def_property_readonly("stateCurrent", &World::stateCurrent,
                                 "Is every node's pos, vel and force current on this rank?  Always on one process; "
                                 "under MPI right after gatherAll().");
@@ -92,8 +101,11 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
             s["stepBytes"] = d->stepBytes;
             s["stepMessages"] = d->stepMessages;
             s["exchangeSeconds"] = d->seconds;
+            s["loadImbalance"] = d->loadImbalance;
+            s["rebalances"] = d->rebalances;
             return s;
         },
         "This rank's share (dict: ranks, rank, ownedNodes, ownedTets, ghosts, neighbours, imbalance = max/mean "
-        "load over ranks) and its halo's cost in the last step (stepBytes, stepMessages sent, exchangeSeconds).");
+        "weight of the split, loadImbalance = max/mean load in the last step, rebalances so far) and its halo's "
+        "cost in the last step (stepBytes, stepMessages sent, exchangeSeconds).");
 }

@@ -19,10 +19,19 @@ comm = MPI.COMM_WORLD
 KINDS = ("pointPolygon", "edgeEdge", "wall")
 
 
+REBALANCE = os.environ.get("QDEM_MPI_REBALANCE") == "1"
+moved = []
+
+
 def run(w, record, reduce):
     dt = 0.5 * w.stableDt()["combined"]
-    for _ in range(STEPS // CHUNK):
+    for k in range(STEPS // CHUNK):
         w.core.step(dt, CHUNK)
+        if REBALANCE and k == STEPS // CHUNK // 2 and w.core.mpiSize > 1:
+            # Forced mid-run, contacts open: the split moves, histories with it.
+            before = np.array(w.core.nodeOwner)
+            w.core.rebalance()
+            moved.append(int((np.array(w.core.nodeOwner) != before).sum()))
         counts = [w.core.contactCounts[k] for k in KINDS]
         record.append(reduce(counts) + [float(x) for x in w.core.obstacleReactions()[0][:3]] +
                       [w.core.energy["total"]])
@@ -35,6 +44,7 @@ def summed(counts):
 dist = scenes.withContacts()
 x0 = np.array(dist.core.pos, copy=True)
 dist.core.setCommunicator(comm)
+dist.core.rebalanceThreshold = 0  # (only the forced one, when asked)
 series = []
 run(dist, series, summed)
 dist.core.gatherAll()
@@ -54,5 +64,6 @@ if comm.rank == 0:
            "dx": float(np.abs(x - xs).max()), "dxThreads": float(np.abs(x2 - xs).max()),
            "series": series, "serialSeries": sseries,
            "ghosts": [s["ghosts"] for s in stats], "stepBytes": [s["stepBytes"] for s in stats],
-           "stepMessages": [s["stepMessages"] for s in stats]}
+           "stepMessages": [s["stepMessages"] for s in stats], "movedNodes": moved,
+           "rebalances": [s["rebalances"] for s in stats]}
     print("RESULT " + json.dumps(out), flush=True)

@@ -56,6 +56,12 @@ w = scenes.contactFree()
 w.core.sleepVelocity = 1e-3
 w.core.setCommunicator(comm)
 c = caught(lambda: w.core.step(dt, 1))
-everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c}, root=0)
+# (d) Ranks that built different scenes (unseeded random placement) are
+# told so on every rank, before any message is cut short.
+w = scenes.contactFree()
+w.pieces[1].pos[:] += 1e-3 * comm.rank
+w.core.setCommunicator(comm)
+d = caught(lambda: w.core.step(dt, 1))
+everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d}, root=0)
 if comm.rank == 0:
     print("RESULT " + json.dumps({"ranks": comm.size, "caught": everything, "nanNode": node}), flush=True)

@@ -60,6 +60,9 @@ def test_error_on_one_rank_stops_every_rank(P):
     # (c) what is not distributed yet (sleeping) is refused on every rank with the fix.
     for c in caught:
         assert c["c"][0] == "ValueError" and "sleepVelocity = 0" in c["c"][1]
+    # (d) ranks with different scenes: refused on every rank, naming the fix.
+    for c in caught:
+        assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
 
 
 def test_yade_floor_force_under_mpiexec_equals_serial():
@@ -111,6 +114,27 @@ def test_contacts_across_ranks_match_serial(P):
     assert np.abs(s[:, 6] - ss[:, 6]).max() <= 1e-9 * np.abs(ss[:, 6]).max()
     # The halo is real: ghosts and messages on every rank that has neighbours.
     assert sum(r["ghosts"]) > 0 and all(m > 0 for m in r["stepMessages"])
+
+
+@pytest.mark.parametrize("P", [2, 4])
+def test_forced_rebalance_mid_run_keeps_the_trajectory_and_histories(P):
+    requireMpi()
+    import os
+    os.environ["QDEM_MPI_REBALANCE"] = "1"
+    try:
+        rc, out = mpirun(P, python("tests/mpi/check_contacts.py"))
+    finally:
+        del os.environ["QDEM_MPI_REBALANCE"]
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    assert r["rebalances"] == [1] * P and r["movedNodes"][0] > 0  # the split moved, mid-contact
+    s, ss = np.array(r["series"]), np.array(r["serialSeries"])
+    # With the histories lost the counts differ and |dx| is ~1e-4 of the
+    # displacement (seen with the surface-node rows left behind).
+    assert np.array_equal(s[:, :3], ss[:, :3])
+    d = r["maxDisplacement"]
+    assert r["dx"] <= 1e-10 * d
+    assert r["dx"] <= max(10 * r["dxThreads"], 1e-13 * d)
 
 
 def test_static_friction_holds_across_a_rank_boundary():
