@@ -57,7 +57,7 @@ bench-mpi: build
 	@$(PY) scripts/bench/mpi/run_ranks.py --build $(BUILD) --out out/bench/mpi_ranks.json
 	@echo "bench-mpi: the weak-scaling model"
 	@MPLBACKEND=Agg $(PY) scripts/bench/mpi/model.py --out out/bench/mpi_model.json --img doc/img \
-	  --partition-check bench/logs/mpi_partition_512.json --combined out/bench/mpi.json
+	  --partition-more bench/logs/mpi_partition_512.json --combined out/bench/mpi.json
 
 # What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md
 accuracy: build

@@ -19,7 +19,7 @@ halo rule predicts from the run's own partition (node owners saved by
 run_ranks.py), and their times are compared.
 
     python3 model.py --pingpong out/bench/mpi_pingpong.json --ranks out/bench/mpi_ranks.json \
-        --partition out/bench/mpi_partition.json [--partition-check bench/logs/mpi_partition_512.json] \
+        --partition out/bench/mpi_partition.json [--partition-more bench/logs/mpi_partition_512.json] \
         --out out/bench/mpi_model.json --img doc/img
 """
 import argparse
@@ -65,10 +65,17 @@ def predictHalo(owner, tets, P):
     return out
 
 
-def commSeconds(alpha, beta, messages, bytes_, P):
+def commSeconds(alpha, beta, messages, bytes_, P, tree=False):
     """Halo exchanges plus the end-of-step allgather (recursive doubling: log2 P
-    latencies, (P - 1) blocks of bytes)."""
-    coll = alpha * math.log2(P) + beta * DOUBLE * GATHER_DOUBLES * (P - 1) if P > 1 else 0.0
+    latencies, (P - 1) blocks of bytes).  tree: the same sums by a reduction
+    in a fixed tree order instead (still deterministic; up and down the tree:
+    2 log2 P latencies, each with one block)."""
+    if P <= 1:
+        coll = 0.0
+    elif tree:
+        coll = 2 * math.log2(P) * (alpha + beta * DOUBLE * GATHER_DOUBLES)
+    else:
+        coll = alpha * math.log2(P) + beta * DOUBLE * GATHER_DOUBLES * (P - 1)
     return alpha * messages + beta * bytes_ + coll, coll
 
 
@@ -94,9 +101,13 @@ def fitHilbert(Ps, ys):
 
 
 def fitSlabs(Ps, ys):
-    """q(P) = a P^k: a slab of a scene whose side grows as P^(1/3) is P^(-2/3)
-    thick in units of the share, so its halo over owned grows as P^(2/3) (k is
-    fitted, not imposed: whole pieces and contact reach change it)."""
+    """q(P) = a P^k on the last three P: a slab of a scene whose side grows as
+    P^(1/3) is P^(-2/3) thick in units of the share, so its halo over owned
+    grows as P^(2/3) while it is thicker than a layer of nodes; thinner, the
+    partitioner orders the nodes of one plane by id (equal keys) and the
+    slab becomes a strip, whose halo grows slower.  So the local slope of the
+    largest P is carried on (k fitted, not imposed), not the whole range."""
+    Ps, ys = list(Ps)[-3:], list(ys)[-3:]
     ys = np.maximum(np.asarray(ys, float), 1e-12)
     k, la = np.polyfit(np.log(np.asarray(Ps, float)), np.log(ys), 1)
     return {"form": "a*P^k", "a": float(math.exp(la)), "k": float(k)}
@@ -119,7 +130,7 @@ def series(rows, scene, method):
 def extrapolate(rows, scene, method, fitFrom=8):
     """Fits of each quantity on the rows with P >= fitFrom, and a check: the
     same fit made on the rows up to a quarter of the largest P predicts the
-    larger ones (relative error per P)."""
+    larger ones (relative error per P), where the partitioner ran both."""
     s = series(rows, scene, method)
     use = [r for r in s if r["ranks"] >= fitFrom]
     Pmax = s[-1]["ranks"]
@@ -129,7 +140,8 @@ def extrapolate(rows, scene, method, fitFrom=8):
         part = [r for r in use if r["ranks"] <= Pmax // 4]
         if len(part) >= 2:
             f = fitFor(method)([r["ranks"] for r in part], [rowValue(r, q) for r in part])
-            check[q] = {"fitted_on_P": [r["ranks"] for r in part],
+            used = [r["ranks"] for r in part][-3:] if method == "slabs" else [r["ranks"] for r in part]
+            check[q] = {"fitted_on_P": used,
                         "predicted_vs_partitioner": {str(r["ranks"]): {
                             "predicted": evalFit(f, r["ranks"]), "partitioner": rowValue(r, q),
                             "relative_error": evalFit(f, r["ranks"]) / max(rowValue(r, q), 1e-12) - 1}
@@ -137,17 +149,8 @@ def extrapolate(rows, scene, method, fitFrom=8):
     # Imbalance: a share keeps its size, so the piece granularity that sets it
     # does not change: the worst seen at P >= 16 is carried on.
     imb = max(r["imbalance"] for r in s if r["ranks"] >= min(16, Pmax))
-    return {"fits": fits, "check_on_overlap": check, "imbalance_beyond": imb, "fitted_on_P": [r["ranks"] for r in use]}
-
-
-def checkAgainst(ext, rowsLarge, scene, method):
-    """The fits (made up to the default run's largest P) against a larger run."""
-    out = {}
-    for r in series(rowsLarge, scene, method):
-        out[str(r["ranks"])] = {q: {"predicted": evalFit(ext["fits"][q], r["ranks"]), "partitioner": rowValue(r, q),
-                                    "relative_error": evalFit(ext["fits"][q], r["ranks"]) / max(rowValue(r, q), 1e-12)
-                                    - 1} for q in QUANTITIES}
-    return out
+    usedAll = [r["ranks"] for r in use][-3:] if method == "slabs" else [r["ranks"] for r in use]
+    return {"fits": fits, "check_on_overlap": check, "imbalance_beyond": imb, "fitted_on_P": usedAll}
 
 
 def partitionAt(rows, ext, scene, method, P):
@@ -170,7 +173,7 @@ def partitionAt(rows, ext, scene, method, P):
 
 # ---- the projection ------------------------------------------------------------------------
 
-def project(rows, exts, nsPerTet, alpha, beta, scenes):
+def project(rows, exts, nsPerTet, alpha, beta, scenes, tree=False):
     # Powers of 2, and the seed's 5,120 cores.
     Ps = sorted([1 << k for k in range(0, int(math.log2(P_MAX)) + 1)] + [5120])
     out = {}
@@ -181,7 +184,7 @@ def project(rows, exts, nsPerTet, alpha, beta, scenes):
                 pa = partitionAt(rows, exts[scene][method], scene, method, P)
                 work = nsPerTet * pa["imbalance"] * pa["tets_per_rank"]
                 msgs = 2 * math.ceil(pa["neighbours_max"])
-                comm, coll = commSeconds(alpha, beta, msgs, pa["bytes_max"], P) if P > 1 else (0.0, 0.0)
+                comm, coll = commSeconds(alpha, beta, msgs, pa["bytes_max"], P, tree) if P > 1 else (0.0, 0.0)
                 T = work + comm
                 # The scenes' shares are 50,000 nodes only to rounding (a cube's side is
                 # an integer): the ideal is the mean share of this P computed alone.
@@ -219,6 +222,7 @@ def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
                           "step_s_measured_median": m["stepSeconds"]["median"],
                           "step_s_measured_min": m["stepSeconds"]["min"],
                           "step_s_model": nsPerTet * p["ownedTets"] + comm,
+                          "step_s_model_yield": nsPerTet * p["ownedTets"] + commY,
                           "exchange_s_measured_median": m["exchangeSeconds"]["median"],
                           "exchange_s_measured_min": m["exchangeSeconds"]["min"],
                           "exchange_s_model_busy_poll": comm, "exchange_s_model_yield": commY})
@@ -228,6 +232,7 @@ def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
                     "load_average_before": run["loadAverageBefore"][0], "load_average_after": run["loadAverageAfter"][0],
                     "oversubscribed": P > 2, "ranks": ranks,
                     "step_s_model_max": max(r["step_s_model"] for r in ranks),
+                    "step_s_model_yield_max": max(r["step_s_model_yield"] for r in ranks),
                     "step_s_measured_median_max": max(r["step_s_measured_median"] for r in ranks),
                     "step_s_measured_min_max": max(r["step_s_measured_min"] for r in ranks)})
     return out
@@ -235,7 +240,7 @@ def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
 
 # ---- plots ---------------------------------------------------------------------------------
 
-def plots(proj, rows, rowsLarge, imgDir, scenes):
+def plots(proj, rows, imgDir, scenes):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -271,10 +276,6 @@ def plots(proj, rows, rowsLarge, imgDir, scenes):
                 ax.plot([p["P"] for p in meas], [p[key] for p in meas], ls, color=colours[scene], marker="o", ms=3,
                         label="%s, %s" % (scene, method))
                 ax.plot([p["P"] for p in fit], [p[key] for p in fit], ls, color=colours[scene], alpha=0.4)
-            big = series(rowsLarge, scene, method) if rowsLarge else []
-            big = [r for r in big if r["ranks"] > meas[-1]["P"]]
-            for ax, key in ((axs[0], "halo_over_owned_max"), (axs[1], "neighbours_max")):
-                ax.plot([r["ranks"] for r in big], [rowValue(r, key) for r in big], "x", color=colours[scene])
     for ax, lab in ((axs[0], "halo / owned nodes (max over ranks)"), (axs[1], "neighbours (max over ranks)")):
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
@@ -282,7 +283,7 @@ def plots(proj, rows, rowsLarge, imgDir, scenes):
         ax.set_ylabel(lab)
         ax.grid(alpha=0.3, which="both")
     axs[0].legend(fontsize=8)
-    fig.suptitle("Partitioner (dots), fits beyond (faint), larger check run (x): Hilbert (solid) vs slabs (dashed)",
+    fig.suptitle("Partitioner (dots), fits beyond (faint): Hilbert (solid) vs slabs (dashed)",
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(os.path.join(imgDir, "parallel_halo.png"), dpi=110)
@@ -295,7 +296,8 @@ def main():
     ap.add_argument("--pingpong-yield", default="out/bench/mpi_pingpong_yield.json")
     ap.add_argument("--ranks", default="out/bench/mpi_ranks.json")
     ap.add_argument("--partition", default="out/bench/mpi_partition.json")
-    ap.add_argument("--partition-check", default=None, help="a partitioner run to larger P, to check the fits on")
+    ap.add_argument("--partition-more", default=None,
+                    help="a partitioner run to more ranks (once: minutes and GB): its rows beyond --partition join it")
     ap.add_argument("--out", default="out/bench/mpi_model.json")
     ap.add_argument("--img", default="doc/img")
     ap.add_argument("--combined", default=None, help="also write every input and the model in one JSON here")
@@ -305,24 +307,26 @@ def main():
     ranks = json.load(open(a.ranks))
     part = json.load(open(a.partition))
     rows = part["rows"]
-    rowsLarge = None
-    if a.partition_check and os.path.exists(a.partition_check):
-        rowsLarge = json.load(open(a.partition_check))["rows"]
+    rows = [dict(r, source=a.partition) for r in rows]
+    more = None
+    if a.partition_more and os.path.exists(a.partition_more):
+        more = json.load(open(a.partition_more))
+        if more["nodes_per_rank"] != part["nodes_per_rank"] or more["contact_reach_m"] != part["contact_reach_m"]:
+            raise SystemExit("model: %s was made with other settings" % a.partition_more)
+        top = max(r["ranks"] for r in rows)
+        rows += [dict(r, source=a.partition_more) for r in more["rows"] if r["ranks"] > top]
     alpha, beta = pp["alpha_s_min"], pp["beta_s_per_byte_min"]
     run1 = next(r for r in ranks["runs"] if r["P"] == 1)
     nsPerTet = run1["ranks"][0]["stepSeconds"]["median"] / run1["tets"]
     scenes = [s for s in ("pieces", "body", "mixed") if series(rows, s, "hilbert")]
 
     exts = {s: {m: extrapolate(rows, s, m) for m in ("hilbert", "slabs")} for s in scenes}
-    larger = {}
-    if rowsLarge:
-        for s in scenes:
-            for m in ("hilbert", "slabs"):
-                larger["%s/%s" % (s, m)] = checkAgainst(exts[s][m], rowsLarge, s, m)
     proj = project(rows, exts, nsPerTet, alpha, beta, scenes)
     # The same with a network 10x slower in latency and bandwidth than this
     # machine's shared memory (an assumption, not a measurement: how much room there is).
     projSlow = project(rows, exts, nsPerTet, 10 * alpha, 10 * beta, scenes)
+    # The end-of-step gather replaced by a fixed-order tree reduction (not built: what it would give).
+    projTree = project(rows, exts, nsPerTet, alpha, beta, scenes, tree=True)
     val = validate(ranks, os.path.dirname(a.ranks) or ".", nsPerTet, alpha, beta, ppy["alpha_s_min"],
                    ppy["beta_s_per_byte_min"])
 
@@ -337,12 +341,14 @@ def main():
                    "ns_per_tet": 1e9 * nsPerTet,
                    "ns_per_tet_from": "P = 1 run: median step seconds / tets (%d tets, 1 thread, contact-free)"
                                       % run1["tets"],
-                   "partition": a.partition, "nodes_per_rank": nodesPerRank,
+                   "partition": a.partition, "partition_more": a.partition_more if more else None,
+                   "nodes_per_rank": nodesPerRank,
                    "partitioner_max_P": max(r["ranks"] for r in rows), "gather_doubles_per_rank": GATHER_DOUBLES},
         "formula": "T(P) = w*imbalance*tets/P + alpha*2*neighbours_max + beta*max(bytes sent, received)_max "
                    "+ alpha*log2(P) + beta*8*n*(P-1); E = T1/T(P), T1 = w*tets/P (the mean share, no messages)",
-        "extrapolation": exts, "extrapolation_vs_larger_run": larger,
+        "extrapolation": exts,
         "efficiency_at": {str(P): at(proj, P) for P in (128, 1024, 5120, 16384)},
+        "efficiency_at_tree_reduction": {str(P): at(projTree, P) for P in (1024, 5120, 16384)},
         "efficiency_at_slow_network_10x": {str(P): at(projSlow, P) for P in (1024, 16384)},
         "projection": proj,
         "validation": val,
@@ -362,15 +368,16 @@ def main():
         with open(a.combined, "w") as f:
             json.dump({"what": "make bench-mpi: doc/parallel.md, sections Benchmark and Weak-scaling model",
                        "pingpong": pp, "pingpong_yield": ppy, "ranks": ranks, "partition": part,
-                       "partition_check": a.partition_check if rowsLarge else None, "model": res}, f, indent=1)
-    plots(proj, rows, rowsLarge, a.img, scenes)
+                       "partition_more": more, "model": res}, f, indent=1)
+    plots(proj, rows, a.img, scenes)
     print("model: alpha %.3g s, beta %.3g s/B, %.1f ns/tet" % (alpha, beta, 1e9 * nsPerTet))
     for P, e in res["efficiency_at"].items():
         print("model: E(%s) = %s" % (P, ", ".join("%s %.3f" % kv for kv in e.items())))
     for v in val:
-        print("model: P=%d halo counts exact: %s; step model %.2f ms vs measured median %.2f ms (min %.2f), load %.1f"
-              % (v["P"], v["halo_counts_exact"], 1e3 * v["step_s_model_max"], 1e3 * v["step_s_measured_median_max"],
-                 1e3 * v["step_s_measured_min_max"], v["load_average_after"]))
+        print("model: P=%d halo counts exact: %s; step model %.2f ms (passive-wait alpha, beta: %.2f ms) vs measured "
+              "median %.2f ms (min %.2f), load %.1f"
+              % (v["P"], v["halo_counts_exact"], 1e3 * v["step_s_model_max"], 1e3 * v["step_s_model_yield_max"],
+                 1e3 * v["step_s_measured_median_max"], 1e3 * v["step_s_measured_min_max"], v["load_average_after"]))
     print("model: wrote", a.out, "and", a.combined or "")
 
 

@@ -157,7 +157,7 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--out", default="out/bench/mpi_ranks.json")
     ap.add_argument("--npz", default=None)
-    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--warmup", type=int, default=10)
     ap.add_argument("--scale", type=int, default=1)
     ap.add_argument("--max-ranks", type=int, default=4)
