@@ -200,7 +200,7 @@ def project(rows, exts, nsPerTet, alpha, beta, scenes, tree=False):
 
 # ---- validation on the measured runs -------------------------------------------------------
 
-def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
+def validate(ranksJson, baseDir, nsPerTet, nsPerTetMin, alpha, beta, alphaYield, betaYield):
     out = []
     for run in ranksJson["runs"]:
         P = run["P"]
@@ -223,6 +223,7 @@ def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
                           "step_s_measured_min": m["stepSeconds"]["min"],
                           "step_s_model": nsPerTet * p["ownedTets"] + comm,
                           "step_s_model_yield": nsPerTet * p["ownedTets"] + commY,
+                          "step_s_model_from_min": nsPerTetMin * p["ownedTets"] + comm,
                           "exchange_s_measured_median": m["exchangeSeconds"]["median"],
                           "exchange_s_measured_min": m["exchangeSeconds"]["min"],
                           "exchange_s_model_busy_poll": comm, "exchange_s_model_yield": commY})
@@ -233,6 +234,7 @@ def validate(ranksJson, baseDir, nsPerTet, alpha, beta, alphaYield, betaYield):
                     "oversubscribed": P > 2, "ranks": ranks,
                     "step_s_model_max": max(r["step_s_model"] for r in ranks),
                     "step_s_model_yield_max": max(r["step_s_model_yield"] for r in ranks),
+                    "step_s_model_from_min_max": max(r["step_s_model_from_min"] for r in ranks),
                     "step_s_measured_median_max": max(r["step_s_measured_median"] for r in ranks),
                     "step_s_measured_min_max": max(r["step_s_measured_min"] for r in ranks)})
     return out
@@ -327,7 +329,8 @@ def main():
     projSlow = project(rows, exts, nsPerTet, 10 * alpha, 10 * beta, scenes)
     # The end-of-step gather replaced by a fixed-order tree reduction (not built: what it would give).
     projTree = project(rows, exts, nsPerTet, alpha, beta, scenes, tree=True)
-    val = validate(ranks, os.path.dirname(a.ranks) or ".", nsPerTet, alpha, beta, ppy["alpha_s_min"],
+    nsPerTetMin = run1["ranks"][0]["stepSeconds"]["min"] / run1["tets"]
+    val = validate(ranks, os.path.dirname(a.ranks) or ".", nsPerTet, nsPerTetMin, alpha, beta, ppy["alpha_s_min"],
                    ppy["beta_s_per_byte_min"])
 
     at = lambda pr, P: {k: next(p for p in v if p["P"] == P)["efficiency"] for k, v in pr.items()}
@@ -338,7 +341,7 @@ def main():
     res = {
         "inputs": {"alpha_s": alpha, "beta_s_per_byte": beta, "from": a.pingpong,
                    "alpha_yield_s": ppy["alpha_s_min"], "beta_yield_s_per_byte": ppy["beta_s_per_byte_min"],
-                   "ns_per_tet": 1e9 * nsPerTet,
+                   "ns_per_tet": 1e9 * nsPerTet, "ns_per_tet_from_min_step": 1e9 * nsPerTetMin,
                    "ns_per_tet_from": "P = 1 run: median step seconds / tets (%d tets, 1 thread, contact-free)"
                                       % run1["tets"],
                    "partition": a.partition, "partition_more": a.partition_more if more else None,
