@@ -322,8 +322,7 @@ def main():
     ppy = json.load(open(a.pingpong_yield)) if os.path.exists(a.pingpong_yield) else pp
     ranks = json.load(open(a.ranks))
     part = json.load(open(a.partition))
-    rows = part["rows"]
-    rows = [dict(r, source=a.partition) for r in rows]
+    rows = [dict(r, source=a.partition) for r in part["rows"]]
     more = None
     if a.partition_more and os.path.exists(a.partition_more):
         more = json.load(open(a.partition_more))
