@@ -9,7 +9,7 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py bench accuracy compare-builds clean
+.PHONY: deps build install demo test test-cpp test-py bench bench-mpi accuracy compare-builds clean
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -39,6 +39,25 @@ test-py:
 bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
+
+# MPI (doc/parallel.md): ping-pong alpha/beta, the contact-free scene on 1-4
+# ranks, the partitioner to 128 ranks, the weak-scaling model to 16,384;
+# about 3-4 minutes.  Combined figures: out/bench/mpi.json, plots in doc/img.
+MPIRUN := timeout 120 mpiexec --allow-run-as-root --oversubscribe
+bench-mpi: build
+	@mkdir -p out/bench
+	@echo "bench-mpi: ping-pong, busy polling, then passive waits (as the oversubscribed runs)"
+	@OMP_NUM_THREADS=1 $(MPIRUN) -n 2 $(PY) scripts/bench/mpi/pingpong.py --out out/bench/mpi_pingpong.json
+	@OMP_NUM_THREADS=1 OMPI_MCA_mpi_yield_when_idle=1 $(MPIRUN) -n 2 $(PY) scripts/bench/mpi/pingpong.py \
+	  --trials 5 --budget 0.02 --out out/bench/mpi_pingpong_yield.json
+	@echo "bench-mpi: the partitioner alone, 1..128 ranks of 50,000 nodes"
+	@OMP_NUM_THREADS=1 timeout 400 $(BUILD)/mpi_partition_model --out out/bench/mpi_partition.json > out/bench/mpi_partition.log
+	@tail -1 out/bench/mpi_partition.log
+	@echo "bench-mpi: the contact-free scene on 1..4 ranks"
+	@$(PY) scripts/bench/mpi/run_ranks.py --build $(BUILD) --out out/bench/mpi_ranks.json
+	@echo "bench-mpi: the weak-scaling model"
+	@MPLBACKEND=Agg $(PY) scripts/bench/mpi/model.py --out out/bench/mpi_model.json --img doc/img \
+	  --partition-more bench/logs/mpi_partition_512.json --combined out/bench/mpi.json
 
 # What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md
 accuracy: build
