@@ -56,7 +56,7 @@ void Domain::build(const PartitionOptions& optIn) {
     contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
     cNbr_.clear(), cNbrPrev_.clear(), cRecv_.clear(), cSend_.clear();
     ghostTouched_.clear();
-    built_ = true;
+    built_ = everBuilt_ = true;
     markCurrent();
     if (contactHalo_) sendContactHalo();  // collective: every rank builds at the same step
 }
@@ -363,7 +363,13 @@ double Domain::load() const {
 }
 
 void Domain::rebalance(const PartitionOptions& opt) {
-    gatherAll();  // positions, velocities, forces: every rank alike
+    gatherAll();   // positions, velocities, forces: every rank alike
+    gatherRows();  // and every state row
+    ++rebalances;
+    build(opt);  // the same new split on every rank: they now hold the same state
+}
+
+void Domain::gatherRows() {
     // Every row of every migrating state column from the rank that held it
     // true.  Every rank knows the owners, so the rows travel without ids.
     StateColumns cols = w_.stateColumns();
@@ -408,8 +414,6 @@ void Domain::rebalance(const PartitionOptions& opt) {
                     at += rowBytes;
                 }
         }
-    ++rebalances;
-    build(opt);  // the same new split on every rank: they now hold the same state
 }
 
 void Domain::gatherAll() {

@@ -37,6 +37,7 @@ public:
     // Splits the world as it stands (all pieces added) and builds the halo.
     void build(const PartitionOptions& opt);
     bool built() const { return built_; }
+    bool everBuilt() const { return everBuilt_; }
     void invalidate() { built_ = false; }
 
     const Partition& partition() const { return part_; }
@@ -86,6 +87,9 @@ public:
     // contact histories: Phase::stateColumns) goes from the rank that held
     // it to every rank first.  Collective.
     void rebalance(const PartitionOptions& opt);
+    // Every state row (Phase::stateColumns: positions, velocities, contact
+    // histories) from the rank that holds it true to every rank.  Collective.
+    void gatherRows();
     long rebalances = 0;
     // Every rank learns every node's position and velocity (output, Python
     // reads, restarts): one gather of the owned nodes.
@@ -116,7 +120,7 @@ private:
     std::vector<int> cNbr_, cNbrPrev_;
     std::vector<std::vector<int32_t>> cRecv_, cSend_;
     std::vector<std::vector<double>> cSendBuf_, cRecvBuf_;
-    bool built_ = false;
+    bool built_ = false, everBuilt_ = false;
     Partition part_;
     Halo halo_;
     std::vector<double> ghostForce_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <type_traits>
 
+#include "../parallel/Domain.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -22,6 +23,9 @@ StateColumns World::stateColumns() {
 
 WorldState World::saveState() const {
     requireGathered("saveState");
+    if (domain_ && domain_->built() && rowsGatheredIter_ != iter)
+        throw InputError("saveState under MPI needs every rank's contact histories: call gatherState() on every "
+                         "rank first (qdem.saveState and O.save do)");
     WorldState s;
     const int64_t counts[4] = {static_cast<int64_t>(nNodes()), static_cast<int64_t>(nTets()),
                                static_cast<int64_t>(pieces.size()), static_cast<int64_t>(surfNodes.size())};
@@ -30,9 +34,9 @@ WorldState World::saveState() const {
     const int64_t steps[3] = {iter, sleepPhase_.sleepCount(), sleepPhase_.wakeCount()};
     s.put("time", clock, 1);
     s.put("iter", steps, 3);
-    const double e[10] = {energy.kinetic,        energy.elastic,  energy.gravity,      energy.viscous,
-                          energy.contactElastic, energy.contactDamping, energy.friction, energy.boundaryWork,
-                          energy.localDamping,   energy.sleep};
+    const Energy& et = energyTotal();  // under MPI: the sums over the ranks
+    const double e[10] = {et.kinetic,        et.elastic,        et.gravity,  et.viscous,      et.contactElastic,
+                          et.contactDamping, et.friction,       et.boundaryWork, et.localDamping, et.sleep};
     s.put("energy", e, 10);
     // (the columns are only read here)
     for (const auto& r : const_cast<World*>(this)->stateColumns().refs)
@@ -73,6 +77,13 @@ void World::loadState(const WorldState& s) {
     sleepPhase_.setCounts(steps[1], steps[2]);
     energy = Energy{e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9]};
     for (Phase* p : phases()) p->loadFields(s);
+    if (domain_) {
+        // Every rank loaded the whole state: split again from it at the next
+        // step, and the saved energy sums count once (on rank 0).
+        domain_->invalidate();
+        energyTotal_ = energy;
+        if (domain_->rank() != 0) energy = Energy{};
+    }
     updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
     contactsActive_ = false;
     for (Phase* p : phases()) p->stateLoaded();

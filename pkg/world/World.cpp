@@ -262,9 +262,13 @@ void World::prepareDomain() {
                                  "QdemEngine.broadPhase = 'triangles' (the seed's cases A/B/C run on one process)");
     if (!spheres.id.empty())
         throw InputError(where + " does not couple YADE spheres yet: run on one process");
+    const bool first = !domain_->everBuilt();
     domain_->build(partitionOptions);
     sleepPhase_.awakeSetChanged();
     energyTotal_ = energy;
+    // Until now every rank summed the whole world's energies: from here on
+    // each sums its share, so what was summed counts once (on rank 0).
+    if (first && domain_->rank() != 0) energy = Energy{};
 }
 
 void World::rebalance() {
@@ -272,6 +276,14 @@ void World::rebalance() {
     domain_->rebalance(partitionOptions);
     sleepPhase_.awakeSetChanged();
     gatheredIter_ = iter;  // rebalance gathered every node
+}
+
+void World::gatherState() {
+    if (domain_ && domain_->built()) {
+        domain_->gatherAll();
+        domain_->gatherRows();
+    }
+    gatheredIter_ = rowsGatheredIter_ = iter;
 }
 
 void World::gatherAll() {

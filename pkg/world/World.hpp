@@ -137,6 +137,10 @@ public:
     // contact history to its new owner (collective; the step does it when
     // the load drifts past settings.rebalanceThreshold).  No-op on one process.
     void rebalance();
+    // gatherAll plus every contact history row: after it every rank holds the
+    // whole state, as one process would (saveState needs it under MPI).
+    // Collective; a no-op on one process.
+    void gatherState();
     // Every node's position, velocity and force is current on this rank
     // (always on one process; under MPI right after gatherAll()).
     bool stateCurrent() const;
@@ -272,6 +276,7 @@ private:
     std::unique_ptr<Domain> domain_;
     Energy energyTotal_;
     long gatheredIter_ = -1;  // the step gatherAll() last made every node current at
+    long rowsGatheredIter_ = -1;  // and gatherState() every history row
     void prepareDomain();
     // Throws InputError under MPI unless gatherAll() made every node current this step.
     void requireGathered(const char* what) const;

@@ -63,6 +63,14 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
         "Under MPI: splits the world again along the Hilbert curve from the current positions and contact work, "
         "moving every node's state and contact history to its new owner (collective: every rank calls it; the "
         "step does so by itself when the load drifts past rebalanceThreshold).  A no-op on one process.");
+    world.def(
+        "gatherState",
+        [](World& w) {
+            py::gil_scoped_release nogil;
+            w.gatherState();
+        },
+        "Under MPI: every rank learns the whole state (node states and contact histories), as one process holds "
+        "it; saveState needs it (collective).  A no-op on one process.");
     world.def_property_readonly("stateCurrent", &World::stateCurrent,
                                 "Is every node's pos, vel and force current on this rank?  Always on one process; "
                                 "under MPI right after gatherAll().");

@@ -29,6 +29,8 @@ import weakref
 
 import numpy as np
 
+from . import parallel
+
 FORMAT = 1
 TAG = "qdem"
 
@@ -67,6 +69,8 @@ def sceneBlob(world, O):
         arrays["refPos%d" % i] = np.array(p.refPos)
         arrays["tets%d" % i] = np.array(p.tets, dtype=np.int32)
         arrays["oldOf%d" % i] = np.asarray(p.originalNodeIds, dtype=np.int32)
+    if core.mpiSize > 1:
+        core.gatherState()  # collective: under mpiexec every rank runs O.save
     for name, data in core.saveState().items():
         arrays["state:" + name] = np.frombuffer(data, dtype=np.uint8)
     for e in O.engines:
@@ -217,13 +221,17 @@ def _wrapErrors(orig):
     return wrapped
 
 
-def _wrapSave(orig):
+def _wrapSave(orig, toFile=True):
     def wrapped(self, *a, **k):
         from .world import defaultWorld
         w = defaultWorld()
         if w.pieces or any(_idOf(e) for e in self.engines):
             self.tags[TAG] = sceneBlob(w, self)
         try:
+            # Under mpiexec every rank runs the script: rank 0 alone writes a
+            # file (O.saveTmp keeps each rank's copy in its own memory).
+            if toFile and not parallel.isWriter():
+                return None
             return orig(self, *a, **k)
         finally:
             if _blob(self):
@@ -260,7 +268,7 @@ def install():
     from yade import wrapper
     Omega = wrapper.Omega
     plan = {"run": _wrapErrors, "step": _wrapErrors, "wait": _wrapErrors,
-            "save": _wrapSave, "saveTmp": _wrapSave,
+            "save": _wrapSave, "saveTmp": lambda o: _wrapSave(o, toFile=False),
             "load": _wrapLoad, "loadTmp": _wrapLoad,
             "reset": _wrapReset, "resetThisScene": _wrapReset, "resetCurrentScene": _wrapReset}
     for name, wrap in plan.items():

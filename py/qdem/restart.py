@@ -19,6 +19,7 @@ import zipfile
 
 import numpy as np
 
+from . import parallel
 from .world import defaultWorld
 
 FORMAT = 1
@@ -29,10 +30,14 @@ def saveState(path, world=None, **extra):
     string values (e.g. O.time of the script) are stored along and returned by
     loadState."""
     core = (world or defaultWorld()).core
+    if core.mpiSize > 1:
+        core.gatherState()  # collective: every rank calls saveState; rank 0 writes (doc/parallel.md)
     arrays = {"qdem:" + k: np.frombuffer(v, dtype=np.uint8) for k, v in core.saveState().items()}
     arrays["format"] = np.array(FORMAT)
     for k, v in extra.items():
         arrays["extra:" + k] = np.asarray(v)
+    if not parallel.isWriter():
+        return
     tmp = path + ".tmp.npz"
     np.savez(tmp, **arrays)
     os.replace(tmp, path)

@@ -151,3 +151,21 @@ def test_static_friction_holds_across_a_rank_boundary():
     assert r["vmax"] < 1e-6
     for a, b in zip((x0, xm, x1), r["serial"]):
         assert np.abs(a - np.array(b)).max() < 1e-12
+
+
+def test_restart_on_ranks_continues_the_run(tmp_path):
+    # qdem.saveState on P ranks gathers every rank's histories, rank 0 writes;
+    # loaded on P ranks the run goes on as if never stopped, energies counted once.
+    requireMpi()
+    import os
+    os.environ["QDEM_MPI_TMP"] = str(tmp_path)
+    try:
+        rc, out = mpirun(3, python("tests/mpi/check_restart.py"))
+    finally:
+        del os.environ["QDEM_MPI_TMP"]
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    assert r["contVsSerial"] <= 1e-12 * r["disp"]
+    assert r["restartVsCont"] <= 1e-13 * r["disp"]
+    assert r["energyRestart"] == pytest.approx(r["energyCont"], rel=1e-12)
+    assert r["energyCont"] == pytest.approx(r["energySerial"], rel=1e-10)
