@@ -36,6 +36,11 @@ r.core.gatherAll()
 xRest = np.array(r.core.pos)
 eRest = r.core.energy["total"]
 if comm.rank == 0:
+    # The file is the serial one: one process loads it and goes on alike.
+    one = scenes.withContacts()
+    qdem.loadState(path, world=one)
+    one.core.step(dt, N)
+    xOne = np.array(one.core.pos)
     s = scenes.withContacts()
     s.core.step(dt, 2 * N)
     x0 = scenes.withContacts().core.pos
@@ -43,6 +48,8 @@ if comm.rank == 0:
     d = float(np.abs(xs - x0).max())
     print("RESULT " + json.dumps({"ranks": comm.size, "disp": d, "contVsSerial": float(np.abs(xCont - xs).max()),
                                   "restartVsCont": float(np.abs(xRest - xCont).max()),
+                                  "serialRestartVsCont": float(np.abs(xOne - xCont).max()),
+                                  "energySerialRestart": one.core.energy["total"],
                                   "energyRestart": eRest, "energyCont": w.core.energy["total"],
                                   "energySerial": s.core.energy["total"]}), flush=True)
     os.remove(path)

@@ -167,5 +167,19 @@ def test_restart_on_ranks_continues_the_run(tmp_path):
     r = result(out)
     assert r["contVsSerial"] <= 1e-12 * r["disp"]
     assert r["restartVsCont"] <= 1e-13 * r["disp"]
+    # ... and loaded by one process: the file is the serial one.
+    assert r["serialRestartVsCont"] <= 1e-12 * r["disp"]
+    assert r["energySerialRestart"] == pytest.approx(r["energyCont"], rel=1e-10)
     assert r["energyRestart"] == pytest.approx(r["energyCont"], rel=1e-12)
     assert r["energyCont"] == pytest.approx(r["energySerial"], rel=1e-10)
+
+
+def test_yade_save_and_load_under_mpiexec(tmp_path):
+    requireMpi()
+    path = str(tmp_path / "scene.yade.gz")
+    rc, out = mpirun(3, ["yade", "-n", "-x", "tests/mpi/yade_save_load.py", path], timeout=300)
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    assert r["ranks"] == 3 and r["iter"][0] == r["iter"][1] == 600
+    assert r["dx"] <= 1e-15
+    assert r["floor"][0] != 0 and r["floor"][1] == pytest.approx(r["floor"][0], rel=1e-12)
