@@ -85,9 +85,9 @@ public:
     // n, pairStart of n+1 and pairPiece of pairStart[n]: see SphereSet).
     // Contact history is carried over for (sphere id, piece) pairs kept.
     void setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
-                    const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
+                    const double* friction, const double* restitution, const double* sphereMass, const int32_t* pairStart,
                     const int32_t* pairPiece) {
-        spherePhase_.setSpheres(n, id, radius, young, ktRatio, friction, restitution, mass, pairStart, pairPiece);
+        spherePhase_.setSpheres(n, id, radius, young, ktRatio, friction, restitution, sphereMass, pairStart, pairPiece);
     }
 
     // ---- stepping ---------------------------------------------------------
