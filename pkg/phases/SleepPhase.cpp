@@ -88,11 +88,13 @@ void SleepPhase::setDynamic(std::size_t p, bool dynamic) {
 void SleepPhase::putToSleep(std::size_t p) {
     const PieceInfo& P = w_.pieces[p];
     // Velocities to zero: the kinetic energy left is booked as removed.
+    // (Under MPI each rank books its own nodes' share: Domain::finishStep sums.)
+    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
     double ek = 0;
     for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n)
         for (int d = 0; d < 3; ++d) {
             double& v = w_.vel[3 * n + d];
-            ek += 0.5 * w_.mass[n] * v * v;
+            if (!dom || dom->owns(n)) ek += 0.5 * w_.mass[n] * v * v;
             v = 0;
         }
     if (w_.settings.trackEnergy) w_.energy.sleep += ek;
@@ -114,6 +116,7 @@ void SleepPhase::putToSleep(std::size_t p) {
     if (pc.listValid && pc.listPos.size() == 3 * w_.surfNodes.size())
         for (int32_t s = P.surfBegin; s < P.surfEnd; ++s) {
             const int32_t n = w_.surfNodes[s];
+            if (dom && !dom->current(n)) continue;  // this rank's lists hold current nodes only
             double d2 = 0;
             for (int d = 0; d < 3; ++d) d2 += std::pow(w_.pos[3 * n + d] - pc.listPos[3 * s + d], 2);
             m2 = std::max(m2, d2);
@@ -131,11 +134,14 @@ void SleepPhase::run(double dt) {
         return;
     }
     const double v2 = w_.settings.sleepVelocity * w_.settings.sleepVelocity;
-    // Largest node speed of each awake piece, from the integration.
+    // Largest node speed of each awake piece, from the integration (under
+    // MPI the largest over the ranks: every rank then decides alike, as the
+    // pieces' boxes, neighbours and obstacles are the global ones too).
+    for (std::size_t p = 0; p < np; ++p) pieceSpeed2_[p] = asleep_[p] ? pieceSpeed2_[p] : w_.integrationPhase_.maxSpeed2(p);
+    if (w_.domain() && w_.domain()->built()) w_.domain_->comm().allreduceMax(pieceSpeed2_.data(), static_cast<int>(np));
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) continue;
-        const double m = w_.integrationPhase_.maxSpeed2(p);
-        pieceSpeed2_[p] = m;
+        const double m = pieceSpeed2_[p];
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
     const PieceContactState& pc = w_.pieceContactPhase_.state();

@@ -192,6 +192,15 @@ void World::updatePieceBounds(bool all) {
                 pieceHi_[3 * ip + d] = std::max(pieceHi_[3 * ip + d], pos[3 * n + d] + r);
             }
         }
+        // With sleeping on, every rank decides which pieces sleep: they need
+        // the same boxes (neighbour pieces, obstacles near), so the whole
+        // pieces' boxes (one reduction).
+        if (settings.sleepVelocity > 0) {
+            for (std::size_t i = 0; i < 3 * np; ++i) pieceHi_[i] = -pieceHi_[i];
+            domain_->comm().allreduceMin(pieceLo_.data(), static_cast<int>(3 * np));
+            domain_->comm().allreduceMin(pieceHi_.data(), static_cast<int>(3 * np));
+            for (std::size_t i = 0; i < 3 * np; ++i) pieceHi_[i] = -pieceHi_[i];
+        }
         return;
     }
     for (std::size_t ip = 0; ip < np; ++ip) {
@@ -253,9 +262,6 @@ void World::setCommunicator(std::shared_ptr<Communicator> comm) {
 void World::prepareDomain() {
     if (domain_->built()) return;
     const std::string where = cat("QDEM under MPI (", domain_->size(), " ranks)");
-    if (settings.sleepVelocity > 0)
-        throw InputError(where + " does not put pieces to sleep yet: set QdemEngine.sleepVelocity = 0, or run on one "
-                                 "process");
     if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) &&
         settings.broadPhase != BroadPhase::Triangles)
         throw InputError(where + " finds piece contacts with the default broad phase only: set "

@@ -52,8 +52,8 @@ def check():
 b = caught(check)
 
 # (c) What is not distributed yet is refused on every rank alike, naming the fix.
-w = scenes.contactFree()
-w.core.sleepVelocity = 1e-3
+w = scenes.withContacts()
+w.core.broadPhase = 1  # the seed's case A
 w.core.setCommunicator(comm)
 c = caught(lambda: w.core.step(dt, 1))
 # (d) Ranks that built different scenes (unseeded random placement) are

@@ -57,9 +57,9 @@ def test_error_on_one_rank_stops_every_rank(P):
     assert len(msgs) == 1
     kind, msg = msgs.pop()
     assert kind == "StabilityError" and "not finite" in msg
-    # (c) what is not distributed yet (sleeping) is refused on every rank with the fix.
+    # (c) what is not distributed yet (the seed's broad phases) is refused on every rank with the fix.
     for c in caught:
-        assert c["c"][0] == "ValueError" and "sleepVelocity = 0" in c["c"][1]
+        assert c["c"][0] == "ValueError" and "broadPhase = 'triangles'" in c["c"][1]
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
@@ -183,3 +183,21 @@ def test_yade_save_and_load_under_mpiexec(tmp_path):
     assert r["ranks"] == 3 and r["iter"][0] == r["iter"][1] == 600
     assert r["dx"] <= 1e-15
     assert r["floor"][0] != 0 and r["floor"][1] == pytest.approx(r["floor"][0], rel=1e-12)
+
+
+@pytest.mark.parametrize("P", [2, 3])
+def test_sleeping_pieces_on_ranks_as_serially(P):
+    # Every rank takes the same sleep decisions: the ranks' largest node
+    # speeds and the whole pieces' boxes are reduced first.
+    requireMpi()
+    rc, out = mpirun(P, python("tests/mpi/check_sleep.py"))
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    s, ss = np.array(r["series"]), np.array(r["serialSeries"])
+    assert np.array_equal(s[:, 0], ss[:, 0])  # pieces asleep, every 100 steps
+    assert ss[-1, 0] == len(r["serialAsleep"])  # the scene comes to rest
+    assert all(a == r["serialAsleep"] for a in r["asleep"])
+    # Sleeping thresholds turn rounding into ~1e-4 of the displacement, the
+    # same between 1 and 2 threads serially: that is the licence.
+    assert r["dx"] <= max(10 * r["dxThreads"], 1e-12 * r["disp"])
+    assert np.abs(s[:, 1] - ss[:, 1]).max() <= 1e-4 * np.abs(ss[:, 1]).max()
