@@ -262,8 +262,10 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
-        if self.progressPeriod and core.iter % self.progressPeriod == 0 and parallel.isWriter():
-            self._progress(core)
+        if self.progressPeriod and core.iter % self.progressPeriod == 0:
+            counts = parallel.summedCounts(core)  # (collective under MPI: every rank gets here)
+            if parallel.isWriter():
+                self._progress(core, counts)
 
     def _checkInverted(self, core, dt):
         # Raises StabilityError (naming piece, element, volume ratio, fix) for a law that
@@ -287,12 +289,11 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         inv["now"] = n
         inv["max"] = max(inv["max"], n)
 
-    def _progress(self, core):
+    def _progress(self, core, c):
         # The QDEM clock (core.iter, core.time): it goes on across restarts,
         # where O.iter and O.time start again from 0.  The share done and the
         # time left come from O.run's target (O.stopAtIter) when it has one.
         now = time.time()
-        c = core.contactCounts
         line = "qdem: step %d  t=%.6g s" % (core.iter, core.time)
         rate = None
         if self._lastProgress is not None and core.iter > self._lastProgress[0]:

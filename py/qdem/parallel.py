@@ -68,3 +68,15 @@ def attach(world):
             "build again (or run without mpiexec)" % size)
     from mpi4py import MPI
     core.setCommunicator(MPI.COMM_WORLD)
+
+
+def summedCounts(core):
+    """core.contactCounts summed over the ranks (each rank counts the contacts
+    it computed); the counts themselves on one process.  Collective under MPI."""
+    c = dict(core.contactCounts)
+    if core.mpiSize <= 1:
+        return c
+    from mpi4py import MPI
+    keys = sorted(c)
+    every = MPI.COMM_WORLD.allgather([c[k] for k in keys])
+    return {k: sum(r[i] for r in every) for i, k in enumerate(keys)}
