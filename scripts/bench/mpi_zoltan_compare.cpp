@@ -7,6 +7,8 @@
 //
 // Methods:
 //   hilbert      ours (partitionHilbert, default options)
+//   hilbert-split  ours with no piece kept whole (wholePieceFraction = 0):
+//                like for like with zoltan-hsfc, which does not know pieces
 //   zoltan-hsfc  Zoltan's Hilbert space-filling curve (LB_METHOD=HSFC) on
 //                the nodes, each weighing a quarter of its tets
 //   zoltan-rcb   Zoltan's recursive coordinate bisection (LB_METHOD=RCB),
@@ -195,9 +197,10 @@ Row measure(const RawScene& s, const std::string& scene, const std::string& meth
     const PartitionInput in = s.input();
     double t0 = omp_get_wtime();
     Partition p;
-    if (method == "hilbert") {
+    if (method == "hilbert" || method == "hilbert-split") {
         PartitionOptions opt;
         opt.nRanks = P;
+        if (method == "hilbert-split") opt.wholePieceFraction = 0;
         p = partitionHilbert(in, opt);
     } else {
         const bool whole = method == "zoltan-hsfc-whole";
@@ -300,7 +303,8 @@ int main(int argc, char** argv) {
     for (const char* scene : {"pieces", "body", "mixed"}) {
         for (int P = 2; P <= maxRanks; P *= 2) {
             const RawScene s = makeScene(scene, P, nodesPerRank);
-            for (const char* method : {"hilbert", "zoltan-hsfc", "zoltan-hsfc-whole", "zoltan-rcb"}) {
+            for (const char* method :
+                 {"hilbert", "hilbert-split", "zoltan-hsfc", "zoltan-hsfc-whole", "zoltan-rcb"}) {
                 const Row r = measure(s, scene, method, P, reach, imbalanceTol);
                 rows.push_back(r);
                 const HaloFigures& h = r.halo;
