@@ -55,6 +55,9 @@ if comm.rank == 0:
         "nTets": int(len(dist.core.tets)),
         "neighbours": [c[3] for c in counts],
         "imbalance": stats["imbalance"],
+        # Momentum ledger: the same total momentum as serially.
+        "momentum": (np.array(dist.core.mass)[:, None] * v).sum(axis=0).tolist(),
+        "serialMomentum": (np.array(ser.core.mass)[:, None] * vs).sum(axis=0).tolist(),
         "series": series,
         "serialSeries": sseries,
     }

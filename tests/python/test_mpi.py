@@ -36,6 +36,9 @@ def test_contact_free_scene_matches_serial(P):
     assert fmax > 1.0, "the scene must push on the floor during the run"
     assert np.abs(s[:, :6] - ss[:, :6]).max() <= 1e-9 * fmax
     assert np.abs(s[:, 6:] - ss[:, 6:]).max() <= 1e-10 * np.abs(ss[:, 6:]).max()
+    # Momentum and energy ledgers as serial (energy: the total above, every 50 steps).
+    pm, ps = np.array(r["momentum"]), np.array(r["serialMomentum"])
+    assert np.abs(pm - ps).max() <= 1e-10 * max(np.abs(ps).max(), 1e-12)
 
 
 @pytest.mark.parametrize("P", [2, 3])
