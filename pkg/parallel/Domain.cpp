@@ -382,11 +382,14 @@ void Domain::gatherRows() {
             default: return 0;
         }
     };
+    // Rows of pieces added since the split (nodes beyond it) are the same on
+    // every rank already (every rank added them): -1, they stay.
+    const auto nodeOwner = [&](int32_t n) { return n < static_cast<int32_t>(part_.nodeOwner.size()) ? owner(n) : -1; };
     const auto ownerOf = [&](Rows k, std::size_t row) -> int {
         switch (k) {
-            case Rows::Node: return owner(static_cast<int32_t>(row));
-            case Rows::SurfaceNode: return owner(w_.surfNodes[row]);
-            default: return owner(std::min(S.edge[2 * row], S.edge[2 * row + 1]));
+            case Rows::Node: return nodeOwner(static_cast<int32_t>(row));
+            case Rows::SurfaceNode: return nodeOwner(w_.surfNodes[row]);
+            default: return nodeOwner(std::min(S.edge[2 * row], S.edge[2 * row + 1]));
         }
     };
     std::vector<uint8_t> mine, all;

@@ -269,6 +269,12 @@ void World::prepareDomain() {
     if (!spheres.id.empty())
         throw InputError(where + " does not couple YADE spheres yet: run on one process");
     const bool first = !domain_->everBuilt();
+    if (!first) {
+        // Split again (pieces were added): every rank must hold the whole
+        // state first, as the split is made by each rank from its own copy.
+        domain_->gatherAll();
+        domain_->gatherRows();
+    }
     domain_->build(partitionOptions);
     sleepPhase_.awakeSetChanged();
     energyTotal_ = energy;

@@ -204,3 +204,13 @@ def test_sleeping_pieces_on_ranks_as_serially(P):
     # same between 1 and 2 threads serially: that is the licence.
     assert r["dx"] <= max(10 * r["dxThreads"], 1e-12 * r["disp"])
     assert np.abs(s[:, 1] - ss[:, 1]).max() <= 1e-4 * np.abs(ss[:, 1]).max()
+
+
+def test_piece_added_mid_run_on_ranks():
+    # Every rank adds it; the world is split again from the gathered state.
+    requireMpi()
+    rc, out = mpirun(3, python("tests/mpi/check_add_piece.py"))
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    assert r["dx"] <= 1e-12 * r["disp"]
+    assert r["energy"][0] == pytest.approx(r["energy"][1], rel=1e-10)
