@@ -30,21 +30,14 @@ public:
     virtual void allgather(const double* mine, int n, double* all) = 0;
     // Every rank's byte block, in rank order (counts: bytes per rank).
     virtual void allgatherv(const std::vector<uint8_t>& mine, std::vector<uint8_t>& all, std::vector<int>& counts) = 0;
+    // v[0..nSum) summed and v[nSum..nSum+nMax) maximised over the ranks,
+    // the same bits on every rank and every run: a binomial tree of fixed
+    // shape to rank 0, then a broadcast (2 log2 P messages, not P vectors).
+    virtual void treeReduce(double* v, int nSum, int nMax) = 0;
     virtual void allreduceMax(double* v, int n) = 0;
     virtual void allreduceMin(double* v, int n) = 0;
     // Bytes and messages sent so far (the halo's counted cost).
     long bytesSent = 0, messagesSent = 0;
 };
-
-// The rank-ordered sum of n values over all ranks (deterministic).
-inline void orderedSum(Communicator& c, double* v, int n) {
-    std::vector<double> all(static_cast<std::size_t>(c.size()) * n);
-    c.allgather(v, n, all.data());
-    for (int i = 0; i < n; ++i) {
-        double s = 0;
-        for (int r = 0; r < c.size(); ++r) s += all[static_cast<std::size_t>(r) * n + i];
-        v[i] = s;
-    }
-}
 
 }  // namespace qdem

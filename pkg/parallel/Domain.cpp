@@ -54,6 +54,9 @@ void Domain::build(const PartitionOptions& optIn) {
     for (const auto& g : halo_.recv)
         for (const int32_t n : g) elementGhost_[n] = 1;
     contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
+    ownedSurf_.clear();
+    for (const int32_t n : halo_.ownedNodes)
+        if (w_.surfaceIndex().surfIndexOfNode[n] >= 0) ownedSurf_.push_back(n);
     cNbr_.clear(), cNbrPrev_.clear(), cRecv_.clear(), cSend_.clear();
     ghostTouched_.clear();
     built_ = everBuilt_ = true;
@@ -106,8 +109,7 @@ void Domain::sendContactHalo() {
     // This rank's box of owned surface nodes, its longest surface edge now,
     // the largest particle radius: gathered from every rank.
     double mine[8] = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300, 0, 0};
-    for (const int32_t n : halo_.ownedNodes) {
-        if (S.surfIndexOfNode[n] < 0) continue;
+    for (const int32_t n : ownedSurf_) {
         for (int d = 0; d < 3; ++d) {
             mine[d] = std::min(mine[d], w_.pos[3 * n + d]);
             mine[3 + d] = std::max(mine[3 + d], w_.pos[3 * n + d]);
@@ -150,8 +152,7 @@ void Domain::sendContactHalo() {
     for (std::size_t i = 0; i < nb; ++i) {
         const double* b = boxOf(cNbr_[i]);
         std::vector<double>& buf = cSendBuf_[i];
-        for (const int32_t n : halo_.ownedNodes) {
-            if (S.surfIndexOfNode[n] < 0) continue;
+        for (const int32_t n : ownedSurf_) {
             const double* x = &w_.pos[3 * n];
             bool in = true;
             for (int d = 0; d < 3 && in; ++d) in = x[d] >= b[d] - width && x[d] <= b[3 + d] + width;
@@ -309,7 +310,7 @@ void Domain::finishStep(const std::string& error) {
     const double t0 = omp_get_wtime();
         const std::size_t no = w_.obstacles.size();
     const bool energyOn = w_.settings.trackEnergy;
-    // [failed, reactions (6 per obstacle), energies (10), load] of every rank, in rank order.
+    // [failed, reactions (6 per obstacle), energies (10), load] of this rank.
     const std::size_t nv = 1 + 6 * no + (energyOn ? 10 : 0) + 1;
     std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
@@ -325,17 +326,12 @@ void Domain::finishStep(const std::string& error) {
                                e.contactDamping, e.friction, e.boundaryWork, e.localDamping, e.sleep};
         std::copy(es, es + 10, v.begin() + 1 + 6 * no);
     }
-    const int P = size();
-    std::vector<double> all(nv * P);
-    comm_->allgather(v.data(), static_cast<int>(nv), all.data());
-    for (std::size_t i = 0; i + 1 < nv; ++i) {  // summed in rank order: the same everywhere
-        double sum = 0;
-        for (int r = 0; r < P; ++r) sum += all[nv * r + i];
-        v[i] = sum;
-    }
-    double maxLoad = 0, sumLoad = 0;
-    for (int r = 0; r < P; ++r) maxLoad = std::max(maxLoad, all[nv * r + nv - 1]), sumLoad += all[nv * r + nv - 1];
-    loadImbalance = sumLoad > 0 ? maxLoad * P / sumLoad : 1.0;
+    // Summed (the load too, for its mean) and the load's maximum, in a tree
+    // of fixed shape: the same bits on every rank and every run.
+    v.push_back(v[nv - 1]);
+    comm_->treeReduce(v.data(), static_cast<int>(nv), 1);
+    const double sumLoad = v[nv - 1], maxLoad = v[nv];
+    loadImbalance = sumLoad > 0 ? maxLoad * size() / sumLoad : 1.0;
     seconds += omp_get_wtime() - t0;
     if (v[0] > 0) {
         const std::string msg = agree(error);

@@ -114,6 +114,7 @@ private:
     bool contactHalo_ = false;
     std::vector<uint8_t> current_, elementGhost_;
     std::vector<int32_t> currentSurf_;
+    std::vector<int32_t> ownedSurf_;  // owned surface nodes (global ids), ascending
     long currentVersion_ = 0;
     // Contact halo: neighbours and, per neighbour, the ghosts received from it
     // and the owned nodes sent to it in the last sendContactHalo.

@@ -1,5 +1,6 @@
 #include "MpiCommunicator.hpp"
 
+#include <algorithm>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -9,6 +10,7 @@ namespace qdem {
 namespace {
 constexpr int kHaloTag = 0x5144;   // "QD"; the duplicated communicator keeps it apart anyway
 constexpr int kSizedTag = 0x5145;  // messages of unknown size (contact halo)
+constexpr int kTreeTag = 0x5146;   // the end-of-step reduction
 
 void check(int rc, const char* what) {
     if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("QDEM MPI: ") + what + " failed");
@@ -90,6 +92,30 @@ void MpiCommunicator::allgatherv(const std::vector<uint8_t>& mine, std::vector<u
     all.resize(static_cast<std::size_t>(displ[size_ - 1]) + counts[size_ - 1]);
     check(MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displ.data(), MPI_BYTE, comm_),
           "MPI_Allgatherv");
+}
+
+void MpiCommunicator::treeReduce(double* v, int nSum, int nMax) {
+    const int n = nSum + nMax;
+    treeBuf_.resize(n);
+    // Rank r takes in, for k = 1, 2, 4, ... while r is a multiple of 2k,
+    // the partial of rank r + k (if there is one), then sends its own to
+    // r - (r mod 2k): the tree and the order of every sum are fixed by P.
+    for (int k = 1; k < size_; k *= 2) {
+        if (rank_ % (2 * k) == 0) {
+            if (rank_ + k < size_) {
+                check(MPI_Recv(treeBuf_.data(), n, MPI_DOUBLE, rank_ + k, kTreeTag, comm_, MPI_STATUS_IGNORE),
+                      "MPI_Recv");
+                for (int i = 0; i < nSum; ++i) v[i] += treeBuf_[i];
+                for (int i = nSum; i < n; ++i) v[i] = std::max(v[i], treeBuf_[i]);
+            }
+        } else {
+            check(MPI_Send(v, n, MPI_DOUBLE, rank_ - k, kTreeTag, comm_), "MPI_Send");
+            bytesSent += static_cast<long>(n * sizeof(double));
+            ++messagesSent;
+            break;
+        }
+    }
+    check(MPI_Bcast(v, n, MPI_DOUBLE, 0, comm_), "MPI_Bcast");
 }
 
 void MpiCommunicator::allreduceMax(double* v, int n) {

@@ -24,6 +24,7 @@ public:
                        std::vector<std::vector<double>>& recv) override;
     void allgather(const double* mine, int n, double* all) override;
     void allgatherv(const std::vector<uint8_t>& mine, std::vector<uint8_t>& all, std::vector<int>& counts) override;
+    void treeReduce(double* v, int nSum, int nMax) override;
     void allreduceMax(double* v, int n) override;
     void allreduceMin(double* v, int n) override;
 
@@ -31,6 +32,7 @@ private:
     MPI_Comm comm_ = MPI_COMM_NULL;
     int rank_ = 0, size_ = 1;
     std::vector<MPI_Request> requests_;
+    std::vector<double> treeBuf_;
 };
 
 }  // namespace qdem
