@@ -53,21 +53,76 @@ def _stopXvfb():
             _xvfb.kill()
 
 
-def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None, size=(1280, 800)):
+def snapshot(world, path, title="", elev=18, azim=-60, vmax=None, floor=None, pieces=None, size=(1280, 800),
+             focus=None, around=2, moving=0.25):
     """Write a PNG of every piece's surface (or only of the piece indices in
     `pieces`, framed on them: a close-up); each triangle takes the von Mises
     stress of its tetrahedron.  vmax fixes the colour scale across frames; a
-    floor height draws the floor.  Returns the vmax used."""
+    floor height draws the floor.  Returns the vmax used.
+
+    focus: the camera follows part of the scene, everything else still drawn
+    around it.  "front": the pieces moving now (frontPieces: the fastest piece
+    and its neighbours along the line moving at least `moving` times as fast)
+    and `around` more on either side; or a list of piece indices.  The camera
+    looks from `elev`/`azim` (azimuth measured from the line's axis when the
+    drawn pieces form a line) and the colour scale is the focused pieces'."""
     core = world.core
     vm = vonMises(core.stress())
     tris, colors = [], []
-    shown = range(core.nPieces) if pieces is None else pieces
+    shown = list(range(core.nPieces) if pieces is None else pieces)
+    surf = {p: core.pieceSurface(p) for p in shown}
     for p in shown:
-        s = core.pieceSurface(p)
-        tris.append(s["triangles"])
-        colors.append(vm[s["triTet"]])
+        tris.append(surf[p]["triangles"])
+        colors.append(vm[surf[p]["triTet"]])
+    framed = None
+    if focus is not None:
+        if isinstance(focus, str):
+            if focus != "front":
+                raise ValueError("qdem.render.snapshot: focus=%r; give focus='front' or a list of piece indices"
+                                 % (focus,))
+            ps = [world.pieces[p] for p in shown]
+            speeds = [float(np.sqrt((p.vel ** 2).sum(axis=1)).max()) for p in ps]
+            focus = [shown[i] for i in frontPieces([p.refPos.mean(axis=0) for p in ps], speeds, around, moving)]
+        focus = [int(p) for p in focus]
+        if not focus or any(p not in surf for p in focus):
+            raise ValueError("qdem.render.snapshot: focus=%s must name drawn pieces (0..%d%s)"
+                             % (focus, core.nPieces - 1, "" if pieces is None else ", within pieces="))
+        framed = np.unique(np.concatenate([surf[p]["triangles"].ravel() for p in focus]))
+        if vmax is None:
+            vmax = float(np.max(np.concatenate([vm[surf[p]["triTet"]] for p in focus])))
     return surfacePlot(core.pos, np.vstack(tris), np.concatenate(colors), path, title, elev, azim, vmax, floor,
-                       fit=pieces is not None, size=size)
+                       fit=pieces is not None or framed is not None, size=size, frame=framed)
+
+
+def frontPieces(centres, speeds, around=2, moving=0.25):
+    """Indices of the pieces at a propagation front, in their order along the
+    line: the fastest piece, its neighbours on either side (in a row) moving
+    at least `moving` times as fast, and `around` more pieces on either side.
+    `centres` order the pieces along the line (their projection on the
+    centres' principal axis; give reference centres: fallen pieces keep their
+    place); `speeds` are each piece's fastest node speed.  Nothing moving:
+    every piece."""
+    c = np.asarray(centres, float)
+    v = np.asarray(speeds, float)
+    if len(c) != len(v) or len(c) == 0:
+        raise ValueError("frontPieces: %d centres for %d speeds" % (len(c), len(v)))
+    if len(c) > 1:
+        w, V = np.linalg.eigh(np.cov((c - c.mean(axis=0)).T))
+        along = (c - c.mean(axis=0)) @ V[:, np.argmax(w)]
+        order = np.argsort(along if along[0] <= along[-1] else -along, kind="stable")  # from the first piece
+    else:
+        order = np.arange(1)
+    top = float(v.max())
+    if not top > 0:
+        return [int(i) for i in order]
+    s = v[order]
+    k = int(np.argmax(s))
+    lo = hi = k
+    while lo > 0 and s[lo - 1] >= moving * top:
+        lo -= 1
+    while hi < len(s) - 1 and s[hi + 1] >= moving * top:
+        hi += 1
+    return [int(i) for i in order[max(0, lo - around):hi + around + 1]]
 
 
 def surfaceOfTets(tets):
@@ -83,30 +138,31 @@ def surfaceOfTets(tets):
 
 
 def surfacePlot(X, tris, val, path, title="", elev=18, azim=-60, vmax=None, floor=None, fit=False,
-                size=(1280, 800)):
+                size=(1280, 800), frame=None):
     """Write a PNG of triangles `tris` over node positions X, coloured by the
     per-triangle values `val` (von Mises stress [Pa]), the camera looking from
     elevation `elev` and azimuth `azim` [deg] at the triangles and framed on
-    them (fit=True: tighter, for close-ups)."""
+    them (fit=True: tighter, for close-ups), or on the nodes `frame` (indices
+    into X: the camera follows those, the rest drawn around them)."""
     vmax = float(vmax or max(float(np.max(val)), 1e-30))
     X, tris, val = np.asarray(X, float), np.asarray(tris), np.asarray(val, float)
     ext = np.ptp(X[np.unique(tris)][:, :2], axis=0)
-    if size == (1280, 800) and max(ext) > 4 * max(min(ext), 1e-300):
+    if frame is None and size == (1280, 800) and max(ext) > 4 * max(min(ext), 1e-300):
         size = (1600, 640)  # a long line of pieces: a wide picture
     try:
         ok = _display()
         if ok:
-            _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size)
+            _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size, frame)
             return vmax
         why = "no X display and no Xvfb (apt-get install xvfb)"
     except ImportError:
         why = "VTK's Python module is missing (apt-get install python3-vtk9)"
     warnings.warn("qdem.render: %s; drawing %s with matplotlib instead" % (why, path), RuntimeWarning)
-    _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit)
+    _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, frame)
     return vmax
 
 
-def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size):
+def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size, frame):
     from vtkmodules.util import numpy_support as ns
     from vtkmodules.vtkCommonCore import vtkLookupTable, vtkPoints
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
@@ -210,7 +266,8 @@ def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size):
         light.SetPosition(*position)
         light.SetIntensity(intensity)
         ren.AddLight(light)
-    _frame(ren.GetActiveCamera(), X[used], elev, azim, size, 1.08 if fit else 1.15)
+    setCamera(ren.GetActiveCamera(), *camera(X[used] if frame is None else X[frame], elev, azim, size,
+                                             1.08 if fit else 1.15, line=X[used], follow=frame is not None))
     ren.ResetCameraClippingRange()
     win = vtkRenderWindow()
     win.SetOffScreenRendering(1)
@@ -230,19 +287,32 @@ def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size):
     os.replace(tmp, path)
 
 
-def _frame(cam, P, elev, azim, size, margin, viewAngle=30.0):
-    """Point the camera at the points P from elevation/azimuth [deg] and set its
-    distance so that they fill the picture (with a margin): the bounding box
-    of P projected on the picture's axes.  An elongated set (a domino line) is
-    seen from across its long axis: the azimuth is taken relative to it."""
+def camera(P, elev, azim, size, margin, viewAngle=30.0, line=None, follow=False):
+    """The camera (focal point, position, view-up, view angle [deg]) looking
+    at the points P from elevation/azimuth [deg], at the distance where they
+    fill the picture (with a margin): the bounding box of P projected on the
+    picture's axes.  When the points `line` (default P) form an elongated set
+    (a domino line, its points in order), the azimuth is taken from its long
+    axis (azim -60 = from 60 deg off the line, on the side of its end) and
+    the elevation is kept low; a camera that follows part of the line
+    (`follow`) keeps the elevation asked and looks from the side of the
+    line's start: from behind a front moving along it, over what has fallen,
+    not through the pieces still standing ahead."""
+    P = np.asarray(P, float)
+    L = P if line is None else np.asarray(line, float)
     centre = 0.5 * (P.min(axis=0) + P.max(axis=0))
-    xy = P[:, :2] - centre[:2]
-    lengths = np.ptp(xy, axis=0)
-    if len(P) > 2 and max(lengths) > 3 * max(min(lengths), 1e-300):
-        w, V = np.linalg.eigh(np.cov(xy.T))
-        long_ = V[:, np.argmax(w)]
-        azim = azim + np.degrees(np.arctan2(long_[1], long_[0]))  # azim -60 = from 60 deg off the line's axis
-        elev = min(elev, 12.0)
+    xy = L[:, :2] - L[:, :2].mean(axis=0)
+    w, V = np.linalg.eigh(np.cov(xy.T)) if len(L) > 2 else (np.ones(2), np.eye(2))
+    lengths = np.ptp(xy @ V, axis=0)  # along the set's principal axes: a diagonal line is a line too
+    if len(L) > 2 and max(lengths) > 3 * max(min(lengths), 1e-300):
+        long_ = V[:, np.argmax(lengths)]
+        if (L[-1, :2] - L[0, :2]) @ long_ < 0:
+            long_ = -long_  # along the line, from its first point to its last
+        if follow:
+            long_ = -long_  # from behind what is followed: the pieces ahead do not hide it
+        else:
+            elev = min(elev, 12.0)
+        azim = azim + np.degrees(np.arctan2(long_[1], long_[0]))
     e, a = np.radians(elev), np.radians(azim)
     d = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])  # towards the camera
     right = np.cross((0.0, 0.0, 1.0), d)
@@ -254,15 +324,32 @@ def _frame(cam, P, elev, azim, size, margin, viewAngle=30.0):
     depth = 0.5 * np.ptp(rel @ d)
     tv = np.tan(np.radians(viewAngle) / 2)
     th = tv * size[0] / size[1]
-    dist = max(half_w / th, half_h / tv) + depth
-    shift = 0.08 * half_h / margin * 0.84 * up / 0.84  # lift the picture's centre above the legend
-    cam.SetFocalPoint(*(centre - shift))
-    cam.SetPosition(*(centre - shift + dist * d))
+    dist = max(half_w / th, half_h / tv) + depth  # fits: every point no nearer than the box's centre
+    focal = centre - 0.08 * half_h / margin * up  # lift the picture's centre above the legend
+
+    def fits(dist):  # in perspective: inside the picture, above the legend (the bottom 20 %)
+        v = rel + (centre - focal) - dist * d
+        depth = -(v @ d)
+        if depth.min() <= 0:
+            return False
+        x, y = (v @ right) / (depth * th), (v @ up) / (depth * tv)
+        return np.abs(x).max() <= 1 / margin and y.max() <= 1 / margin and y.min() >= -0.8 / margin
+
+    near = 0.0
+    for _ in range(40):  # the nearest distance that fits: the points fill the picture
+        mid = 0.5 * (near + dist)
+        near, dist = (near, mid) if fits(mid) else (mid, dist)
+    return focal, focal + dist * d, up, viewAngle
+
+
+def setCamera(cam, focal, position, up, viewAngle):
+    cam.SetFocalPoint(*focal)
+    cam.SetPosition(*position)
     cam.SetViewUp(*up)
     cam.SetViewAngle(viewAngle)
 
 
-def _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit):
+def _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, frame):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -274,7 +361,7 @@ def _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit):
     poly.set_cmap("jet")
     poly.set_clim(0, vmax)
     ax.add_collection3d(poly)
-    used = X[np.unique(tris)]
+    used = X[np.unique(tris) if frame is None else frame]  # (matplotlib does not clip the rest)
     lo, hi = used.min(axis=0), used.max(axis=0)
     span = (hi - lo).max()
     box0, box1 = lo - 0.05 * span, hi + 0.05 * span

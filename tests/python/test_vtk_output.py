@@ -84,3 +84,79 @@ def test_snapshot_draws_with_vtk_off_screen(tmp_path):
     grey = (np.abs(rgb[..., 0] - rgb[..., 1]) < 0.04) & (np.abs(rgb[..., 1] - rgb[..., 2]) < 0.06) & \
         (rgb[..., 0] > 0.5) & (rgb[..., 0] < 0.8)
     assert red.mean() > 0.005 and grey.mean() > 0.05
+
+
+def _line(n=8):
+    """n upright blocks in a line along a diagonal of the floor, the 5th and
+    6th falling (spun about the line's normal) and squeezed (stressed)."""
+    w = qdem.World()
+    axis = np.array([np.cos(0.5), np.sin(0.5), 0.0])
+    pieces = [w.addPiece(qdem.boxMesh((0.02, 0.06, 0.1), (2, 3, 4)), rubber(), pos=tuple(0.06 * i * axis + [0, 0, 0.051]))
+              for i in range(n)]
+    for k in (4, 5):
+        p = pieces[k]
+        p.pos[:, 2] = 0.001 + 0.8 * (p.pos[:, 2] - 0.001)
+        p.vel[:] = np.cross([-axis[1], axis[0], 0.0], p.pos - p.pos.mean(axis=0)) * 20.0 + 0.5 * axis
+    pieces[0].vel[:] = 0.05 * axis  # a slow creep far behind: not the front
+    return w, pieces
+
+
+def _project(points, focal, position, up, angle, size):
+    """Picture coordinates in [-1, 1] of points seen by a pinhole camera."""
+    f = (np.asarray(focal) - position) / np.linalg.norm(np.asarray(focal) - position)
+    r = np.cross(f, up)
+    v = np.asarray(points) - position
+    depth = v @ f
+    t = np.tan(np.radians(angle) / 2)
+    return np.c_[(v @ r) / (depth * t * size[0] / size[1]), (v @ up) / (depth * t)]
+
+
+def test_front_pieces_are_the_moving_ones_and_their_neighbours():
+    from qdem.render import frontPieces
+    w, pieces = _line()
+    centres = [p.refPos.mean(axis=0) for p in pieces]
+    speeds = [np.sqrt((p.vel ** 2).sum(axis=1)).max() for p in pieces]
+    assert frontPieces(centres, speeds, around=1) == [3, 4, 5, 6]
+    assert frontPieces(centres, speeds, around=0) == [4, 5]
+    assert frontPieces(centres[::-1], speeds[::-1], around=2) == [0, 1, 2, 3, 4, 5]  # reversed: 7 is the creeping one
+    assert frontPieces(centres, np.zeros(8)) == list(range(8))  # nothing moving: everything
+    with pytest.raises(ValueError, match="centres"):
+        frontPieces(centres, speeds[:3])
+
+
+def test_camera_follows_the_front():
+    """The follow camera has the front pieces (and one either side) filling
+    the picture, seen obliquely, and the line's ends out of it."""
+    from qdem.render import camera
+    w, pieces = _line()
+    size = (1280, 800)
+    front = np.vstack([pieces[k].pos for k in (3, 4, 5, 6)])
+    cam = camera(front, 25, -50, size, 1.08, line=w.core.pos, follow=True)
+    xy = _project(front, *cam, size)
+    assert np.abs(xy).max() < 1 and max(np.ptp(xy, axis=0)) > 1.3   # inside, filling the width or height
+    assert np.abs(_project(pieces[0].pos.mean(axis=0)[None], *cam, size)).max() > 1  # the far end: out
+    assert np.ptp(_project(w.core.pos, *cam, size)[:, 0]) > 2.5                    # the line: wider than the picture
+    d = np.asarray(cam[1]) - cam[0]
+    assert np.degrees(np.arcsin(d[2] / np.linalg.norm(d))) == pytest.approx(25)  # the elevation asked
+    back = -np.array([np.cos(0.5), np.sin(0.5)])  # from behind the front, 50 deg off the line
+    assert np.degrees(np.arccos(d[:2] @ back / np.linalg.norm(d[:2]))) == pytest.approx(50, abs=1.0)  # (the nodes' principal axis)
+
+
+def test_snapshot_focus_front_fills_the_picture_with_the_front(tmp_path):
+    """focus='front': the two stressed, falling blocks of an 8-block line take
+    a large part of the picture (red); framed on the whole line they are a
+    small part of it."""
+    import matplotlib.image as mpimg
+    from qdem import render
+    w, pieces = _line()
+    share = {}
+    for name, kw in (("line", {}), ("front", dict(focus="front", around=1, elev=25, azim=-50))):
+        path = str(tmp_path / (name + ".png"))
+        render.snapshot(w, path, floor=0.0, size=(640, 400), **kw)
+        rgb = mpimg.imread(path)[..., :3]
+        share[name] = ((rgb[..., 0] > 0.3) & (rgb[..., 0] > 3 * rgb[..., 1]) & (rgb[..., 0] > 3 * rgb[..., 2])).mean()
+    assert share["front"] > 0.08 and share["front"] > 1.6 * share["line"]
+    with pytest.raises(ValueError, match="focus"):
+        render.snapshot(w, str(tmp_path / "x.png"), focus="fastest")
+    with pytest.raises(ValueError, match="focus"):
+        render.snapshot(w, str(tmp_path / "x.png"), focus=[9])
