@@ -10,6 +10,8 @@ How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
   settings of every QdemEngine and the frame list of every VtkRecorder - into
   ``O.tags['qdem']`` (compressed npz, base64), so it is *inside* YADE's saved
   scene: one file, which saveTmp, mpy and yade-batch carry like any scene.
+- ``O.sceneToString()`` / ``O.stringToScene(s)`` (how mpy sends a scene to
+  its workers) and ``O.reload()`` do the same as save and load.
 - ``O.load(f)`` / ``O.loadTmp(name)`` rebuild the QDEM world from that tag,
   or empty it when the loaded scene has none, and put QdemEngine and
   VtkRecorder objects back in O.engines (YADE keeps them as plain PyRunners).
@@ -17,7 +19,7 @@ How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
   with a message saying what to do.  A PyRunner that finds no engine object
   for its command (a scene loaded some other way) rebuilds the world and the
   engine from the same tag at its first call.
-- ``O.reset()`` (and resetThisScene, resetCurrentScene) empties the QDEM world.
+- ``O.reset()`` (and resetThisScene, resetCurrentScene, resetAllScenes) empties the QDEM world.
 - A QDEM exception inside ``O.run``/``O.step``/``O.wait`` reaches the script as
   itself (``except qdem.StabilityError`` works, message intact), where YADE
   would give a generic ``RuntimeError: PyRunner error.``."""
@@ -269,8 +271,11 @@ def install():
     Omega = wrapper.Omega
     plan = {"run": _wrapErrors, "step": _wrapErrors, "wait": _wrapErrors,
             "save": _wrapSave, "saveTmp": lambda o: _wrapSave(o, toFile=False),
-            "load": _wrapLoad, "loadTmp": _wrapLoad,
-            "reset": _wrapReset, "resetThisScene": _wrapReset, "resetCurrentScene": _wrapReset}
+            "sceneToString": lambda o: _wrapSave(o, toFile=False),  # how mpy sends the scene to its workers
+            "load": _wrapLoad, "loadTmp": _wrapLoad, "stringToScene": _wrapLoad,
+            "reload": _wrapLoad,  # YADE's reload loads O.filename in C++, past the wrapper of load
+            "reset": _wrapReset, "resetThisScene": _wrapReset, "resetCurrentScene": _wrapReset,
+            "resetAllScenes": _wrapReset}
     for name, wrap in plan.items():
         orig = getattr(Omega, name, None)
         if orig is None or hasattr(orig, "_qdemOrig"):

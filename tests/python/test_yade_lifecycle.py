@@ -63,6 +63,49 @@ print("MAXDIFF", np.abs(now - ref).max(), "FRAMES", len(O.engines[2].frames))
     assert int(line[3]) == 5  # frames at 0, 250, 500 before the save; 750, 1000 after
 
 
+def test_scene_to_string_and_back_in_a_new_process_continue_to_the_bit(tmp_path):
+    """O.sceneToString / O.stringToScene: how yade.mpy sends the scene from
+    rank 0 to its workers; the QDEM state travels with it."""
+    r = _yade(tmp_path, SCENE + """
+O.run(300, True)
+open("scene.str", "wb").write(O.sceneToString())  # bytes
+O.run(300, True)
+np.save("ref.npy", np.concatenate([qdem.defaultWorld().core.pos, qdem.defaultWorld().core.vel]))
+""", "save.py")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    r = _yade(tmp_path, """
+import numpy as np, qdem
+from yade import O
+O.stringToScene(open("scene.str", "rb").read())
+assert type(O.engines[1]).__name__ == "QdemEngine" and O.iter == 300
+O.run(300, True)
+now = np.concatenate([qdem.defaultWorld().core.pos, qdem.defaultWorld().core.vel])
+print("MAXDIFF", np.abs(now - np.load("ref.npy")).max())
+""", "load.py")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert float([x for x in r.stdout.splitlines() if x.startswith("MAXDIFF")][0].split()[1]) == 0.0
+
+
+def test_reload_rewinds_qdem_and_reset_all_scenes_empties_it(tmp_path):
+    """O.reload() (YADE loads O.filename in C++, past O.load) rewinds the
+    QDEM state with the scene; O.resetAllScenes() empties the world."""
+    r = _yade(tmp_path, SCENE + """
+O.run(300, True)
+O.save("r.yade.gz")
+O.run(300, True)
+ref = qdem.defaultWorld().core.pos.copy()
+O.reload()
+assert O.iter == 300 and qdem.defaultWorld().core.iter == 300, (O.iter, qdem.defaultWorld().core.iter)
+O.run(300, True)
+print("MAXDIFF", np.abs(qdem.defaultWorld().core.pos - ref).max())
+O.resetAllScenes()
+print("PIECES", len(qdem.defaultWorld().pieces))
+""")
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    out = dict(x.split()[:2] for x in r.stdout.splitlines() if x.startswith(("MAXDIFF", "PIECES")))
+    assert float(out["MAXDIFF"]) == 0.0 and out["PIECES"] == "0"
+
+
 def test_save_tmp_and_load_tmp_in_one_process(scene):
     O = scene
     from yade import ForceResetter, NewtonIntegrator, utils
