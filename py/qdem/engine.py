@@ -240,9 +240,13 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             self._dtChecked = key
         if parallel.launchedSize() > 1 and core.mpiSize == 1:
             parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
-        if core.iter == 0:
+        if core.iter == 0 and core.time == 0.0:
+            # A world's first step: its clock starts at YADE's (the engine may
+            # join a scene that has run), so frames are named by O.iter and
+            # timed by O.time; then the frame of the initial state.
+            core.iter, core.time = int(O.iter), float(O.time)
             from .recorder import initialFrames
-            initialFrames(self.world)  # the t = 0 frame, before the first step
+            initialFrames(self.world)
         core.step(dt)
         if self._ids:
             yadeglue.applyReactions(O, self._ids, core.obstacleReactions())

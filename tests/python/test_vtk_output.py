@@ -54,6 +54,28 @@ def test_recorder_series_reads_back_in_vtk(scene, tmp_path):
     assert "vtkZLibDataCompressor" in head
 
 
+def test_frames_follow_yades_clock_when_qdem_joins_a_running_scene(scene, tmp_path):
+    """A QdemEngine added to a scene that has already run: QDEM's clock starts
+    at YADE's, so frames are named by O.iter and timed by O.time (the first
+    one the initial state of the pieces, at the step they joined)."""
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    O.engines = [ForceResetter(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 1e-4
+    O.run(130, True)
+    t0 = O.time
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, 1))
+    base = str(tmp_path / "j-")
+    O.engines = [ForceResetter(), qdem.QdemEngine(), qdem.VtkRecorder(fileBase=base, iterPeriod=100),
+                 NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    O.run(200, True)
+    assert qdem.defaultWorld().core.iter == O.iter and qdem.defaultWorld().core.time == O.time
+    assert sorted(os.listdir(tmp_path)) == ["j-000130.vtu", "j-000200.vtu", "j-000300.vtu", "j.pvd"]
+    times = [float(t) for t in re.findall(r'timestep="([^"]+)"', open(tmp_path / "j.pvd").read())]
+    np.testing.assert_allclose(times, [t0, t0 + 70 * O.dt, t0 + 170 * O.dt], rtol=1e-12)
+
+
 def test_vtu_refuses_nan_and_leaves_no_partial_file(tmp_path):
     from qdem.vtu import writeVtu
     path = str(tmp_path / "nan.vtu")
