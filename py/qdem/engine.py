@@ -215,7 +215,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             self._checkedSetup = O.iter
         stop = O.stopAtIter  # a new O.run(n): remember where it started (progress share and ETA)
         if self._runStart is None or self._runStart[1] != stop:
-            self._runStart = (O.iter, stop)
+            self._runStart = (O.iter, stop, core.iter, time.time())
         if self.threads:
             _core.setThreads(int(self.threads))
         self._syncObstacles()
@@ -300,11 +300,14 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         now = time.time()
         line = "qdem: step %d  t=%.6g s" % (core.iter, core.time)
         rate = None
-        if self._lastProgress is not None and core.iter > self._lastProgress[0]:
-            rate = (core.iter - self._lastProgress[0]) / max(now - self._lastProgress[1], 1e-9)
+        start, stop, iter0, wall0 = self._runStart
+        last = self._lastProgress
+        if last is None or last[0] < iter0:  # the first line of this O.run: the rate since it started
+            last = (iter0, wall0)
+        if core.iter > last[0]:
+            rate = (core.iter - last[0]) / max(now - last[1], 1e-9)
             line += "  %.0f steps/s" % rate
         self._lastProgress = (core.iter, now)
-        start, stop = self._runStart
         if stop > 0 and stop > O.iter:
             done = (O.iter + 1 - start) / max(stop - start, 1)
             line += "  %3.0f%%" % (100 * min(done, 1.0))
