@@ -256,3 +256,29 @@ def test_progress_line_shows_share_done_and_time_left(scene):
     assert len(lines) == 4
     assert "100%" in lines[-1] and " 50%" in lines[1]
     assert all("ETA" in x for x in lines)  # the first line too: the rate since O.run started
+
+
+def test_yade_batch_job_logs_are_ignored_by_git():
+    """yade-batch writes each job's log beside its script ('$.@.log': script
+    path, then the job's description); for every table in scripts/ those logs
+    are ignored by git, so a batch run leaves the work tree clean."""
+    import glob
+    import re
+    import shutil
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    if shutil.which("git") is None or not os.path.exists(os.path.join(root, ".git")):
+        pytest.skip("not a git work tree")
+    logs = []
+    for table in glob.glob(os.path.join(root, "scripts", "**", "*.table"), recursive=True):
+        text = open(table).read()
+        script = re.search(r"yade-batch .*?\.table\s+(\S+\.py)", text)
+        assert script, "%s: no 'yade-batch ... TABLE SCRIPT.py' command in its header" % table
+        rows = [l.split() for l in text.splitlines() if l.strip() and not l.startswith("#")]
+        head = rows[0]
+        for row in rows[1:]:
+            desc = ",".join("%s=%s" % (k, v.strip("'\"")) for k, v in zip(head, row))
+            logs.append("%s.%s.log" % (script.group(1), desc))
+    assert len(logs) >= 10
+    r = subprocess.run(["git", "check-ignore", "--no-index", "-v"] + logs, cwd=root, capture_output=True, text=True)
+    ignored = {l.split("\t")[-1] for l in r.stdout.splitlines()}
+    assert ignored == set(logs), "not ignored: %s" % sorted(set(logs) - ignored)
