@@ -192,14 +192,16 @@ def test_engine_order_mistakes_are_refused(scene, order, match):
     assert qdem.defaultWorld().core.iter == 0  # refused before any QDEM step
 
 
-def test_non_finite_gravity_is_refused_at_the_first_step(scene):
+@pytest.mark.parametrize("gravity", [(0, 0, float("nan")), (0, float("inf"), -9.81)])
+def test_non_finite_gravity_is_refused_at_the_first_step(scene, gravity):
     O = scene
     from yade import ForceResetter, NewtonIntegrator
     qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
-    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, float("nan")))]
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=gravity)]
     O.dt = 1e-5
     with pytest.raises(ValueError, match="gravity .* is not finite"):
-        O.run(1, True)
+        O.run(5, True)
+    assert qdem.defaultWorld().core.iter == 0  # at the first step, before any QDEM step
 
 
 def test_newton_damping_with_spheres_and_pieces_warns(scene):
