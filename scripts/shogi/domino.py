@@ -25,8 +25,9 @@
 #                 qdem.saveState) and a run started again goes on from the last
 #                 one; 0: always from the start
 # Writes out/shogi/<scene>_mu<friction>_<material>/: block VTU series (.pvd),
-# PNG snapshots coloured by von Mises stress (and close-ups of the front for long
-# lines; scripts/shogi/closeups.py makes them afterwards from the VTU frames),
+# PNG snapshots coloured by von Mises stress (and, for long lines, close-ups with
+# the camera following the front; scripts/shogi/pictures.py and closeups.py make
+# pictures afterwards from the VTU frames),
 # hits.json (time each piece is
 # first hit) and front.png (first-hit time against position).
 import json
@@ -98,11 +99,9 @@ def frame():
     vmax = render.snapshot(qdem.defaultWorld(), path, title="%s, mu=%g, t=%.3f s" % (P.scene, P.frictionPiece,
                                                                                        core.time - tPush), floor=0.0)
     frames.append((core.time - tPush, path, vmax))
-    if len(pieces) > 5:  # and a close-up of the front: the last piece hit, 3 behind, 2 ahead
-        front = max(i for i, h in enumerate(hits) if h is not None)
-        shown = range(max(0, front - 3), min(len(pieces), front + 3))
-        render.snapshot(qdem.defaultWorld(), "%s/close%02d.png" % (out, k), floor=0.0, pieces=shown,
-                        title="t=%.3f s, pieces %d-%d" % (core.time - tPush, shown[0] + 1, shown[-1] + 1))
+    if len(pieces) > 5:  # and the camera following the front: the pieces moving fastest, 2 more either side
+        render.snapshot(qdem.defaultWorld(), "%s/close%02d.png" % (out, k), floor=0.0, focus="front", elev=22,
+                        title="%s, mu=%g, t=%.3f s, the front" % (P.scene, P.frictionPiece, core.time - tPush))
 
 
 core = qdem.defaultWorld().core
