@@ -3,10 +3,11 @@ the VTU frames scripts/shogi/domino.py wrote: the pieces coloured by von Mises
 stress, with its legend.
 
     /usr/bin/python3.11 scripts/shogi/pictures.py out/shogi/<run> <time [s]> <out.png> [--view follow|line]
-                        [--around 2] [--friction 0.1]
+                        [--around 2] [--moving 0.5] [--elev E] [--azim A]
 
 --view follow (default): the camera follows the front, the pieces moving
-fastest at that time and their moving neighbours (qdem.render.frontPieces),
+fastest at that time and their neighbours moving at least `--moving` times as
+fast (qdem.render.frontPieces),
 and `--around` more on either side, seen obliquely from behind the front; the
 rest of the line drawn around them.  --view line: the whole line.
 The time counts from the push (hits.json: settle_s); the frame nearest to it
@@ -42,6 +43,7 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--view", choices=("follow", "line"), default="follow")
     ap.add_argument("--around", type=int, default=2)
+    ap.add_argument("--moving", type=float, default=0.5, help="share of the fastest speed that counts as moving")
     ap.add_argument("--elev", type=float, default=None)
     ap.add_argument("--azim", type=float, default=None)
     a = ap.parse_args()
@@ -71,7 +73,7 @@ def main():
         speed = np.sqrt((np.asarray(m.point_data["velocity"]) ** 2).sum(axis=1))
         centres = [ref[nodePiece == p].mean(axis=0) for p in range(nPieces)]
         speeds = [speed[nodePiece == p].max() for p in range(nPieces)]
-        focus = render.frontPieces(centres, speeds, around=a.around)
+        focus = render.frontPieces(centres, speeds, around=a.around, moving=a.moving)
         frame = np.flatnonzero(np.isin(nodePiece, focus))
         shown = np.isin(tetPiece[owner], focus)
         vmax = float(np.percentile(val[shown], 99.5))  # contact spots would wash out the rest
@@ -81,7 +83,8 @@ def main():
     else:
         title += " (%d of %d hit so far)" % (hit, nPieces)
         render.surfacePlot(X, tris, val, a.out, title, elev=18 if a.elev is None else a.elev,
-                           azim=-60 if a.azim is None else a.azim, vmax=float(np.percentile(val, 99.5)), floor=0.0)
+                           azim=-120 if a.azim is None else a.azim, vmax=float(np.percentile(val, 99.5)), floor=0.0,
+                           size=(1600, 500))  # the line seen from low down: a wide picture
     print("pictures: %s, frame %s (t = %.4g s after the push) -> %s" % (a.view, fr[k][1], t, a.out))
 
 
