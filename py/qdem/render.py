@@ -289,9 +289,9 @@ def _vtkPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, size, fram
 
 def camera(P, elev, azim, size, margin, viewAngle=30.0, line=None, follow=False):
     """The camera (focal point, position, view-up, view angle [deg]) looking
-    at the points P from elevation/azimuth [deg], at the distance where they
-    fill the picture (with a margin): the bounding box of P projected on the
-    picture's axes.  When the points `line` (default P) form an elongated set
+    at the points P from elevation/azimuth [deg], at the nearest distance
+    where all of them are inside the picture in perspective (with a margin,
+    above the colour legend): they fill it.  When the points `line` (default P) form an elongated set
     (a domino line, its points in order), the azimuth is taken from its long
     axis (azim -60 = from 60 deg off the line, on the side of its end) and
     the elevation is kept low; a camera that follows part of the line
