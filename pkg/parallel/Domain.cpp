@@ -53,7 +53,8 @@ void Domain::build(const PartitionOptions& optIn) {
     elementGhost_.assign(w_.nNodes(), 0);
     for (const auto& g : halo_.recv)
         for (const int32_t n : g) elementGhost_[n] = 1;
-    contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
+    contactHalo_ = (w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn)) ||
+                   sphereRadius() > 0;
     ownedSurf_.clear();
     for (const int32_t n : halo_.ownedNodes)
         if (w_.surfaceIndex().surfIndexOfNode[n] >= 0) ownedSurf_.push_back(n);
@@ -131,7 +132,15 @@ void Domain::sendContactHalo() {
     for (int r = 0; r < P; ++r) hMax = std::max(hMax, all[8 * r + 6]), rMax = std::max(rMax, all[8 * r + 7]);
     // 5 % over the width: positions are the same on both sides, this is no
     // skin, only room for rounding in the box tests.
-    const double width = 1.05 * (2 * rMax + 2 * hMax);
+    double width = 1.05 * (2 * rMax + 2 * hMax);
+    // YADE spheres: a pair is computed by the owner of the lowest node of the
+    // triangles whose bounding sphere (radius <= 2h/3 of its longest edge)
+    // comes within R + r of the sphere's centre.  Their nodes lie within
+    // R + r + 4h/3 of the centre, so within 2 (R + r) + 8h/3 of each other:
+    // with this width the owner sees them all (SpherePhase.cpp).
+    const double Rs = sphereRadius();
+    if (Rs > 0) width = std::max(width, 1.05 * (2 * (Rs + rMax) + 3 * hMax));
+    haloSphereRadius_ = Rs;
     const auto boxOf = [&](int r) { return &all[8 * static_cast<std::size_t>(r)]; };
     const auto reaches = [&](const double* a, const double* b) {  // a grown by width meets b
         for (int d = 0; d < 3; ++d)
@@ -182,6 +191,15 @@ void Domain::sendContactHalo() {
     stepBytes += comm_->bytesSent - b0;
     stepMessages += comm_->messagesSent - m0;
     seconds += omp_get_wtime() - t0;
+}
+
+double Domain::sphereRadius() const { return w_.spheres.pairPiece.empty() ? 0.0 : w_.spheres.radiusMax; }
+
+void Domain::ensureSphereHalo() {
+    const double Rs = sphereRadius();
+    if (Rs == 0 || (contactHalo_ && Rs <= haloSphereRadius_)) return;
+    contactHalo_ = true;
+    sendContactHalo();
 }
 
 void Domain::ownedTetRuns(int32_t piece, std::vector<TetSegment>& out) const {
@@ -310,8 +328,10 @@ void Domain::finishStep(const std::string& error) {
     const double t0 = omp_get_wtime();
         const std::size_t no = w_.obstacles.size();
     const bool energyOn = w_.settings.trackEnergy;
-    // [failed, reactions (6 per obstacle), energies (10), load] of this rank.
-    const std::size_t nv = 1 + 6 * no + (energyOn ? 10 : 0) + 1;
+    // [failed, reactions (6 per obstacle), energies (10), sphere pairs, load]
+    // of this rank.
+    const std::size_t ne = energyOn ? 10 : 0, ns = w_.spherePhase_.mpiValues();
+    const std::size_t nv = 1 + 6 * no + ne + ns + 1;
     std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
     v[nv - 1] = load();
@@ -326,6 +346,9 @@ void Domain::finishStep(const std::string& error) {
                                e.contactDamping, e.friction, e.boundaryWork, e.localDamping, e.sleep};
         std::copy(es, es + 10, v.begin() + 1 + 6 * no);
     }
+    // The sphere pairs this rank computed (zeros for the others'): their
+    // sums are each pair's owner's force, torque and history.
+    if (ns > 0) w_.spherePhase_.packPairs(v.data() + 1 + 6 * no + ne);
     // Summed (the load too, for its mean) and the load's maximum, in a tree
     // of fixed shape: the same bits on every rank and every run.
     v.push_back(v[nv - 1]);
@@ -347,6 +370,7 @@ void Domain::finishStep(const std::string& error) {
         const double* s = v.data() + 1 + 6 * no;
         w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
     }
+    if (ns > 0 || !w_.spheres.pairPiece.empty()) w_.spherePhase_.unpackPairs(v.data() + 1 + 6 * no + ne, w_.iter - 1);
 }
 
 double Domain::load() const {

@@ -64,6 +64,10 @@ public:
     // then whole on the reading rank).  Renewed every step: no skin to trust.
     void sendContactHalo();
     bool contactHalo() const { return contactHalo_; }
+    // YADE spheres coupled (World::spheres): the contact halo on, at least
+    // as wide as their largest radius asks (sendContactHalo).  Collective;
+    // every rank decides alike, the spheres being the same everywhere.
+    void ensureSphereHalo();
 
     // Nodes whose state is current on this rank: owned, element ghosts and
     // contact ghosts.  version() changes whenever the set does (the contact
@@ -112,6 +116,8 @@ private:
     World& w_;
     std::shared_ptr<Communicator> comm_;
     bool contactHalo_ = false;
+    double haloSphereRadius_ = 0;  // the sphere radius the contact halo was last made wide enough for
+    double sphereRadius() const;   // the largest coupled sphere's radius (0: none)
     std::vector<uint8_t> current_, elementGhost_;
     std::vector<int32_t> currentSurf_;
     std::vector<int32_t> ownedSurf_;  // owned surface nodes (global ids), ascending

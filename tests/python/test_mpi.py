@@ -214,3 +214,103 @@ def test_piece_added_mid_run_on_ranks():
     r = result(out)
     assert r["dx"] <= 1e-12 * r["disp"]
     assert r["energy"][0] == pytest.approx(r["energy"][1], rel=1e-10)
+
+
+# ---- YADE spheres and clumps (every rank holds the whole YADE scene) --------
+
+_serialSpheres = {}
+
+
+def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
+    """Runs tests/mpi/yade_spheres.py SCENE serially (P = 1) or on P ranks; its JSON."""
+    import json
+    import os
+    import subprocess
+    import tempfile
+    from mpi_launch import ROOT, env
+    fd, out = tempfile.mkstemp(suffix=".json", dir=tmp)
+    os.close(fd)
+    e = env()
+    e.update(QDEM_THREADS=str(threads), QDEM_MPI_OUT=out, OMP_NUM_THREADS=str(threads), **envExtra)
+    args = ["yade", "-n", "-x", "tests/mpi/yade_spheres.py", scene]
+    try:
+        if P == 1:
+            p = subprocess.run(["timeout", "300"] + args, cwd=ROOT, env=e, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True)
+            rc, log = p.returncode, p.stdout
+        else:
+            saved = dict(os.environ)
+            os.environ.update(envExtra, QDEM_MPI_OUT=out)
+            try:
+                rc, log = mpirun(P, args, timeout=300)
+            finally:
+                os.environ.clear()
+                os.environ.update(saved)
+        assert rc == 0, log[-4000:]
+        with open(out) as f:
+            return json.load(f)
+    finally:
+        os.remove(out)
+
+
+def _sphereReference(scene):
+    """The serial run with 1 and 2 QDEM threads (their difference is the licence)."""
+    if scene not in _serialSpheres:
+        _serialSpheres[scene] = (_yadeSpheres(scene, threads=1), _yadeSpheres(scene, threads=2))
+    return _serialSpheres[scene]
+
+
+def _sphereDiffs(a, b):
+    dx = np.abs(np.array(a["pos"]) - np.array(b["pos"])).max()
+    sa, sb = np.array(a["spheres"]), np.array(b["spheres"])
+    return dx, np.abs(sa - sb).max() / np.abs(sa).max()
+
+
+def _assertSpheresAsSerial(r, s, s2):
+    d = s["disp"]
+    dxThreads, dsThreads = _sphereDiffs(s, s2)
+    dx, ds = _sphereDiffs(s, r)
+    # Every sphere contact computed once: the counts summed over the ranks are
+    # the serial ones, every 25 steps; the scene has contacts.
+    ser, mine = np.array(s["series"]), np.array(r["series"])
+    assert np.array_equal(mine[:, 0], ser[:, 0]) and ser[:, 0].sum() > 10
+    # Every rank's copy of YADE got the same forces: its spheres are bit-identical.
+    assert r["sphereRankSpread"] == 0.0
+    # Summation order is the only licence: as far as 1 vs 2 threads serially.
+    assert dx <= 1e-10 * d and dx <= max(10 * dxThreads, 1e-13 * d)
+    assert ds <= max(10 * dsThreads, 1e-13)
+    # The floor reaction (QDEM's, summed over the ranks, plus YADE's) and the energy as serial.
+    fmax = np.abs(ser[:, 1:4]).max()
+    assert fmax > 1.0 and np.abs(mine[:, 1:4] - ser[:, 1:4]).max() <= 1e-9 * fmax
+    assert np.abs(mine[:, 4] - ser[:, 4]).max() <= 1e-9 * np.abs(ser[:, 4]).max()
+    # Momentum of spheres and pieces against the floor's impulse and gravity.
+    assert np.abs(r["ledger"]).max() <= 1e-12 * r["momentumScale"]
+
+
+@pytest.mark.parametrize("scene,P", [("drop", 2), ("drop", 3), ("drop", 4), ("clump", 2), ("clump", 3)])
+def test_yade_spheres_and_clumps_on_ranks_as_serially(scene, P):
+    requireMpi()
+    s, s2 = _sphereReference(scene)
+    r = _yadeSpheres(scene, P)
+    assert r["ranks"] == P
+    _assertSpheresAsSerial(r, s, s2)
+    if scene == "drop":  # the split cuts under the spheres: pairs are computed on several ranks
+        assert sum(n > 0 for n in r["sphereContactsPerRank"]) >= 2
+
+
+def test_yade_spheres_rebalance_and_save_load_keep_histories(tmp_path):
+    # A rebalance forced mid-contact moves nodes between ranks; O.save at the
+    # same step, the run goes on, then O.load and the run goes on again: the
+    # sphere-piece contact histories survive both.
+    requireMpi()
+    s, s2 = _sphereReference("drop")
+    r = _yadeSpheres("drop", 3, QDEM_MPI_REBALANCE="1", QDEM_MPI_SAVE=str(tmp_path / "s.yade.gz"))
+    assert r["movedNodes"] > 0 and min(r["rebalances"]) >= 1
+    _assertSpheresAsSerial(r, s, s2)
+    rl = r["reloaded"]
+    assert rl["iter"][0] == rl["iter"][1]
+    _, dsThreads = _sphereDiffs(s, s2)
+    scale = np.abs(np.array(r["spheres"])).max()
+    # Loaded, the world is split afresh: rounding apart, the same end.
+    assert rl["dx"] <= 1e-12 * r["disp"]
+    assert rl["dSphere"] <= max(10 * dsThreads, 1e-13) * scale
