@@ -55,9 +55,31 @@ void Domain::build(const PartitionOptions& optIn) {
         for (const int32_t n : g) elementGhost_[n] = 1;
     contactHalo_ = (w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn)) ||
                    sphereRadius() > 0;
+    // The owned nodes the contact halo may send: those the contact phase
+    // reads of another piece.  With the default broad phase, the surface
+    // nodes; with the seed's cases (Settings.hpp BroadPhase) the nodes of the
+    // tetrahedra registered: every tet (A) or the surface tets (B, C), whose
+    // fourth node is interior.  A tet is only registered where all its nodes
+    // are current (PieceContactPhase.cpp).
+    const SurfaceIndex& S = w_.surfaceIndex();
+    const BroadPhase bp = w_.settings.broadPhase;
+    std::vector<uint8_t> sent(w_.nNodes(), 0);
+    for (const int32_t n : halo_.ownedNodes) sent[n] = S.surfIndexOfNode[n] >= 0 || bp == BroadPhase::AllTets;
+    haloTets_.clear();
+    if (bp == BroadPhase::SurfaceTets || bp == BroadPhase::SurfaceFaces) {
+        for (const int32_t t : S.surfTets)
+            for (int k = 0; k < 4; ++k) {
+                const int32_t n = w_.tetNodes[4 * t + k];
+                if (owns(n)) sent[n] = 1;
+            }
+        for (const int32_t t : S.surfTets)
+            if (ownsTet(t)) haloTets_.push_back(t);
+    } else if (bp == BroadPhase::AllTets) {
+        haloTets_ = halo_.ownedTets;
+    }
     ownedSurf_.clear();
     for (const int32_t n : halo_.ownedNodes)
-        if (w_.surfaceIndex().surfIndexOfNode[n] >= 0) ownedSurf_.push_back(n);
+        if (sent[n]) ownedSurf_.push_back(n);
     cNbr_.clear(), cNbrPrev_.clear(), cRecv_.clear(), cSend_.clear();
     ghostTouched_.clear();
     built_ = everBuilt_ = true;
@@ -123,6 +145,17 @@ void Domain::sendContactHalo() {
         for (int d = 0; d < 3; ++d) l2 += (w_.pos[3 * a + d] - w_.pos[3 * b + d]) * (w_.pos[3 * a + d] - w_.pos[3 * b + d]);
         mine[6] = std::max(mine[6], l2);
     }
+    // The seed's broad phases register tets: their longest edge (owned tets
+    // of the kind registered) instead.
+    for (const int32_t t : haloTets_)
+        for (int i = 0; i < 4; ++i)
+            for (int j = i + 1; j < 4; ++j) {
+                const int32_t a = w_.tetNodes[4 * t + i], b = w_.tetNodes[4 * t + j];
+                double l2 = 0;
+                for (int d = 0; d < 3; ++d)
+                    l2 += (w_.pos[3 * a + d] - w_.pos[3 * b + d]) * (w_.pos[3 * a + d] - w_.pos[3 * b + d]);
+                mine[6] = std::max(mine[6], l2);
+            }
     mine[6] = std::sqrt(mine[6]);
     for (const PieceInfo& p : w_.pieces) mine[7] = std::max(mine[7], w_.materials[p.material].radius);
     const int P = size(), me = rank();
@@ -133,6 +166,12 @@ void Domain::sendContactHalo() {
     // 5 % over the width: positions are the same on both sides, this is no
     // skin, only room for rounding in the box tests.
     double width = 1.05 * (2 * rMax + 2 * hMax);
+    // The seed's broad phases: a tet is a candidate when its bounding sphere
+    // (radius <= its longest edge h) grown by 2r holds the node, so its nodes
+    // lie within 2r + 2h of it; its surface face's neighbours read one edge
+    // further: 2r + 3h.
+    if (!haloTets_.empty() || w_.settings.broadPhase != BroadPhase::Triangles)
+        width = 1.05 * (2 * rMax + 3 * hMax);
     // YADE spheres: a pair is computed by the owner of the lowest node of the
     // triangles whose bounding sphere (radius <= 2h/3 of its longest edge)
     // comes within R + r of the sphere's centre.  Their nodes lie within

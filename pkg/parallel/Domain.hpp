@@ -120,7 +120,10 @@ private:
     double sphereRadius() const;   // the largest coupled sphere's radius (0: none)
     std::vector<uint8_t> current_, elementGhost_;
     std::vector<int32_t> currentSurf_;
-    std::vector<int32_t> ownedSurf_;  // owned surface nodes (global ids), ascending
+    // Owned nodes the contact halo may send (global ids, ascending): the
+    // surface nodes, and with the seed's broad phases the registered tets'.
+    std::vector<int32_t> ownedSurf_;
+    std::vector<int32_t> haloTets_;  // owned tets of the kind registered (seed's broad phases)
     long currentVersion_ = 0;
     // Contact halo: neighbours and, per neighbour, the ghosts received from it
     // and the owned nodes sent to it in the last sendContactHalo.

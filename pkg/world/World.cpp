@@ -291,11 +291,6 @@ void World::prepareDomain() {
         domain_->ensureSphereHalo();  // spheres listed since, or larger ones: a wider contact halo now
         return;
     }
-    const std::string where = cat("QDEM under MPI (", domain_->size(), " ranks)");
-    if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) &&
-        settings.broadPhase != BroadPhase::Triangles)
-        throw InputError(where + " finds piece contacts with the default broad phase only: set "
-                                 "QdemEngine.broadPhase = 'triangles' (the seed's cases A/B/C run on one process)");
     const bool first = !domain_->everBuilt();
     if (!first) {
         // Split again (pieces were added): every rank must hold the whole
