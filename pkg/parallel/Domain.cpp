@@ -112,6 +112,52 @@ void Domain::checkSameEverywhere(const PartitionInput& in) const {
                          "every rank, not on one");
 }
 
+namespace {
+
+// FNV-1a over raw bytes.
+struct Fnv {
+    uint64_t h = 1469598103934665603ull;
+    void bytes(const void* p, std::size_t n) {
+        const auto* b = static_cast<const uint8_t*>(p);
+        for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    }
+    template <class T>
+    void vec(const std::vector<T>& v) {
+        const std::size_t n = v.size();
+        bytes(&n, sizeof n);
+        if (n) bytes(v.data(), n * sizeof(T));
+    }
+};
+
+// Equal on every rank?  Two exact 32-bit halves compared by min and max.
+bool sameEverywhere(Communicator& comm, uint64_t h) {
+    double v[4] = {double(h >> 32), double(h & 0xffffffffu), -double(h >> 32), -double(h & 0xffffffffu)};
+    comm.allreduceMin(v, 4);
+    return v[0] == -v[2] && v[1] == -v[3];
+}
+
+}  // namespace
+
+void Domain::checkYadeAlike() const {
+    Fnv f;
+    const SphereSet& S = w_.spheres;
+    f.vec(S.id), f.vec(S.radius), f.vec(S.mass), f.vec(S.pairStart), f.vec(S.pairPiece);
+    f.vec(S.pos), f.vec(S.vel), f.vec(S.angVel);
+    const std::size_t no = w_.obstacles.size();
+    f.bytes(&no, sizeof no);
+    for (const Obstacle& o : w_.obstacles) {
+        f.bytes(&o.bodyId, sizeof o.bodyId);
+        f.bytes(o.pos.data(), 3 * sizeof(double));
+        f.bytes(o.vel.data(), 3 * sizeof(double));
+    }
+    if (!sameEverywhere(*comm_, f.h))
+        throw InputError("QDEM under MPI: the ranks' YADE scenes differ (other walls, boxes, facets or spheres, or "
+                         "the same ones in other states), so their forces cannot be shared. Under plain mpiexec every "
+                         "rank must build and step the same YADE scene: seed random numbers alike on every rank, "
+                         "change bodies on every rank, and run QDEM on one process or under plain mpiexec, not "
+                         "under yade.mpy (which gives each rank other bodies: doc/parallel.md)");
+}
+
 void Domain::markCurrent() {
     current_.assign(w_.nNodes(), 0);
     for (const int32_t n : halo_.ownedNodes) current_[n] = 1;

@@ -68,6 +68,12 @@ public:
     // as wide as their largest radius asks (sendContactHalo).  Collective;
     // every rank decides alike, the spheres being the same everywhere.
     void ensureSphereHalo();
+    // Every rank's copy of YADE must hold the same obstacles and coupled
+    // spheres in the same states (they size the step's reductions, and each
+    // rank applies the same forces to its copy): checked at the start of
+    // every step by one reduction of a hash, refused on every rank with the
+    // fix otherwise (never a mismatched message).  Collective.
+    void checkYadeAlike() const;
 
     // Nodes whose state is current on this rank: owned, element ghosts and
     // contact ghosts.  version() changes whenever the set does (the contact

@@ -288,6 +288,7 @@ void World::setCommunicator(std::shared_ptr<Communicator> comm) {
 // rank alike (they all built the same scene), so no rank waits for another.
 void World::prepareDomain() {
     if (domain_->built()) {
+        domain_->checkYadeAlike();    // before any message sized by them
         domain_->ensureSphereHalo();  // spheres listed since, or larger ones: a wider contact halo now
         return;
     }
@@ -298,6 +299,7 @@ void World::prepareDomain() {
         domain_->gatherAll();
         domain_->gatherRows();
     }
+    domain_->checkYadeAlike();
     domain_->build(partitionOptions);
     sleepPhase_.awakeSetChanged();
     energyTotal_ = energy;

@@ -27,6 +27,7 @@ THREADS = int(os.environ.get("QDEM_THREADS", "1"))
 REBALANCE = os.environ.get("QDEM_MPI_REBALANCE") == "1"
 SAVE = os.environ.get("QDEM_MPI_SAVE")
 G = np.array([0, 0, -9.81])
+AT = 4 * STEPS // 5  # the step of the forced rebalance and of O.save: spheres resting on the block
 
 
 def engines():
@@ -93,11 +94,11 @@ for step in range(STEPS):
     O.step()
     impulse -= np.array(O.forces.f(0)) * O.dt  # the floor's push on the system
     mine += core.contactCounts["sphere"]  # computed on this rank
-    if REBALANCE and step == STEPS // 2 and core.mpiSize > 1:
+    if REBALANCE and step == AT and core.mpiSize > 1:
         before = np.array(core.nodeOwner)
         core.rebalance()  # forced, mid-contact: the split moves
         moved = int((np.array(core.nodeOwner) != before).sum())
-    if SAVE and step == STEPS // 2:
+    if SAVE and step == AT:
         O.save(SAVE)
     if (step + 1) % CHUNK == 0:
         n = qdem.parallel.summedCounts(core)["sphere"]
@@ -106,8 +107,18 @@ ledger = momentum() - p0 - impulse - totalMass() * G * (O.time - t0)
 out = {"ranks": core.mpiSize, "threads": THREADS, "series": series, "pos": np.array(core.pos).tolist(),
        "spheres": sphereStates(), "momentumScale": float(totalMass() * 9.81 * (O.time - t0)),
        "ledger": ledger.tolist(), "iter": core.iter, "disp": float(np.abs(np.array(core.pos) - x0).max())}
+# The sphere-piece contact histories (slot keys and tangential springs), as
+# a restart keeps them: gathered first under MPI (collective).
+if core.mpiSize > 1:
+    core.gatherState()
+state = core.saveState()
+keys = np.frombuffer(state["sphereSlotKey"], dtype=np.int32)
+shear = np.frombuffer(state["sphereSlotShear"], dtype=np.float64)
+out["historyKeys"], out["historyShear"] = keys.tolist(), shear.tolist()
 if core.mpiSize > 1:
     from mpi4py import MPI
+    every = MPI.COMM_WORLD.allgather((keys.tobytes(), shear.tobytes()))
+    out["historySameOnRanks"] = all(e == every[0] for e in every)
     every = MPI.COMM_WORLD.allgather(sphereStates())
     out["sphereRankSpread"] = float(max(np.abs(np.array(e) - np.array(every[0])).max() for e in every))
     out["rebalances"] = MPI.COMM_WORLD.allgather(core.partitionStats["rebalances"])
@@ -120,7 +131,7 @@ if SAVE:
         MPI.COMM_WORLD.Barrier()  # the file is written
     O.load(SAVE)
     core = qdem.defaultWorld().core
-    for k in range(STEPS - STEPS // 2 - 1):
+    for k in range(STEPS - AT - 1):
         O.step()
     out["reloaded"] = {"iter": [cont[2], core.iter], "dx": float(np.abs(np.array(core.pos) - cont[0]).max()),
                        "dSphere": float(np.abs(np.array(sphereStates()) - np.array(cont[1])).max())}
