@@ -45,8 +45,21 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall
 O.dt = 0.5 * qe.stableTimeStep()  # noqa: F821
 try:
     mp.mpirun(400, NP)
-    mp.mprint("after 400 steps: %d bodies here, engines %s, QDEM world split over %d rank(s), block zmin %.5f, "
-              "floor force %s" % (len(O.bodies), [type(e).__name__ for e in O.engines], qe.world.core.mpiSize,  # noqa
-                                  float(block.pos[:, 2].min()), O.forces.f(0) if O.bodies[0] else None), force=True)
+    core = qdem.defaultWorld().core
+    core.gatherAll()
+    mp.mprint("after 400 steps: QDEM world split over %d rank(s), block zmin %.5f, floor force %s"
+              % (core.mpiSize, float(block.pos[:, 2].min()), O.forces.f(0) if O.bodies[0] else None), force=True)
 except Exception as e:
-    mp.mprint("%s: %s" % (type(e).__name__, e), force=True)
+    text = str(e)  # on workers a PyRunner error wrapping qdem's: its message from 'qdem:' / 'QDEM' on
+    at = min([i for i in (text.find("qdem:"), text.find("QDEM")) if i >= 0] or [0])
+    mp.mprint("%s: %s" % (type(e).__name__, " ".join(text[at:at + 200].split())), force=True)
+# What this rank's YADE holds after mpy's split, and what QDEM was given.
+here = [b for b in O.bodies if b is not None]
+kinds = {}
+for b in here:
+    k = "subdomain" if b.isSubdomain else type(b.shape).__name__
+    kinds[k] = kinds.get(k, 0) + 1
+core = qdem.defaultWorld().core
+mp.mprint("holds %s (spheres of subdomains %s); the label qe is a %s; QDEM sees %d obstacle(s), %d sphere(s)"
+          % (kinds, sorted({b.subdomain for b in here if type(b.shape).__name__ == "Sphere"}),
+             type(qe).__name__, core.nObstacles, core.nSpheres), force=True)  # noqa: F821

@@ -358,3 +358,16 @@ def test_yade_spheres_rebalance_and_save_load_keep_histories(tmp_path):
     # Loaded, the world is split afresh: rounding apart, the same end.
     assert rl["dx"] <= 1e-12 * r["disp"]
     assert rl["dSphere"] <= max(10 * dsThreads, 1e-13) * scale
+
+
+def test_yade_mpy_is_refused_on_every_rank_without_a_hang():
+    # YADE's own MPI mode gives each rank other bodies (doc/parallel.md, "YADE's
+    # MPI mode"): refused on the master at the first step and on the workers,
+    # whose scene mpy replaced by the master's, with the same reasons and fix.
+    requireMpi()
+    rc, out = mpirun(3, ["yade", "-n", "-x", "scripts/mpi/mpy_probe.py", "refused"], timeout=240)
+    assert rc != 124, "mpiexec timed out: a hang\n" + out[-3000:]
+    for who in ("Master", "Worker1", "Worker2"):  # (scripts/mpi/mpy_probe.py prints one line per rank)
+        assert any(who + ": RuntimeError: qdem: the scene runs under yade.mpy (mp.mpirun), which QDEM cannot join"
+                   in ln for ln in out.splitlines()), who + ":\n" + out[-3000:]
+    assert "without mpy" in out and "mpiexec -n P yade -n -x script.py" in out
