@@ -215,9 +215,12 @@ void SpherePhase::unpackPairs(const double* in, long phaseIter) {
         }
         if (v[0] < 0.5) continue;  // no rank had a triangle within reach: no contact, as serially
         std::copy_n(v + 1, 6, &S.pairForceTorque[6 * at]);
-        for (int k = 0; k < K; ++k) S.slotKey[K * at + k] = static_cast<int32_t>(v[7 + k]) - 1;
-        std::copy_n(v + 7 + K, K, &S.slotRef[K * at]);
-        std::copy_n(v + 7 + 2 * K, 3 * K, &S.slotShear[3 * K * at]);
+        for (int k = 0; k < K; ++k) {
+            S.slotKey[K * at + k] = static_cast<int32_t>(v[7 + k]) - 1;
+            S.slotRef[K * at + k] = v[7 + K + k];
+            if (S.slotKey[K * at + k] >= 0)  // the springs of live slots (empty ones are never read)
+                std::copy_n(v + 7 + 2 * K + 3 * k, 3, &S.slotShear[3 * (K * at + k)]);
+        }
     }
     sumPairForces();
 }

@@ -1,7 +1,7 @@
 """The figures doc/parallel.md quotes for YADE spheres and the seed's broad
 phases under MPI, against serial runs, into bench/logs/mpi_spheres.json:
 
-    /usr/bin/python3.11 scripts/mpi/spheres_vs_serial.py
+    PYTHONPATH=build/python /usr/bin/python3.11 scripts/mpi/spheres_vs_serial.py
 
 Runs tests/mpi/yade_spheres.py (scenes 'drop' and 'clump') serially with 1
 and 2 QDEM threads and on P = 2, 3, 4 ranks, and tests/mpi/check_contacts.py

@@ -55,10 +55,10 @@ def build():
                        restitution=0.1, frictionPiece=0.6)
     piece = qdem.addPiece(qdem.boxMesh((0.3, 0.12, 0.03), (12, 5, 2)), mat, pos=(0, 0, 0.018))
     top = 0.033 + 0.003
-    parts = [utils.sphere((-0.11 + dx, dz * 0.5, top + 0.0099 + dz), r, material=fm)
+    parts = [utils.sphere((0.0 + dx, dz * 0.5, top + 0.0099 + dz), r, material=fm)
              for dx, dz, r in ((0.0, 0.0, 0.01), (0.014, 0.004, 0.008), (-0.012, 0.006, 0.007))]
     clumpId, members = O.bodies.appendClumped(parts)
-    O.bodies[clumpId].state.vel = (0.5, 0.0, 0.0)
+    O.bodies[clumpId].state.vel = (1.5, 0.0, 0.0)
     O.bodies[clumpId].state.angVel = (0.0, 0.0, 2.0)
     return piece, list(members), [clumpId]
 
@@ -123,6 +123,9 @@ if core.mpiSize > 1:
     out["sphereRankSpread"] = float(max(np.abs(np.array(e) - np.array(every[0])).max() for e in every))
     out["rebalances"] = MPI.COMM_WORLD.allgather(core.partitionStats["rebalances"])
     out["sphereContactsPerRank"] = MPI.COMM_WORLD.allgather(mine)
+    owner, x = np.array(core.nodeOwner), np.array(core.pos)
+    out["ownedBoxes"] = [np.concatenate([x[owner == r].min(axis=0), x[owner == r].max(axis=0)]).round(4).tolist()
+                         for r in range(core.mpiSize)]  # where the split cuts the pieces
     if REBALANCE:
         out["movedNodes"] = moved
 if SAVE:

@@ -316,10 +316,12 @@ def _assertSpheresAsSerial(r, s, s2, resting=True):
     # owner's, through the reduction), the serial ones to the licence.
     assert r["historySameOnRanks"]
     assert r["historyKeys"] == s["historyKeys"]
-    sh, sh2, mine = (np.array(x["historyShear"]) for x in (s, s2, r))
+    live = np.repeat(np.array(s["historyKeys"]) >= 0, 3)  # springs of slots holding a contact
+    sh, sh2, mine = (np.array(x["historyShear"])[live] for x in (s, s2, r))
     if resting:  # spheres resting on the block at the end: contacts with springs
         assert max(r["historyKeys"]) >= 0 and np.abs(sh).max() > 0
-    assert np.abs(mine - sh).max() <= max(10 * np.abs(sh2 - sh).max(), 1e-13 * np.abs(sh).max())
+    if live.any():
+        assert np.abs(mine - sh).max() <= max(10 * np.abs(sh2 - sh).max(), 1e-13 * np.abs(sh).max())
 
 
 @pytest.mark.parametrize("scene,P", [("drop", 2), ("drop", 3), ("drop", 4), ("clump", 2), ("clump", 3)])
@@ -329,8 +331,9 @@ def test_yade_spheres_and_clumps_on_ranks_as_serially(scene, P):
     r = _yadeSpheres(scene, P)
     assert r["ranks"] == P
     _assertSpheresAsSerial(r, s, s2, resting=scene == "drop")  # (the clump hops: in the air at the end)
-    if scene == "drop":  # the split cuts under the spheres: pairs are computed on several ranks
-        assert sum(n > 0 for n in r["sphereContactsPerRank"]) >= 2
+    # The split cuts under the spheres (the clump rolls across a cut): pairs
+    # are computed on several ranks.
+    assert sum(n > 0 for n in r["sphereContactsPerRank"]) >= 2
 
 
 def test_yade_spheres_save_load_keeps_their_histories_serially(tmp_path):
