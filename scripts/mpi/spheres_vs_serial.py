@@ -7,7 +7,9 @@ Runs tests/mpi/yade_spheres.py (scenes 'drop' and 'clump') serially with 1
 and 2 QDEM threads and on P = 2, 3, 4 ranks, and tests/mpi/check_contacts.py
 with broad phases A, B, C on P = 2, 3, 4; reports max |dx| over the largest
 displacement, sphere states' max difference over their largest value, and
-whether the contact counts equal the serial ones."""
+whether the contact counts equal the serial ones; and a rebalance plus
+O.save / O.load on 3 ranks ('restart': run alone with the argument
+`restart`)."""
 import json
 import os
 import subprocess
@@ -50,6 +52,34 @@ def diff(a, b):
             "countsEqual": bool(np.array_equal(np.array(a["series"])[:, 0], np.array(b["series"])[:, 0]))}
 
 
+def restart():
+    """Drop on 3 ranks, a rebalance forced and O.save at step 800, O.load, the
+    last steps again: the reloaded end against the continued one."""
+    tmp = tempfile.mkdtemp()
+    fd, out = tempfile.mkstemp(suffix=".json")
+    os.close(fd)
+    p = launch(3, ["yade", "-n", "-x", "tests/mpi/yade_spheres.py", "drop"],
+               {"QDEM_MPI_OUT": out, "QDEM_MPI_REBALANCE": "1", "QDEM_MPI_SAVE": os.path.join(tmp, "s.yade.gz")})
+    if p.returncode != 0:
+        raise SystemExit(p.stdout[-3000:])
+    with open(out) as f:
+        r = json.load(f)
+    os.remove(out)
+    rl = r["reloaded"]
+    return {"movedNodes": r["movedNodes"], "rebalances": r["rebalances"], "iter": rl["iter"],
+            "reloadedDxOverDisp": rl["dx"] / r["disp"],
+            "reloadedDSphereOverMax": rl["dSphere"] / float(np.abs(np.array(r["spheres"])).max())}
+
+
+path = os.path.join(ROOT, "bench", "logs", "mpi_spheres.json")
+if sys.argv[1:] == ["restart"]:  # only this part, into the existing record
+    with open(path) as f:
+        out = json.load(f)
+    out["restart"] = restart()
+    print(json.dumps(out["restart"]))
+    with open(path, "w") as f:
+        json.dump(out, f, indent=1)
+    raise SystemExit(0)
 out = {"spheres": {}, "broadPhases": {}}
 for scene in ("drop", "clump"):
     s1, s2 = spheres(scene, 1, 1), spheres(scene, 1, 2)
@@ -75,7 +105,7 @@ for bp in ("A", "B", "C"):
                           "interiorFaceTests": [int(s[:, 7:8].sum()), int(ss[:, 7:8].sum())] if s.shape[1] > 7 else None}
     out["broadPhases"][bp] = row
     print(bp, json.dumps(row), flush=True)
-path = os.path.join(ROOT, "bench", "logs", "mpi_spheres.json")
+out["restart"] = restart()
 with open(path, "w") as f:
     json.dump(out, f, indent=1)
 print("written", path)
