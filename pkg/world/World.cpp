@@ -284,8 +284,10 @@ void World::setCommunicator(std::shared_ptr<Communicator> comm) {
     sleepPhase_.awakeSetChanged();
 }
 
-// What is not distributed yet is refused before the first split, on every
-// rank alike (they all built the same scene), so no rank waits for another.
+// Before each step under MPI: every rank's YADE copy checked alike (walls,
+// spheres), the world split at the first step (and again after pieces were
+// added), the contact halo widened for the spheres listed.  Each check is
+// collective and decided alike everywhere, so no rank waits for another.
 void World::prepareDomain() {
     if (domain_->built()) {
         domain_->checkYadeAlike();    // before any message sized by them
