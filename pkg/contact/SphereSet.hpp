@@ -31,6 +31,11 @@ struct SphereSet {
     std::vector<double> slotShear; // tangential spring, 3 per slot
     std::vector<double> slotRef;   // reference overlap of a contact born deep (doc/contacts.md §5)
     std::vector<long> pairStamp;   // step at which the pair's slots were last written
+    std::vector<double> pairForceTorque;  // 6 per pair: what the pair gave the sphere this step
+    std::vector<uint8_t> pairComputed;    // this rank computed the pair this step (MPI: its owner)
+    // Under MPI: the pairs whose sphere box meets the whole piece's box this
+    // step (the same list on every rank: the boxes are reduced first).
+    std::vector<int32_t> active;
 
     // ---- derived on set-up ------------------------------------------------------
     double radiusMax = 0;
@@ -42,6 +47,7 @@ struct SphereSet {
     std::vector<double> triPoint, triRadius, triNormal;  // per surface triangle (3, 1, 3)
     std::vector<double> pieceTriRadius;  // per piece: largest triangle bounding radius
     std::vector<uint8_t> pieceUsed;      // per piece: some sphere may touch it
+    std::vector<uint8_t> triCurrent;     // per surface triangle: its nodes are current here (MPI)
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
 
     int32_t size() const { return static_cast<int32_t>(id.size()); }

@@ -53,10 +53,33 @@ void Domain::build(const PartitionOptions& optIn) {
     elementGhost_.assign(w_.nNodes(), 0);
     for (const auto& g : halo_.recv)
         for (const int32_t n : g) elementGhost_[n] = 1;
-    contactHalo_ = w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn);
+    contactHalo_ = (w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn)) ||
+                   sphereRadius() > 0;
+    // The owned nodes the contact halo may send: those the contact phase
+    // reads of another piece.  With the default broad phase, the surface
+    // nodes; with the seed's cases (Settings.hpp BroadPhase) the nodes of the
+    // tetrahedra registered: every tet (A) or the surface tets (B, C), whose
+    // fourth node is interior.  A tet is only registered where all its nodes
+    // are current (PieceContactPhase.cpp).
+    const SurfaceIndex& S = w_.surfaceIndex();
+    const BroadPhase bp = w_.settings.broadPhase;
+    std::vector<uint8_t> sent(w_.nNodes(), 0);
+    for (const int32_t n : halo_.ownedNodes) sent[n] = S.surfIndexOfNode[n] >= 0 || bp == BroadPhase::AllTets;
+    haloTets_.clear();
+    if (bp == BroadPhase::SurfaceTets || bp == BroadPhase::SurfaceFaces) {
+        for (const int32_t t : S.surfTets)
+            for (int k = 0; k < 4; ++k) {
+                const int32_t n = w_.tetNodes[4 * t + k];
+                if (owns(n)) sent[n] = 1;
+            }
+        for (const int32_t t : S.surfTets)
+            if (ownsTet(t)) haloTets_.push_back(t);
+    } else if (bp == BroadPhase::AllTets) {
+        haloTets_ = halo_.ownedTets;
+    }
     ownedSurf_.clear();
     for (const int32_t n : halo_.ownedNodes)
-        if (w_.surfaceIndex().surfIndexOfNode[n] >= 0) ownedSurf_.push_back(n);
+        if (sent[n]) ownedSurf_.push_back(n);
     cNbr_.clear(), cNbrPrev_.clear(), cRecv_.clear(), cSend_.clear();
     ghostTouched_.clear();
     built_ = everBuilt_ = true;
@@ -87,6 +110,52 @@ void Domain::checkSameEverywhere(const PartitionInput& in) const {
                          "so they cannot share one split. Every rank must build the same scene: seed random numbers "
                          "alike on every rank (e.g. random.seed(1) before placing pieces), and change pieces on "
                          "every rank, not on one");
+}
+
+namespace {
+
+// FNV-1a over raw bytes.
+struct Fnv {
+    uint64_t h = 1469598103934665603ull;
+    void bytes(const void* p, std::size_t n) {
+        const auto* b = static_cast<const uint8_t*>(p);
+        for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    }
+    template <class T>
+    void vec(const std::vector<T>& v) {
+        const std::size_t n = v.size();
+        bytes(&n, sizeof n);
+        if (n) bytes(v.data(), n * sizeof(T));
+    }
+};
+
+// Equal on every rank?  Two exact 32-bit halves compared by min and max.
+bool sameEverywhere(Communicator& comm, uint64_t h) {
+    double v[4] = {double(h >> 32), double(h & 0xffffffffu), -double(h >> 32), -double(h & 0xffffffffu)};
+    comm.allreduceMin(v, 4);
+    return v[0] == -v[2] && v[1] == -v[3];
+}
+
+}  // namespace
+
+void Domain::checkYadeAlike() const {
+    Fnv f;
+    const SphereSet& S = w_.spheres;
+    f.vec(S.id), f.vec(S.radius), f.vec(S.mass), f.vec(S.pairStart), f.vec(S.pairPiece);
+    f.vec(S.pos), f.vec(S.vel), f.vec(S.angVel);
+    const std::size_t no = w_.obstacles.size();
+    f.bytes(&no, sizeof no);
+    for (const Obstacle& o : w_.obstacles) {
+        f.bytes(&o.bodyId, sizeof o.bodyId);
+        f.bytes(o.pos.data(), 3 * sizeof(double));
+        f.bytes(o.vel.data(), 3 * sizeof(double));
+    }
+    if (!sameEverywhere(*comm_, f.h))
+        throw InputError("QDEM under MPI: the ranks' YADE scenes differ (other walls, boxes, facets or spheres, or "
+                         "the same ones in other states), so their forces cannot be shared. Under plain mpiexec every "
+                         "rank must build and step the same YADE scene: seed random numbers alike on every rank, "
+                         "change bodies on every rank, and run QDEM on one process or under plain mpiexec, not "
+                         "under yade.mpy (which gives each rank other bodies: doc/parallel.md)");
 }
 
 void Domain::markCurrent() {
@@ -122,6 +191,17 @@ void Domain::sendContactHalo() {
         for (int d = 0; d < 3; ++d) l2 += (w_.pos[3 * a + d] - w_.pos[3 * b + d]) * (w_.pos[3 * a + d] - w_.pos[3 * b + d]);
         mine[6] = std::max(mine[6], l2);
     }
+    // The seed's broad phases register tets: their longest edge (owned tets
+    // of the kind registered) instead.
+    for (const int32_t t : haloTets_)
+        for (int i = 0; i < 4; ++i)
+            for (int j = i + 1; j < 4; ++j) {
+                const int32_t a = w_.tetNodes[4 * t + i], b = w_.tetNodes[4 * t + j];
+                double l2 = 0;
+                for (int d = 0; d < 3; ++d)
+                    l2 += (w_.pos[3 * a + d] - w_.pos[3 * b + d]) * (w_.pos[3 * a + d] - w_.pos[3 * b + d]);
+                mine[6] = std::max(mine[6], l2);
+            }
     mine[6] = std::sqrt(mine[6]);
     for (const PieceInfo& p : w_.pieces) mine[7] = std::max(mine[7], w_.materials[p.material].radius);
     const int P = size(), me = rank();
@@ -131,7 +211,21 @@ void Domain::sendContactHalo() {
     for (int r = 0; r < P; ++r) hMax = std::max(hMax, all[8 * r + 6]), rMax = std::max(rMax, all[8 * r + 7]);
     // 5 % over the width: positions are the same on both sides, this is no
     // skin, only room for rounding in the box tests.
-    const double width = 1.05 * (2 * rMax + 2 * hMax);
+    double width = 1.05 * (2 * rMax + 2 * hMax);
+    // The seed's broad phases: a tet is a candidate when its bounding sphere
+    // (radius <= its longest edge h) grown by 2r holds the node, so its nodes
+    // lie within 2r + 2h of it; its surface face's neighbours read one edge
+    // further: 2r + 3h.
+    if (!haloTets_.empty() || w_.settings.broadPhase != BroadPhase::Triangles)
+        width = 1.05 * (2 * rMax + 3 * hMax);
+    // YADE spheres: a pair is computed by the owner of the lowest node of the
+    // triangles whose bounding sphere (radius <= 2h/3 of its longest edge)
+    // comes within R + r of the sphere's centre.  Their nodes lie within
+    // R + r + 4h/3 of the centre, so within 2 (R + r) + 8h/3 of each other:
+    // with this width the owner sees them all (SpherePhase.cpp).
+    const double Rs = sphereRadius();
+    if (Rs > 0) width = std::max(width, 1.05 * (2 * (Rs + rMax) + 3 * hMax));
+    haloSphereRadius_ = Rs;
     const auto boxOf = [&](int r) { return &all[8 * static_cast<std::size_t>(r)]; };
     const auto reaches = [&](const double* a, const double* b) {  // a grown by width meets b
         for (int d = 0; d < 3; ++d)
@@ -182,6 +276,15 @@ void Domain::sendContactHalo() {
     stepBytes += comm_->bytesSent - b0;
     stepMessages += comm_->messagesSent - m0;
     seconds += omp_get_wtime() - t0;
+}
+
+double Domain::sphereRadius() const { return w_.spheres.pairPiece.empty() ? 0.0 : w_.spheres.radiusMax; }
+
+void Domain::ensureSphereHalo() {
+    const double Rs = sphereRadius();
+    if (Rs == 0 || (contactHalo_ && Rs <= haloSphereRadius_)) return;
+    contactHalo_ = true;
+    sendContactHalo();
 }
 
 void Domain::ownedTetRuns(int32_t piece, std::vector<TetSegment>& out) const {
@@ -310,8 +413,10 @@ void Domain::finishStep(const std::string& error) {
     const double t0 = omp_get_wtime();
         const std::size_t no = w_.obstacles.size();
     const bool energyOn = w_.settings.trackEnergy;
-    // [failed, reactions (6 per obstacle), energies (10), load] of this rank.
-    const std::size_t nv = 1 + 6 * no + (energyOn ? 10 : 0) + 1;
+    // [failed, reactions (6 per obstacle), energies (10), sphere pairs, load]
+    // of this rank.
+    const std::size_t ne = energyOn ? 10 : 0, ns = w_.spherePhase_.mpiValues();
+    const std::size_t nv = 1 + 6 * no + ne + ns + 1;
     std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
     v[nv - 1] = load();
@@ -326,6 +431,9 @@ void Domain::finishStep(const std::string& error) {
                                e.contactDamping, e.friction, e.boundaryWork, e.localDamping, e.sleep};
         std::copy(es, es + 10, v.begin() + 1 + 6 * no);
     }
+    // The sphere pairs this rank computed (zeros for the others'): their
+    // sums are each pair's owner's force, torque and history.
+    if (ns > 0) w_.spherePhase_.packPairs(v.data() + 1 + 6 * no + ne);
     // Summed (the load too, for its mean) and the load's maximum, in a tree
     // of fixed shape: the same bits on every rank and every run.
     v.push_back(v[nv - 1]);
@@ -347,6 +455,7 @@ void Domain::finishStep(const std::string& error) {
         const double* s = v.data() + 1 + 6 * no;
         w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
     }
+    if (ns > 0 || !w_.spheres.pairPiece.empty()) w_.spherePhase_.unpackPairs(v.data() + 1 + 6 * no + ne, w_.iter - 1);
 }
 
 double Domain::load() const {

@@ -64,6 +64,16 @@ public:
     // then whole on the reading rank).  Renewed every step: no skin to trust.
     void sendContactHalo();
     bool contactHalo() const { return contactHalo_; }
+    // YADE spheres coupled (World::spheres): the contact halo on, at least
+    // as wide as their largest radius asks (sendContactHalo).  Collective;
+    // every rank decides alike, the spheres being the same everywhere.
+    void ensureSphereHalo();
+    // Every rank's copy of YADE must hold the same obstacles and coupled
+    // spheres in the same states (they size the step's reductions, and each
+    // rank applies the same forces to its copy): checked at the start of
+    // every step by one reduction of a hash, refused on every rank with the
+    // fix otherwise (never a mismatched message).  Collective.
+    void checkYadeAlike() const;
 
     // Nodes whose state is current on this rank: owned, element ghosts and
     // contact ghosts.  version() changes whenever the set does (the contact
@@ -112,9 +122,14 @@ private:
     World& w_;
     std::shared_ptr<Communicator> comm_;
     bool contactHalo_ = false;
+    double haloSphereRadius_ = 0;  // the sphere radius the contact halo was last made wide enough for
+    double sphereRadius() const;   // the largest coupled sphere's radius (0: none)
     std::vector<uint8_t> current_, elementGhost_;
     std::vector<int32_t> currentSurf_;
-    std::vector<int32_t> ownedSurf_;  // owned surface nodes (global ids), ascending
+    // Owned nodes the contact halo may send (global ids, ascending): the
+    // surface nodes, and with the seed's broad phases the registered tets'.
+    std::vector<int32_t> ownedSurf_;
+    std::vector<int32_t> haloTets_;  // owned tets of the kind registered (seed's broad phases)
     long currentVersion_ = 0;
     // Contact halo: neighbours and, per neighbour, the ghosts received from it
     // and the owned nodes sent to it in the last sendContactHalo.

@@ -43,6 +43,7 @@ void PieceContactPhase::run(double dt) {
     broadSeconds_ = sumSeconds_ = 0;
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = 0;
+    interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     bool anyKind = false;

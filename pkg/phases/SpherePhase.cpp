@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <unordered_map>
 
@@ -18,7 +19,9 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
+#include "../parallel/Domain.hpp"
 #include "../world/World.hpp"
+#include "../world/WorldState.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -65,15 +68,21 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
                 throw InputError(cat("sphere ", id[i], ": unknown piece ", pairPiece[q]));
     }
     SphereSet& S = w_.spheres;
-    // Carry the contact history of (id, piece) pairs over to the new order.
-    std::unordered_map<int64_t, int32_t> oldPair;
-    for (int32_t i = 0; i < S.size(); ++i)
-        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q)
-            oldPair[(static_cast<int64_t>(S.id[i]) << 20) ^ S.pairPiece[q]] = q;
-    const std::vector<int32_t> oldKey = std::move(S.slotKey);
-    const std::vector<double> oldShear = std::move(S.slotShear);
-    const std::vector<double> oldRef = std::move(S.slotRef);
-    const std::vector<long> oldStamp = std::move(S.pairStamp);
+    // The contact history of (id, piece) pairs kept: from a restart's state
+    // if one was loaded since, else from the spheres set last.
+    History old;
+    if (hasLoaded_) {
+        old = std::move(loaded_);
+        hasLoaded_ = false;
+    } else {
+        old.id = std::move(S.id);
+        old.pairStart = std::move(S.pairStart);
+        old.pairPiece = std::move(S.pairPiece);
+        old.key = std::move(S.slotKey);
+        old.shear = std::move(S.slotShear);
+        old.ref = std::move(S.slotRef);
+        old.stamp = std::move(S.pairStamp);
+    }
 
     S.id.assign(id, id + n);
     S.radius.assign(radius, radius + n);
@@ -94,17 +103,10 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
     S.slotShear.assign(3 * K * static_cast<std::size_t>(nPairs), 0.0);
     S.slotRef.assign(K * static_cast<std::size_t>(nPairs), 0.0);
     S.pairStamp.assign(nPairs, -2);
-    for (int32_t i = 0; i < n; ++i)
-        for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
-            const auto it = oldPair.find((static_cast<int64_t>(id[i]) << 20) ^ pairPiece[q]);
-            if (it == oldPair.end()) continue;
-            const int32_t o = it->second;
-            S.pairStamp[q] = oldStamp[o];
-            std::copy_n(&oldKey[K * static_cast<std::size_t>(o)], K, &S.slotKey[K * static_cast<std::size_t>(q)]);
-            std::copy_n(&oldRef[K * static_cast<std::size_t>(o)], K, &S.slotRef[K * static_cast<std::size_t>(q)]);
-            std::copy_n(&oldShear[3 * K * static_cast<std::size_t>(o)], 3 * K,
-                        &S.slotShear[3 * K * static_cast<std::size_t>(q)]);
-        }
+    S.pairForceTorque.assign(6 * static_cast<std::size_t>(nPairs), 0.0);
+    S.pairComputed.assign(nPairs, 0);
+    S.active.clear();
+    carry(old);
     // Stiffest springs, for the stable time step.
     S.radiusMax = 0;
     S.omegaMax = 0;
@@ -120,6 +122,162 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
     }
 }
 
+void SpherePhase::carry(const History& old) {
+    SphereSet& S = w_.spheres;
+    constexpr int K = SphereSet::kSlots;
+    std::unordered_map<int64_t, int32_t> oldPair;
+    const auto keyOf = [](int32_t sphere, int32_t piece) { return (static_cast<int64_t>(sphere) << 20) ^ piece; };
+    for (std::size_t i = 0; i + 1 < old.pairStart.size(); ++i)
+        for (int32_t q = old.pairStart[i]; q < old.pairStart[i + 1]; ++q) oldPair[keyOf(old.id[i], old.pairPiece[q])] = q;
+    for (int32_t i = 0; i < S.size(); ++i)
+        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
+            const auto it = oldPair.find(keyOf(S.id[i], S.pairPiece[q]));
+            if (it == oldPair.end()) continue;
+            const auto o = static_cast<std::size_t>(it->second), at = static_cast<std::size_t>(q);
+            S.pairStamp[at] = old.stamp[o];
+            std::copy_n(&old.key[K * o], K, &S.slotKey[K * at]);
+            std::copy_n(&old.ref[K * o], K, &S.slotRef[K * at]);
+            std::copy_n(&old.shear[3 * K * o], 3 * K, &S.slotShear[3 * K * at]);
+        }
+}
+
+void SpherePhase::sumPairForces() {
+    SphereSet& S = w_.spheres;
+    for (int32_t i = 0; i < S.size(); ++i) {
+        double ft[6] = {0, 0, 0, 0, 0, 0};
+        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q)
+            for (int d = 0; d < 6; ++d) ft[d] += S.pairForceTorque[6 * static_cast<std::size_t>(q) + d];
+        std::copy_n(ft, 6, &S.forceTorque[6 * static_cast<std::size_t>(i)]);
+    }
+}
+
+// ---- under MPI ---------------------------------------------------------------
+
+// A pair can hold contacts only when the sphere's box meets the piece's box
+// (grown by its particle radius), the test the contact loop starts with.
+// Under MPI the piece boxes are the whole pieces' (World::updatePieceBounds
+// reduces them when spheres are coupled) and the spheres are YADE's, the
+// same on every rank: so is this list, which sizes the reduction.
+void SpherePhase::listActive() {
+    SphereSet& S = w_.spheres;
+    S.active.clear();
+    for (int32_t i = 0; i < S.size(); ++i) {
+        const double R = S.radius[i];
+        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
+            const int32_t pb = S.pairPiece[q];
+            bool overlap = true;
+            for (int d = 0; d < 3 && overlap; ++d)
+                overlap = S.pos[3 * i + d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= S.pos[3 * i + d] + R;
+            if (overlap) S.active.push_back(q);
+        }
+    }
+}
+
+std::size_t SpherePhase::mpiValues() const { return kPairValues * w_.spheres.active.size(); }
+
+void SpherePhase::packPairs(double* out) const {
+    const SphereSet& S = w_.spheres;
+    constexpr int K = SphereSet::kSlots;
+    for (const int32_t q : S.active) {
+        const auto at = static_cast<std::size_t>(q);
+        double* o = out;
+        out += kPairValues;
+        if (!S.pairComputed[at]) {  // another rank's (or nobody's): zeros, the sum is the owner's
+            std::fill(o, out, 0.0);
+            continue;
+        }
+        o[0] = 1.0;
+        std::copy_n(&S.pairForceTorque[6 * at], 6, o + 1);
+        for (int k = 0; k < K; ++k) o[7 + k] = S.slotKey[K * at + k] + 1.0;  // exact: keys < 2^31
+        std::copy_n(&S.slotRef[K * at], K, o + 7 + K);
+        std::copy_n(&S.slotShear[3 * K * at], 3 * K, o + 7 + 2 * K);
+    }
+}
+
+void SpherePhase::unpackPairs(const double* in, long phaseIter) {
+    SphereSet& S = w_.spheres;
+    constexpr int K = SphereSet::kSlots;
+    // Every pair was looked at this step (serially too: a pair out of reach
+    // keeps no contact): its stamp, and no contact unless its owner kept one.
+    std::fill(S.pairStamp.begin(), S.pairStamp.end(), phaseIter);
+    std::fill(S.slotKey.begin(), S.slotKey.end(), -1);
+    std::fill(S.slotRef.begin(), S.slotRef.end(), 0.0);
+    std::fill(S.pairForceTorque.begin(), S.pairForceTorque.end(), 0.0);
+    for (const int32_t q : S.active) {
+        const auto at = static_cast<std::size_t>(q);
+        const double* v = in;
+        in += kPairValues;
+        if (v[0] > 1.5) {
+            const auto i = std::upper_bound(S.pairStart.begin(), S.pairStart.end(), q) - S.pairStart.begin() - 1;
+            throw StabilityError(cat("QDEM under MPI: the contacts of sphere ", S.id[i], " with piece ",
+                                     S.pairPiece[at], " were computed on ", v[0],
+                                     " ranks (internal error: the contact halo is too narrow for this sphere)"));
+        }
+        if (v[0] < 0.5) continue;  // no rank had a triangle within reach: no contact, as serially
+        std::copy_n(v + 1, 6, &S.pairForceTorque[6 * at]);
+        for (int k = 0; k < K; ++k) {
+            S.slotKey[K * at + k] = static_cast<int32_t>(v[7 + k]) - 1;
+            S.slotRef[K * at + k] = v[7 + K + k];
+            if (S.slotKey[K * at + k] >= 0)  // the springs of live slots (empty ones are never read)
+                std::copy_n(v + 7 + 2 * K + 3 * k, 3, &S.slotShear[3 * (K * at + k)]);
+        }
+    }
+    sumPairForces();
+}
+
+// ---- restarts ------------------------------------------------------------------
+
+void SpherePhase::saveFields(WorldState& s) const {
+    const SphereSet& S = w_.spheres;
+    const std::vector<int64_t> stamp(S.pairStamp.begin(), S.pairStamp.end());
+    s.put("sphereId", S.id.data(), S.id.size());
+    s.put("spherePairStart", S.pairStart.data(), S.pairStart.size());
+    s.put("spherePairPiece", S.pairPiece.data(), S.pairPiece.size());
+    s.put("sphereSlotKey", S.slotKey.data(), S.slotKey.size());
+    s.put("sphereSlotShear", S.slotShear.data(), S.slotShear.size());
+    s.put("sphereSlotRef", S.slotRef.data(), S.slotRef.size());
+    s.put("spherePairStamp", stamp.data(), stamp.size());
+}
+
+void SpherePhase::checkFields(const WorldState& s) const {
+    if (s.fields.count("sphereId") == 0) return;  // a state from before sphere histories were kept
+    constexpr int K = SphereSet::kSlots;
+    const std::size_t n = s.getAll<int32_t>("sphereId").size();
+    const std::vector<int32_t> start = s.getAll<int32_t>("spherePairStart");
+    const std::size_t pairs = start.empty() ? 0 : static_cast<std::size_t>(start.back());
+    if (!(start.size() == n + 1 || (n == 0 && start.empty())))
+        throw InputError("world state: spherePairStart does not fit sphereId");
+    s.check<int32_t>("spherePairPiece", pairs);
+    s.check<int32_t>("sphereSlotKey", K * pairs);
+    s.check<double>("sphereSlotShear", 3 * K * pairs);
+    s.check<double>("sphereSlotRef", K * pairs);
+    s.check<int64_t>("spherePairStamp", pairs);
+    for (const int32_t p : s.getAll<int32_t>("spherePairPiece"))
+        if (p < 0 || p >= static_cast<int32_t>(w_.pieces.size()))
+            throw InputError(cat("world state: a sphere pair names piece ", p, " of ", w_.pieces.size()));
+}
+
+void SpherePhase::loadFields(const WorldState& s) {
+    if (s.fields.count("sphereId") == 0) return;
+    History h;
+    h.id = s.getAll<int32_t>("sphereId");
+    h.pairStart = s.getAll<int32_t>("spherePairStart");
+    h.pairPiece = s.getAll<int32_t>("spherePairPiece");
+    h.key = s.getAll<int32_t>("sphereSlotKey");
+    h.shear = s.getAll<double>("sphereSlotShear");
+    h.ref = s.getAll<double>("sphereSlotRef");
+    const std::vector<int64_t> stamp = s.getAll<int64_t>("spherePairStamp");
+    h.stamp.assign(stamp.begin(), stamp.end());
+    // Into the spheres set now (a state loaded into a running scene), and
+    // kept for the next setSpheres (a scene whose spheres are listed again).
+    SphereSet& S = w_.spheres;
+    std::fill(S.slotKey.begin(), S.slotKey.end(), -1);
+    std::fill(S.pairStamp.begin(), S.pairStamp.end(), -2);
+    carry(h);
+    loaded_ = std::move(h);
+    hasLoaded_ = true;
+}
+
 // Per piece that a sphere may touch: its surface triangles binned by
 // centroid, with bounding radii and unit normals of the current shape.
 void SpherePhase::buildGrids() {
@@ -133,6 +291,8 @@ void SpherePhase::buildGrids() {
     S.triPoint.resize(3 * surf.nTris());
     S.triRadius.resize(surf.nTris());
     S.triNormal.resize(3 * surf.nTris());
+    S.triCurrent.resize(surf.nTris());
+    const Domain* dom = w_.domain_.get();
     for (int32_t p = 0; p < np; ++p) {
         if (!S.pieceUsed[p]) continue;
         const int32_t t0 = surf.pieceTriStart[p], t1 = surf.pieceTriStart[p + 1];
@@ -140,6 +300,14 @@ void SpherePhase::buildGrids() {
 #pragma omp parallel for schedule(static) reduction(max : rMax)
         for (int32_t t = t0; t < t1; ++t) {
             const int32_t* c = &surf.tri[3 * t];
+            // Under MPI only triangles whose nodes are current here are seen
+            // (the others' positions are stale on this rank).
+            S.triCurrent[t] = !dom || (dom->current(c[0]) && dom->current(c[1]) && dom->current(c[2]));
+            if (!S.triCurrent[t]) {
+                S.triRadius[t] = 0;
+                for (int k = 0; k < 3; ++k) S.triPoint[3 * t + k] = S.triNormal[3 * t + k] = 0;
+                continue;
+            }
             const Vector3d a = at(w_.pos, c[0]), b = at(w_.pos, c[1]), d = at(w_.pos, c[2]);
             const Vector3d m = (a + b + d) / 3.0;
             const Vector3d n = (b - a).cross(d - a).normalized();
@@ -159,6 +327,8 @@ void SpherePhase::run(double dt) {
     contacts_ = 0;
     SphereSet& S = w_.spheres;
     std::fill(S.forceTorque.begin(), S.forceTorque.end(), 0.0);
+    std::fill(S.pairForceTorque.begin(), S.pairForceTorque.end(), 0.0);
+    std::fill(S.pairComputed.begin(), S.pairComputed.end(), 0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
     buildGrids();
     w_.beginContactForces();
@@ -179,6 +349,9 @@ void SpherePhase::run(double dt) {
                 for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
     contacts_ = count;
+    // Under MPI each rank holds only the pairs it computed: the sums come
+    // with the end-of-step reduction (unpackPairs).
+    if (!w_.domain_) sumPairForces();
     if (w_.settings.trackEnergy) {
         w_.energy.contactElastic += eEl;
         w_.energy.contactDamping += eDamp;
@@ -196,6 +369,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
     const std::size_t nSurf = w_.surfNodes.size();
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    const Domain* dom = w_.domain_.get();
+    const int me = dom ? dom->rank() : 0;
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -211,9 +386,37 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
             const Vector3d v(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]);
             const Vector3d w(S.angVel[3 * i], S.angVel[3 * i + 1], S.angVel[3 * i + 2]);
             const double R = S.radius[i];
-            Vector3d F = Vector3d::Zero(), T = Vector3d::Zero();
             for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
                 const int32_t pb = S.pairPiece[q];
+                const Material& mb = w_.materials[w_.pieces[pb].material];
+                const double reach = R + mb.radius;
+                bool overlap = true;  // piece box (grown by r) against the sphere's
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
+                const int32_t t0 = surf.pieceTriStart[pb];
+                const double qr = S.pieceTriRadius[pb] + reach;
+                // Under MPI the pair is computed by the owner of the lowest-id
+                // node of the triangles within reach of the sphere (bounding
+                // spheres within R + r of its centre).  With the contact halo
+                // as wide as Domain::sendContactHalo makes it for spheres,
+                // that owner sees every such triangle, and a rank that sees
+                // another lowest node owns none of them: each pair is
+                // computed once (doc/parallel.md).
+                if (dom) {
+                    if (!overlap) continue;  // no contact: unpackPairs clears it on every rank
+                    int32_t lowest = INT32_MAX;
+                    const Vector3d lo = C.array() - qr, hi = C.array() + qr;
+                    S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+                        const int32_t t = t0 + local;
+                        if (!S.triCurrent[t]) return;
+                        const double Rt = S.triRadius[t] + reach;
+                        if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
+                        for (int k = 0; k < 3; ++k) lowest = std::min(lowest, surf.tri[3 * t + k]);
+                    });
+                    if (lowest == INT32_MAX || dom->owner(lowest) != me) continue;
+                }
+                S.pairComputed[q] = 1;
+                Vector3d F = Vector3d::Zero(), T = Vector3d::Zero();
                 int32_t* key = &S.slotKey[K * static_cast<std::size_t>(q)];
                 double* shear = &S.slotShear[3 * K * static_cast<std::size_t>(q)];
                 double* ref = &S.slotRef[K * static_cast<std::size_t>(q)];
@@ -221,19 +424,13 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 if (!watched)  // history is only valid from the previous step
                     for (int k = 0; k < K; ++k) key[k] = -1;
                 S.pairStamp[q] = stamp;
-                const Material& mb = w_.materials[w_.pieces[pb].material];
-                const double reach = R + mb.radius;
-                bool overlap = true;  // piece box (grown by r) against the sphere's
-                for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
                 cl.clear();
                 const int& nc = cl.n;
-                const int32_t t0 = surf.pieceTriStart[pb];
-                const double qr = S.pieceTriRadius[pb] + reach;
                 if (overlap) {
                     const Vector3d lo = C.array() - qr, hi = C.array() + qr;
                     S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
                         const int32_t t = t0 + local;
+                        if (!S.triCurrent[t]) return;
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
@@ -253,6 +450,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                         S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
                             if (!keep[k]) return;
                             const int32_t t = t0 + local;
+                            if (!S.triCurrent[t]) return;
                             const int32_t* c = &surf.tri[3 * t];
                             if (frontFaceNearer(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
                                                 Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
@@ -323,8 +521,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     if (k < nNew)
                         for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
                 }
+                double* ft = &S.pairForceTorque[6 * static_cast<std::size_t>(q)];
+                for (int d = 0; d < 3; ++d) ft[d] = F[d], ft[3 + d] = T[d];
             }
-            for (int d = 0; d < 3; ++d) S.forceTorque[6 * i + d] = F[d], S.forceTorque[6 * i + 3 + d] = T[d];
         }
     }
 }

@@ -4,6 +4,7 @@
 // glue), writes their forceTorque and the nodes' contact forces.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "../world/Phase.hpp"
 
@@ -24,7 +25,41 @@ public:
                     const double* friction, const double* restitution, const double* mass, const int32_t* pairStart,
                     const int32_t* pairPiece);
 
+    // ---- under MPI (doc/parallel.md, "YADE spheres") --------------------------
+    // Every rank holds every sphere (YADE's scene is replicated); a (sphere,
+    // piece) pair is computed by the owner of the lowest-id node of the
+    // triangles within its reach, and its force, torque and history reach
+    // every rank through the end-of-step reduction (Domain::finishStep), so
+    // every rank's copy of YADE applies the same force.
+    // The pairs whose sphere box meets the piece's (whole) box: the same list
+    // on every rank.  Called every step before the phases, never throws.
+    void listActive();
+    static constexpr int kPairValues = 7 + 5 * SphereSet::kSlots;  // flag, F, T, key + 1, ref, shear
+    std::size_t mpiValues() const;
+    void packPairs(double* out) const;
+    // The sums over the ranks: every rank takes the owner's results; throws
+    // StabilityError if a pair was computed on two ranks.  `phaseIter`: the
+    // step the phase ran at.
+    void unpackPairs(const double* in, long phaseIter);
+
+    // Restarts: the (sphere id, piece) pairs' contact histories.
+    void saveFields(WorldState& s) const override;
+    void checkFields(const WorldState& s) const override;
+    void loadFields(const WorldState& s) override;
+
 private:
+    // A contact history by (sphere id, piece): what setSpheres carries over.
+    struct History {
+        std::vector<int32_t> id, pairStart, pairPiece, key;
+        std::vector<double> shear, ref;
+        std::vector<long> stamp;
+    };
+    void carry(const History& old);
+    History loaded_;  // from a restart, for the next setSpheres
+    bool hasLoaded_ = false;
+    // forceTorque of each sphere: its pairs' parts summed in pair order
+    // (the same sum serially and on every rank).
+    void sumPairForces();
     // Per piece that a sphere may touch: its surface triangles binned by
     // centroid, with bounding radii and unit normals of the current shape.
     void buildGrids();

@@ -46,6 +46,7 @@ WorldState World::saveState() const {
 }
 
 void World::loadState(const WorldState& s) {
+    boxesIter_ = -1;  // (pieceBoxes: positions change)
     const std::vector<int64_t> counts = s.getAll<int64_t>("counts");
     const int64_t mine[4] = {static_cast<int64_t>(nNodes()), static_cast<int64_t>(nTets()),
                              static_cast<int64_t>(pieces.size()), static_cast<int64_t>(surfNodes.size())};

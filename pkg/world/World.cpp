@@ -195,7 +195,10 @@ void World::updatePieceBounds(bool all) {
         // With sleeping on, every rank decides which pieces sleep: they need
         // the same boxes (neighbour pieces, obstacles near), so the whole
         // pieces' boxes (one reduction).
-        if (settings.sleepVelocity > 0) {
+        // So does the sphere coupling: which (sphere, piece) pairs may touch
+        // sizes the reduction of their forces (SpherePhase::listActive), and
+        // YADE's copy of the scene on each rank moves the proxies by them.
+        if (settings.sleepVelocity > 0 || !spheres.pairPiece.empty()) {
             for (std::size_t i = 0; i < 3 * np; ++i) pieceHi_[i] = -pieceHi_[i];
             domain_->comm().allreduceMin(pieceLo_.data(), static_cast<int>(3 * np));
             domain_->comm().allreduceMin(pieceHi_.data(), static_cast<int>(3 * np));
@@ -218,6 +221,29 @@ void World::updatePieceBounds(bool all) {
             pieceHi_[3 * ip + d] = hi[d] + r;
         }
     }
+}
+
+const std::vector<double>& World::pieceBoxes() {
+    const bool split = domain_ && domain_->built();
+    if (split && boxesIter_ == iter && boxes_.size() == 6 * pieces.size()) return boxes_;
+    const std::size_t np = pieces.size();
+    boxes_.assign(6 * np, 0.0);
+    for (std::size_t p = 0; p < np; ++p) {
+        const PieceInfo& pc = pieces[p];
+        const double r = materials[pc.material].radius;
+        double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+        for (int32_t s = pc.surfBegin; s < pc.surfEnd; ++s) {
+            const int32_t n = surfNodes[s];
+            if (split && !domain_->owns(n)) continue;  // every node counted by its owner, current there
+            for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], pos[3 * n + d]), hi[d] = std::max(hi[d], pos[3 * n + d]);
+        }
+        for (int d = 0; d < 3; ++d) boxes_[6 * p + d] = lo[d] - r, boxes_[6 * p + 3 + d] = -(hi[d] + r);
+    }
+    if (split) domain_->comm().allreduceMin(boxes_.data(), static_cast<int>(6 * np));  // min of lo and of -hi
+    for (std::size_t p = 0; p < np; ++p)
+        for (int d = 0; d < 3; ++d) boxes_[6 * p + 3 + d] = -boxes_[6 * p + 3 + d];
+    boxesIter_ = split ? iter : -1;
+    return boxes_;
 }
 
 void World::beginContactForces() {
@@ -252,22 +278,22 @@ World::World() = default;
 World::~World() = default;
 
 void World::setCommunicator(std::shared_ptr<Communicator> comm) {
+    boxesIter_ = -1;
     if (comm && comm->size() > 1) domain_ = std::make_unique<Domain>(*this, std::move(comm));
     else domain_.reset();
     sleepPhase_.awakeSetChanged();
 }
 
-// What is not distributed yet is refused before the first split, on every
-// rank alike (they all built the same scene), so no rank waits for another.
+// Before each step under MPI: every rank's YADE copy checked alike (walls,
+// spheres), the world split at the first step (and again after pieces were
+// added), the contact halo widened for the spheres listed.  Each check is
+// collective and decided alike everywhere, so no rank waits for another.
 void World::prepareDomain() {
-    if (domain_->built()) return;
-    const std::string where = cat("QDEM under MPI (", domain_->size(), " ranks)");
-    if (pieces.size() > 1 && (settings.pointPolygonOn || settings.edgeEdgeOn) &&
-        settings.broadPhase != BroadPhase::Triangles)
-        throw InputError(where + " finds piece contacts with the default broad phase only: set "
-                                 "QdemEngine.broadPhase = 'triangles' (the seed's cases A/B/C run on one process)");
-    if (!spheres.id.empty())
-        throw InputError(where + " does not couple YADE spheres yet: run on one process");
+    if (domain_->built()) {
+        domain_->checkYadeAlike();    // before any message sized by them
+        domain_->ensureSphereHalo();  // spheres listed since, or larger ones: a wider contact halo now
+        return;
+    }
     const bool first = !domain_->everBuilt();
     if (!first) {
         // Split again (pieces were added): every rank must hold the whole
@@ -275,6 +301,7 @@ void World::prepareDomain() {
         domain_->gatherAll();
         domain_->gatherRows();
     }
+    domain_->checkYadeAlike();
     domain_->build(partitionOptions);
     sleepPhase_.awakeSetChanged();
     energyTotal_ = energy;

@@ -226,6 +226,11 @@ public:
     }
     long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
     const SurfaceIndex& surfaceIndex() const { return surf_; }
+    // Box (lo, hi) of each piece's surface nodes now, grown by its particle
+    // radius: 6 per piece.  Under MPI the whole pieces' (a reduction of the
+    // ranks' owned nodes, made once per step: collective on its first call
+    // in a step), so every rank's copy of YADE places its proxies alike.
+    const std::vector<double>& pieceBoxes();
     // Point-polygon contacts of the last step: kPP slots per surface node
     // holding 8 * (triangle within its piece) + feature (-1 = empty) and that piece; for diagnostics.
     const Column<int32_t>& pointPolygonKeys() const { return pieceContactPhase_.state().ppKey; }
@@ -291,6 +296,8 @@ private:
     // Per piece: bounding box of its surface nodes grown by its particle
     // radius (3 + 3 each), updated each step for the awake pieces.
     std::vector<double> pieceLo_, pieceHi_;
+    std::vector<double> boxes_;  // pieceBoxes(), made at step boxesIter_
+    long boxesIter_ = -1;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
     mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };

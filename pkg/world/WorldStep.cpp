@@ -50,6 +50,7 @@ void World::step(double dt) {
         beginPieceEnergy();
     }
     updatePieceBounds();
+    if (domain_) spherePhase_.listActive();  // the same pairs on every rank: they size the reduction
     // Forces: contacts (into contactForce_), then elements (thread buffers).
     run(obstaclePhase_);
     run(pieceContactPhase_);

@@ -56,22 +56,9 @@ void readVector(PyObject* obj, PyObject* name, double* out) {
 }
 
 // Box (lo, hi) of each piece's surface nodes, grown by its particle radius.
-std::vector<double> pieceBoxes(const World& w) {
-    const std::size_t np = w.pieces.size();
-    std::vector<double> o(6 * np);
-    for (std::size_t p = 0; p < np; ++p) {
-        const PieceInfo& pc = w.pieces[p];
-        const double r = w.materials[pc.material].radius;
-        double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-        for (int32_t s = pc.surfBegin; s < pc.surfEnd; ++s)
-            for (int d = 0; d < 3; ++d) {
-                const double x = w.pos[3 * w.surfNodes[s] + d];
-                lo[d] = std::min(lo[d], x), hi[d] = std::max(hi[d], x);
-            }
-        for (int d = 0; d < 3; ++d) o[6 * p + d] = lo[d] - r, o[6 * p + 3 + d] = hi[d] + r;
-    }
-    return o;
-}
+// The pieces' boxes now (World::pieceBoxes: under MPI a reduction over
+// the ranks, once per step, collective).
+const std::vector<double>& pieceBoxes(World& w) { return w.pieceBoxes(); }
 
 }  // namespace
 
@@ -128,13 +115,13 @@ void bindSpheres(py::module_& m) {
             py::arg("interactions"), py::arg("self"))
         .def(
             "piecesInside",
-            [](const World& w, const Reals& lo, const Reals& hi) {
+            [](World& w, const Reals& lo, const Reals& hi) {
                 // Are all pieces' boxes inside the given (pieces, 3) boxes?  The
                 // per-step test of the sphere coupling, without temporaries.
                 const std::size_t np = w.pieces.size();
                 if (lo.size() != static_cast<py::ssize_t>(3 * np) || hi.size() != static_cast<py::ssize_t>(3 * np))
                     return false;
-                const std::vector<double> b = pieceBoxes(w);
+                const std::vector<double>& b = pieceBoxes(w);
                 for (std::size_t p = 0; p < np; ++p)
                     for (int d = 0; d < 3; ++d)
                         if (b[6 * p + d] < lo.data()[3 * p + d] || b[6 * p + 3 + d] > hi.data()[3 * p + d]) return false;
@@ -146,8 +133,8 @@ void bindSpheres(py::module_& m) {
         .def_property_readonly("nSpheres", [](const World& w) { return w.spheres.size(); })
         .def(
             "pieceBounds",
-            [](const World& w) {
-                const std::vector<double> b = pieceBoxes(w);
+            [](World& w) {
+                const std::vector<double>& b = pieceBoxes(w);
                 py::array_t<double> a({static_cast<py::ssize_t>(w.pieces.size()), py::ssize_t(6)});
                 std::copy(b.begin(), b.end(), a.mutable_data());
                 return a;
@@ -178,7 +165,7 @@ void bindSpheres(py::module_& m) {
                 static PyObject* angVel = PyUnicode_InternFromString("angVel");
                 // Velocities only matter for spheres that may touch a piece this
                 // step (box test as in the contact phase): the rest skip them.
-                const std::vector<double> box = pieceBoxes(w);
+                const std::vector<double>& box = pieceBoxes(w);
                 SphereSet& S = w.spheres;
                 long full = 0;
                 for (py::ssize_t i = 0; i < n; ++i) {

@@ -191,6 +191,11 @@ def engineFor(qid):
         obj = engines.get(qid)
         if obj is not None:
             return obj
+    from . import parallel
+    if parallel._mpyInUse():
+        # A yade.mpy worker: mpy replaced its scene by the master's, whose
+        # QdemEngine arrives as a plain PyRunner naming the master's engine.
+        raise RuntimeError(parallel.MPY_REFUSAL)
     raise RuntimeError("qdem: no engine for command id %s: this scene was saved without its QDEM state. "
                        "Re-run the script that built it with 'import qdem' before O.save." % qid)
 

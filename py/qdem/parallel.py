@@ -4,8 +4,9 @@ The same script runs serially and under ``mpiexec -n P yade -n -x script.py``:
 every rank builds the whole scene, and at its first step the QdemEngine splits
 the QDEM nodes and tetrahedra along the Hilbert curve, one contiguous share
 per rank (qdem._core.World.setCommunicator).  Each rank computes its share and
-exchanges its halo; walls, boxes and facets are known on every rank, their
-reactions summed over the ranks.  After each step (QdemEngine.gatherPeriod)
+exchanges its halo; walls, boxes, facets and YADE spheres (clump members too)
+are known on every rank, their forces summed over the ranks, so every rank's
+copy of YADE moves alike.  After each step (QdemEngine.gatherPeriod)
 every rank learns every node's state again, so scripts read ``piece.pos`` as
 usual; rank 0 alone writes files."""
 import os
@@ -44,6 +45,15 @@ def isWriter():
     return rank() == 0
 
 
+MPY_REFUSAL = (
+    "qdem: the scene runs under yade.mpy (mp.mpirun), which QDEM cannot join: mpy sends each worker the master's "
+    "scene (the QdemEngine arrives as a plain PyRunner, without QDEM's world) and gives each rank other bodies "
+    "(walls on rank 0 only, each worker its own spheres), while QDEM's split needs every rank to see the same "
+    "walls and spheres (doc/parallel.md, 'YADE's MPI mode'). Run the same script without mpy: "
+    "`mpiexec -n P yade -n -x script.py` splits the QDEM pieces over P ranks with YADE spheres, clumps, walls, "
+    "boxes and facets on every rank.")
+
+
 def _mpyInUse():
     mp = sys.modules.get("yade.mpy")
     return mp is not None and getattr(mp, "comm", None) is not None and (getattr(mp, "numThreads", 1) or 1) > 1
@@ -57,10 +67,7 @@ def attach(world):
     if size <= 1 or core.mpiSize > 1:
         return
     if _mpyInUse():
-        raise RuntimeError(
-            "qdem: the scene runs under yade.mpy (mp.mpirun), which splits YADE bodies only; QDEM under mpy is not "
-            "supported yet. Run the same script with plain `mpiexec -n P yade -n -x script.py` (QDEM pieces with "
-            "walls, boxes and facets), or serially when YADE spheres share the scene.")
+        raise RuntimeError(MPY_REFUSAL)
     if not _core.hasMPI:
         raise RuntimeError(
             "qdem: started by mpiexec with %d ranks, but this build of qdem has no MPI (Open MPI or mpi4py were "

@@ -7,11 +7,11 @@ exactly where it stopped (YADE's O.save does not see QDEM's state).
     qdem.loadState("run.qdem.npz")
 
 Saved: node positions and velocities, external forces and blocked DOFs,
-every contact history (tangential springs, wall sides, contacts born deep),
-sleeping pieces, the QDEM clock and step count, energy sums.  Not saved: the
-meshes, materials and settings (the script makes them again; a different
-scene is refused, naming the difference) and YADE spheres' contact springs
-(they start again from zero, as for a new contact).  The file is written to a
+every contact history (tangential springs, wall sides, contacts born deep;
+YADE spheres' with pieces too, by sphere id and piece), sleeping pieces, the
+QDEM clock and step count, energy sums.  Not saved: the meshes, materials
+and settings (the script makes them again; a different scene is refused,
+naming the difference).  The file is written to a
 temporary name and renamed: a run stopped while saving never leaves a broken
 file behind."""
 import os

@@ -17,6 +17,11 @@ from qdem import _core  # noqa: E402
 STEPS, CHUNK = int(os.environ.get("QDEM_MPI_STEPS", 400)), 25
 comm = MPI.COMM_WORLD
 KINDS = ("pointPolygon", "edgeEdge", "wall")
+# The broad phase: 'triangles' (default) or the seed's cases 'A', 'B', 'C'
+# (A and B also count the interior faces they test, after the kinds).
+BROAD = os.environ.get("QDEM_MPI_BROADPHASE", "triangles")
+if BROAD in ("A", "B"):
+    KINDS = KINDS + ("interiorFaceTests", "interiorFaceNear")
 
 
 REBALANCE = os.environ.get("QDEM_MPI_REBALANCE") == "1"
@@ -33,15 +38,21 @@ def run(w, record, reduce):
             w.core.rebalance()
             moved.append(int((np.array(w.core.nodeOwner) != before).sum()))
         counts = [w.core.contactCounts[k] for k in KINDS]
-        record.append(reduce(counts) + [float(x) for x in w.core.obstacleReactions()[0][:3]] +
-                      [w.core.energy["total"]])
+        record.append(reduce(counts[:3]) + [float(x) for x in w.core.obstacleReactions()[0][:3]] +
+                      [w.core.energy["total"]] + reduce(counts[3:]))
 
 
 def summed(counts):
     return [int(x) for x in comm.allreduce(np.array(counts), op=MPI.SUM)]
 
 
-dist = scenes.withContacts()
+def build():
+    w = scenes.withContacts()
+    w.core.broadPhase = ("triangles", "A", "B", "C").index(BROAD)
+    return w
+
+
+dist = build()
 x0 = np.array(dist.core.pos, copy=True)
 dist.core.setCommunicator(comm)
 dist.core.rebalanceThreshold = 0  # (only the forced one, when asked)
@@ -54,7 +65,7 @@ if comm.rank == 0:
     ref = {}
     for threads in (1, 2):
         _core.setThreads(threads)
-        s = scenes.withContacts()
+        s = build()
         ss = []
         run(s, ss, lambda c: c)
         ref[threads] = (scenes.positions(s), ss)

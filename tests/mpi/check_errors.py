@@ -51,17 +51,23 @@ def check():
 
 b = caught(check)
 
-# (c) What is not distributed yet is refused on every rank alike, naming the fix.
-w = scenes.withContacts()
-w.core.broadPhase = 1  # the seed's case A
-w.core.setCommunicator(comm)
-c = caught(lambda: w.core.step(dt, 1))
 # (d) Ranks that built different scenes (unseeded random placement) are
 # told so on every rank, before any message is cut short.
 w = scenes.contactFree()
 w.pieces[1].pos[:] += 1e-3 * comm.rank
 w.core.setCommunicator(comm)
 d = caught(lambda: w.core.step(dt, 1))
+# (c) Ranks whose YADE copies hold other spheres (here: one sphere elsewhere
+# on the last rank, as an unseeded random placement would do): refused on
+# every rank at the step's start, before a reduction they would size apart.
+w = scenes.withContacts()
+w.core.setCommunicator(comm)
+i32, f64 = np.int32, np.float64
+w.core.setSpheres(np.array([7], i32), np.array([0.01]), np.array([1e7]), np.array([0.3]), np.array([0.5]),
+                  np.array([-1.0]), np.array([0.01]), np.array([0, 1], i32), np.array([0], i32))
+x = 0.05 if comm.rank == comm.size - 1 else 0.0
+w.core.setSphereStates(np.array([[x, 0.0, 0.06]], f64), np.zeros((1, 3)), np.zeros((1, 3)))
+c = caught(lambda: w.core.step(dt, 2))
 everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d}, root=0)
 if comm.rank == 0:
     print("RESULT " + json.dumps({"ranks": comm.size, "caught": everything, "nanNode": node}), flush=True)

@@ -60,9 +60,9 @@ def test_error_on_one_rank_stops_every_rank(P):
     assert len(msgs) == 1
     kind, msg = msgs.pop()
     assert kind == "StabilityError" and "not finite" in msg
-    # (c) what is not distributed yet (the seed's broad phases) is refused on every rank with the fix.
+    # (c) ranks whose YADE copies hold other spheres: refused on every rank, naming the fix.
     for c in caught:
-        assert c["c"][0] == "ValueError" and "broadPhase = 'triangles'" in c["c"][1]
+        assert c["c"][0] == "ValueError" and "YADE scenes differ" in c["c"][1] and "seed" in c["c"][1]
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
@@ -117,6 +117,30 @@ def test_contacts_across_ranks_match_serial(P):
     assert np.abs(s[:, 6] - ss[:, 6]).max() <= 1e-9 * np.abs(ss[:, 6]).max()
     # The halo is real: ghosts and messages on every rank that has neighbours.
     assert sum(r["ghosts"]) > 0 and all(m > 0 for m in r["stepMessages"])
+
+
+@pytest.mark.parametrize("broad,P", [("A", 3), ("B", 2), ("C", 4)])
+def test_seed_broad_phases_across_ranks_match_serial(broad, P):
+    # The seed's cases register tetrahedra (A: all, B/C: surface tets, whose
+    # fourth node is interior): the contact halo carries their nodes.
+    requireMpi()
+    import os
+    os.environ["QDEM_MPI_BROADPHASE"] = broad
+    try:
+        rc, out = mpirun(P, python("tests/mpi/check_contacts.py"))
+    finally:
+        del os.environ["QDEM_MPI_BROADPHASE"]
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    s, ss = np.array(r["series"]), np.array(r["serialSeries"])
+    assert np.array_equal(s[:, :3], ss[:, :3]) and (ss[:, :3].sum(axis=0) > 0).all()
+    if broad in ("A", "B"):  # the interior faces tested (the seed's Figure 6 cost) as serially
+        assert np.array_equal(s[:, 7:], ss[:, 7:]) and ss[:, 7].sum() > 0
+    d = r["maxDisplacement"]
+    assert r["dx"] <= 1e-10 * d
+    assert r["dx"] <= max(10 * r["dxThreads"], 1e-13 * d)
+    fmax = np.abs(ss[:, 3:6]).max()
+    assert np.abs(s[:, 3:6] - ss[:, 3:6]).max() <= 1e-9 * fmax
 
 
 @pytest.mark.parametrize("P", [2, 4])
@@ -214,3 +238,136 @@ def test_piece_added_mid_run_on_ranks():
     r = result(out)
     assert r["dx"] <= 1e-12 * r["disp"]
     assert r["energy"][0] == pytest.approx(r["energy"][1], rel=1e-10)
+
+
+# ---- YADE spheres and clumps (every rank holds the whole YADE scene) --------
+
+_serialSpheres = {}
+
+
+def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
+    """Runs tests/mpi/yade_spheres.py SCENE serially (P = 1) or on P ranks; its JSON."""
+    import json
+    import os
+    import subprocess
+    import tempfile
+    from mpi_launch import ROOT, env
+    fd, out = tempfile.mkstemp(suffix=".json", dir=tmp)
+    os.close(fd)
+    e = env()
+    e.update(QDEM_THREADS=str(threads), QDEM_MPI_OUT=out, OMP_NUM_THREADS=str(threads), **envExtra)
+    args = ["yade", "-n", "-x", "tests/mpi/yade_spheres.py", scene]
+    try:
+        if P == 1:
+            p = subprocess.run(["timeout", "300"] + args, cwd=ROOT, env=e, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True)
+            rc, log = p.returncode, p.stdout
+        else:
+            saved = dict(os.environ)
+            os.environ.update(envExtra, QDEM_MPI_OUT=out)
+            try:
+                rc, log = mpirun(P, args, timeout=300)
+            finally:
+                os.environ.clear()
+                os.environ.update(saved)
+        assert rc == 0, log[-4000:]
+        with open(out) as f:
+            return json.load(f)
+    finally:
+        os.remove(out)
+
+
+def _sphereReference(scene):
+    """The serial run with 1 and 2 QDEM threads (their difference is the licence)."""
+    if scene not in _serialSpheres:
+        _serialSpheres[scene] = (_yadeSpheres(scene, threads=1), _yadeSpheres(scene, threads=2))
+    return _serialSpheres[scene]
+
+
+def _sphereDiffs(a, b):
+    dx = np.abs(np.array(a["pos"]) - np.array(b["pos"])).max()
+    sa, sb = np.array(a["spheres"]), np.array(b["spheres"])
+    return dx, np.abs(sa - sb).max() / np.abs(sa).max()
+
+
+def _assertSpheresAsSerial(r, s, s2, resting=True):
+    d = s["disp"]
+    dxThreads, dsThreads = _sphereDiffs(s, s2)
+    dx, ds = _sphereDiffs(s, r)
+    # Every sphere contact computed once: the counts summed over the ranks are
+    # the serial ones, every 25 steps; the scene has contacts.
+    ser, mine = np.array(s["series"]), np.array(r["series"])
+    assert np.array_equal(mine[:, 0], ser[:, 0]) and ser[:, 0].sum() > 10
+    # Every rank's copy of YADE got the same forces: its spheres are bit-identical.
+    assert r["sphereRankSpread"] == 0.0
+    # Summation order is the only licence: as far as 1 vs 2 threads serially.
+    assert dx <= 1e-10 * d and dx <= max(10 * dxThreads, 1e-13 * d)
+    assert ds <= max(10 * dsThreads, 1e-13)
+    # The floor reaction (QDEM's, summed over the ranks, plus YADE's) and the energy as serial.
+    fmax = np.abs(ser[:, 1:4]).max()
+    assert fmax > 1.0 and np.abs(mine[:, 1:4] - ser[:, 1:4]).max() <= 1e-9 * fmax
+    assert np.abs(mine[:, 4] - ser[:, 4]).max() <= 1e-9 * np.abs(ser[:, 4]).max()
+    # Momentum of spheres and pieces against the floor's impulse and gravity.
+    assert np.abs(r["ledger"]).max() <= 1e-12 * r["momentumScale"]
+    # The sphere-piece contact histories: the same on every rank (each pair's
+    # owner's, through the reduction), the serial ones to the licence.
+    assert r["historySameOnRanks"]
+    assert r["historyKeys"] == s["historyKeys"]
+    live = np.repeat(np.array(s["historyKeys"]) >= 0, 3)  # springs of slots holding a contact
+    sh, sh2, mine = (np.array(x["historyShear"])[live] for x in (s, s2, r))
+    if resting:  # spheres resting on the block at the end: contacts with springs
+        assert max(r["historyKeys"]) >= 0 and np.abs(sh).max() > 0
+    if live.any():
+        assert np.abs(mine - sh).max() <= max(10 * np.abs(sh2 - sh).max(), 1e-13 * np.abs(sh).max())
+
+
+@pytest.mark.parametrize("scene,P", [("drop", 2), ("drop", 3), ("drop", 4), ("clump", 2), ("clump", 3)])
+def test_yade_spheres_and_clumps_on_ranks_as_serially(scene, P):
+    requireMpi()
+    s, s2 = _sphereReference(scene)
+    r = _yadeSpheres(scene, P)
+    assert r["ranks"] == P
+    _assertSpheresAsSerial(r, s, s2, resting=scene == "drop")  # (the clump hops: in the air at the end)
+    # The split cuts under the spheres (the clump rolls across a cut): pairs
+    # are computed on several ranks.
+    assert sum(n > 0 for n in r["sphereContactsPerRank"]) >= 2
+
+
+def test_yade_spheres_save_load_keeps_their_histories_serially(tmp_path):
+    # One process: O.save with spheres resting on the block, O.load, the same
+    # steps again: bit for bit (the sphere-piece springs are in the state;
+    # without them the spheres end 0.016 apart).
+    r = _yadeSpheres("drop", 1, QDEM_MPI_SAVE=str(tmp_path / "s.yade.gz"))
+    assert r["reloaded"]["iter"][0] == r["reloaded"]["iter"][1]
+    assert r["reloaded"]["dx"] == 0.0 and r["reloaded"]["dSphere"] == 0.0
+
+
+def test_yade_spheres_rebalance_and_save_load_keep_histories(tmp_path):
+    # A rebalance forced mid-contact moves nodes between ranks; O.save at the
+    # same step, the run goes on, then O.load and the run goes on again: the
+    # sphere-piece contact histories survive both.
+    requireMpi()
+    s, s2 = _sphereReference("drop")
+    r = _yadeSpheres("drop", 3, QDEM_MPI_REBALANCE="1", QDEM_MPI_SAVE=str(tmp_path / "s.yade.gz"))
+    assert r["movedNodes"] > 0 and min(r["rebalances"]) >= 1
+    _assertSpheresAsSerial(r, s, s2)
+    rl = r["reloaded"]
+    assert rl["iter"][0] == rl["iter"][1]
+    _, dsThreads = _sphereDiffs(s, s2)
+    scale = np.abs(np.array(r["spheres"])).max()
+    # Loaded, the world is split afresh: rounding apart, the same end.
+    assert rl["dx"] <= 1e-12 * r["disp"]
+    assert rl["dSphere"] <= max(10 * dsThreads, 1e-13) * scale
+
+
+def test_yade_mpy_is_refused_on_every_rank_without_a_hang():
+    # YADE's own MPI mode gives each rank other bodies (doc/parallel.md, "YADE's
+    # MPI mode"): refused on the master at the first step and on the workers,
+    # whose scene mpy replaced by the master's, with the same reasons and fix.
+    requireMpi()
+    rc, out = mpirun(3, ["yade", "-n", "-x", "scripts/mpi/mpy_probe.py", "refused"], timeout=240)
+    assert rc != 124, "mpiexec timed out: a hang\n" + out[-3000:]
+    for who in ("Master", "Worker1", "Worker2"):  # (scripts/mpi/mpy_probe.py prints one line per rank)
+        assert any(who + ": RuntimeError: qdem: the scene runs under yade.mpy (mp.mpirun), which QDEM cannot join"
+                   in ln for ln in out.splitlines()), who + ":\n" + out[-3000:]
+    assert "without mpy" in out and "mpiexec -n P yade -n -x script.py" in out
