@@ -234,7 +234,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         elif core.nSpheres:
             core.setSpheres(*_NO_SPHERES)
         dt = O.dt
-        key = (dt, core.nPieces, self.viscosity, coupling.version if coupling else None)
+        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, coupling.version if coupling else None)
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
