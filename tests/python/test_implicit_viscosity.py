@@ -142,16 +142,19 @@ def _momentum(p):
     return np.sum(p.mass[:, None] * p.vel, axis=0)
 
 
-def test_momentum_is_conserved_whatever_the_tolerance():
+def test_momentum_is_conserved_whatever_the_tolerance(rng):
     w, p = _table1_cube()
+    p.vel[:] += rng.normal(0, 0.3, p.vel.shape)  # no symmetry to hide behind
+    w.core.gravity = (0, 0, -9.81)
     w.core.viscousIntegration = IMPLICIT
     w.core.viscousTolerance = 0.4  # a few iterations only: far from converged
     p0 = _momentum(p)
     scale = float(np.sum(p.mass) * np.abs(p.vel).max())
     dt = 0.8 * w.stableDt()["combined"]
-    for _ in range(20):
+    for k in range(1, 21):
         w.core.step(dt, 10)
-        assert np.abs(_momentum(p) - p0).max() < 1e-13 * scale
+        expected = p0 + np.sum(p.mass) * np.array([0, 0, -9.81]) * 10 * k * dt  # gravity's impulse only
+        assert np.abs(_momentum(p) - expected).max() < 1e-13 * scale
     assert w.core.counts["viscousIterations"] >= 1
 
 
@@ -180,7 +183,9 @@ def test_blocked_dofs_keep_their_velocity_and_the_rest_follows_explicit():
     assert np.all(a.vel[pushed, 0] == 0.3)
     moved = np.abs(b.pos - b.refPos).max()
     assert moved > 1e-3
-    assert np.abs(a.pos - b.pos).max() < 0.02 * moved
+    # first-order apart at this step: ~3e-5 of the motion (treating the blocked rows as
+    # unknowns of the solve instead gives 4e-3)
+    assert np.abs(a.pos - b.pos).max() < 2e-4 * moved
 
 
 def test_a_sleeping_piece_changes_nothing():
