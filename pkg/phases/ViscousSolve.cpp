@@ -28,7 +28,13 @@ bool viscous(const World& w, const Material& m) { return w.settings.viscosityOn 
 }  // namespace
 
 bool ViscousSolve::active() const {
-    if (w_.settings.viscousIntegration != ViscousIntegration::Implicit || !w_.settings.viscosityOn) return false;
+    if (w_.settings.viscousIntegration != ViscousIntegration::Implicit) return false;
+    if (w_.domain())  // every rank has the same settings: all refuse at the same step
+        throw InputError(
+            "QDEM: viscousIntegration='implicit' is not available under MPI yet (its conjugate gradients are not "
+            "distributed): set QdemEngine(viscousIntegration='explicit') with O.dt below "
+            "stableDt()['combinedExplicit'], or run on one process.");
+    if (!w_.settings.viscosityOn) return false;
     for (const TetSegment& sg : w_.sleeping().awakeTets())
         if (w_.materials[w_.pieces[sg.piece].material].viscosity > 0) return true;
     return false;
@@ -144,11 +150,6 @@ void ViscousSolve::diagonal(double* diag) {
 }
 
 const double* ViscousSolve::solve(double dt, const double* f) {
-    if (w_.domain())
-        throw InputError(
-            "QDEM: viscousIntegration='implicit' is not available under MPI yet (its conjugate gradients are not "
-            "distributed): set QdemEngine(viscousIntegration='explicit') with O.dt below "
-            "stableDt()['combinedExplicit'], or run on one process.");
     const double t0 = omp_get_wtime();
     const int nth = omp_get_max_threads();
     if (!layout_.matches(nth, w_.sleeping().version()))

@@ -27,11 +27,12 @@ class ViscousSolve {
 public:
     explicit ViscousSolve(World& w) : w_(w) {}
     // Implicit viscosity asked for, viscosity on, and an awake piece viscous.
+    // Throws InputError under MPI (not distributed yet), naming the fix.
     bool active() const;
     // Solves for the step's viscous correction from the explicit forces f
     // (3 per node, read on the awake nodes); returns q = C D (3 per node,
-    // valid on the awake nodes).  Throws InputError under MPI and
-    // StabilityError when the iterations do not converge.
+    // valid on the awake nodes).  Throws StabilityError when the iterations
+    // do not converge.
     const double* solve(double dt, const double* f);
     // With the energy tracked: the integrator writes v_{n+1/2} - v_{n-1/2}
     // here (3 per awake node), then dissipation() returns the work of the
