@@ -124,6 +124,7 @@ void IntegrationPhase::report(PhaseReport& r) const {
     r.seconds.push_back({name(), seconds - viscous_.seconds});
     r.seconds.push_back({"viscousSolve", viscous_.seconds});
     r.counts.push_back({"viscousIterations", viscous_.iterations});
+    r.counts.push_back({"viscousIterationsTotal", viscous_.totalIterations});  // since the world was built
 }
 
 double IntegrationPhase::maxSpeed2(std::size_t piece) const {

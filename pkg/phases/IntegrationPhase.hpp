@@ -17,7 +17,8 @@ public:
     const char* name() const override { return "integrate"; }
     void run(double dt) override;
     // "integrate" without the implicit viscous solve, "viscousSolve", and its
-    // conjugate-gradient iterations in the last step ("viscousIterations").
+    // conjugate-gradient iterations in the last step ("viscousIterations")
+    // and in all steps so far ("viscousIterationsTotal").
     void report(PhaseReport& r) const override;
     // Largest squared node speed of a piece in the last run (sleeping on only).
     double maxSpeed2(std::size_t piece) const;
