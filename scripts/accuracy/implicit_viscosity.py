@@ -41,8 +41,12 @@ from acclib import G, Stepper, floor, lame, oneThread  # noqa: E402
 XI_MAX = 10.0  # damping ratio of the stiffest element mode
 
 
+TOLERANCE = [1e-6]  # viscousTolerance of the implicit runs (the tolerance sweep changes it)
+
+
 def _setup(w, integration):
     w.core.viscousIntegration = {"explicit": 0, "implicit": 1}[integration]
+    w.core.viscousTolerance = TOLERANCE[0]
 
 
 def _iters(w):
@@ -206,9 +210,16 @@ def main(argv=None):
     ap.add_argument("--short", action="store_true")
     ap.add_argument("--out", default="out/accuracy")
     ap.add_argument("--log", action="store_true", help="also write bench/logs/implicit_viscosity.json")
+    ap.add_argument("--tolerance-only", action="store_true",
+                    help="only the tolerance sweep, added to an existing out/accuracy/implicit_viscosity.json")
     a = ap.parse_args(argv)
     oneThread()
     t0 = time.time()
+    if a.tolerance_only:
+        with open(os.path.join(a.out, "implicit_viscosity.json")) as f:
+            out = json.load(f)
+        out["tolerance"] = toleranceSweep(out)
+        return _write(out, a, t0)
     fr = (0.1, 0.3, 0.9) if a.short else (0.05, 0.1, 0.2, 0.4, 0.9)
     out = {"xiMax": XI_MAX, "mode": [], "pwave": [], "bouncing": []}
 
@@ -243,7 +254,33 @@ def main(argv=None):
             if name == "mode":
                 r["dissipationVsExplicit"] = r["dissipated"] / ref["dissipated"] - 1
         out[name] = rows
-    out["seconds"] = time.time() - t0
+    out["tolerance"] = toleranceSweep(out)
+    return _write(out, a, t0)
+
+
+def toleranceSweep(out, fraction=0.4):
+    """The bar's mode and the bouncing block at 0.4 of the limit, implicit, for
+    viscousTolerance 1e-2 .. 1e-8: what the stopping rule buys."""
+    rows = []
+    refs = {n: next(r for r in out[n] if r["integration"] == "explicit") for n in ("mode", "bouncing")}
+    for tol in (1e-2, 1e-4, 1e-6, 1e-8):
+        TOLERANCE[0] = tol
+        for name, run in (("mode", runMode), ("bouncing", runBouncing)):
+            r = run("implicit", fraction)
+            r.update(problem=name, tolerance=tol, fraction=fraction)
+            if name == "mode":
+                r["dissipationVsExplicit"] = r["dissipated"] / refs[name]["dissipated"] - 1
+            else:
+                r["dissipationError"] = r["viscous"] / refs[name]["viscous"] - 1
+            rows.append(r)
+            print("implicit_viscosity tolerance %g %s %s" % (tol, name, "  ".join(
+                "%s=%.4g" % (k, v) for k, v in r.items() if isinstance(v, (int, float)))), flush=True)
+    TOLERANCE[0] = 1e-6
+    return rows
+
+
+def _write(out, a, t0):
+    out["seconds"] = out.get("seconds", 0) + time.time() - t0
     os.makedirs(a.out, exist_ok=True)
     paths = [os.path.join(a.out, "implicit_viscosity.json")]
     if a.log:
@@ -253,9 +290,6 @@ def main(argv=None):
             json.dump(out, f, indent=1)
         print("implicit_viscosity: wrote %s (%.0f s)" % (path, time.time() - t0), flush=True)
 
-
-if __name__ == "__main__":
-    main()
 
 
 # ---- the doc/accuracy.md section (report.py appends it) ---------------------
@@ -306,4 +340,20 @@ def section(data):
                      "at %.2g of the limit it runs %.1fx faster than explicit at its limit.\n" % (
                          same["wallPerSecond"] / best["wallPerSecond"], same["cgPerStep"], fastest["fraction"],
                          best["wallPerSecond"] / fastest["wallPerSecond"]))
+    tol = data.get("tolerance") or []
+    if tol:
+        t.append("### What the stopping rule buys (implicit at %.2g of the limit)\n" % tol[0]["fraction"])
+        t.append("| viscousTolerance | problem | CG iterations / step | wall s / simulated s | error |")
+        t.append("| --- | --- | --- | --- | --- |")
+        for r in tol:
+            err = ("decay rate %s, dissipation vs analytic %s" % (_pct(r["rateError"]), _pct(r["dissipationError"]))
+                   if r["problem"] == "mode" else "ledger %.2e, dissipation vs reference %s" % (
+                       r["ledgerError"], _pct(r["dissipationError"])))
+            t.append("| %g | %s | %.1f | %.3g | %s |" % (r["tolerance"], r["problem"], r["cgPerStep"],
+                                                        r["wallPerSecond"], err))
+        t.append("")
     return "\n".join(t) + "\n"
+
+
+if __name__ == "__main__":
+    main()

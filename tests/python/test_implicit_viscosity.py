@@ -275,3 +275,40 @@ def test_bad_settings_are_refused_with_the_allowed_values():
     w = qdem.World()
     with pytest.raises(Exception, match="viscousIntegration.*must be one of"):
         w.core.viscousIntegration = 2
+
+
+def test_yade_sphere_on_an_implicitly_viscous_slab_balances_momentum_through_the_floor(scene):
+    """A YADE sphere bouncing on a viscous slab (implicit, beyond the explicit
+    viscous limit): its contact forces are explicit forces of the solve, and
+    sphere + slab momentum changes by the floor's impulse and gravity's only."""
+    from yade import FrictMat, Vector3
+    from test_spheres import _engines, _slab
+    O = scene
+    g = np.array([0, 0, -9.81])
+    mat, slab, floor = _slab(O, young=1e8, viscosity=3e4)
+    fm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.5, density=2000))
+    from yade import utils
+    sid = O.bodies.append(utils.sphere((0.013, 0.007, 0.055), 0.005, material=fm))
+    O.bodies[sid].state.vel = Vector3(0.3, 0, -1.0)
+    O.engines = _engines(viscousIntegration="implicit")
+    s = O.engines[3].stableDt()
+    O.dt = 0.5 * s["combined"]
+    assert O.dt > 2 * s["combinedExplicit"]
+    b = O.bodies[sid]
+    m = b.state.mass
+
+    def momentum():
+        return m * np.array(b.state.vel) + slab.momentum()
+
+    p0 = momentum()
+    impulse = np.zeros(3)
+    touched = 0
+    for _ in range(1500):
+        O.step()
+        impulse -= np.array(O.forces.f(floor)) * O.dt
+        touched += O.engines[3].world.core.contactCounts["sphere"] > 0
+    gravityImpulse = (m + slab.totalMass) * g * O.time
+    scale = m * 1.0 + slab.totalMass * 9.81 * O.time
+    assert touched > 10
+    assert b.state.vel[2] > 0  # it bounced
+    assert np.abs(momentum() - p0 - impulse - gravityImpulse).max() < 1e-9 * scale
