@@ -57,7 +57,7 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
       "step, as every other force; the stable step shrinks as h^2 with viscosity) or 'implicit' (each step solves " \
       "(M + dt C) v = M v_old + dt f for the new velocities by conjugate gradients: viscosity no longer limits "    \
       "O.dt, elasticity and contacts stay explicit; one process only).  doc/formulation.md, section 2.1.")          \
-    X(double, viscousTolerance, "viscousTolerance", 1e-6, within(1e-14, 0.5),                                        \
+    X(double, viscousTolerance, "viscousTolerance", 1e-3, within(1e-14, 0.5),                                        \
       "viscousIntegration='implicit': the conjugate gradients stop when the error of the step's velocity change "    \
       "is at most this fraction of that change (kinetic-energy norm; a bound, doc/formulation.md 2.1).")           \
     X(double, localDamping, "damping", 0.0, withinOpenTop(0, 1),                                                     \
