@@ -126,7 +126,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
 
     def stableDt(self):
         """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
-        current YADE obstacles included."""
+        current YADE obstacles included.  combinedExplicit and combinedImplicit are the
+        combined limit with the viscous force integrated explicitly and implicitly
+        (viscousIntegration); combined is the one in force."""
         self._syncObstacles()
         if self._spheres is not None and self.spheres:
             self._spheres.listAll(O)  # any sphere may come near: bound them all
