@@ -62,6 +62,7 @@ bench-mpi: build
 # What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md
 accuracy: build
 	@mkdir -p out/accuracy
+	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/implicit_viscosity.py --out out/accuracy
 	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/run_accuracy.py --out out/accuracy
 
 # Trajectories of this build against another one (OLD=<that build>/python):

@@ -39,24 +39,44 @@ void IntegrationPhase::run(double dt) {
         threadSpeed2_.resize(nth);
         for (auto& t : threadSpeed2_) t.assign(w_.pieces.size(), 0.0);
     }
+    // The explicit force on node n: element buffers, contacts, gravity, external.
+    const auto explicitForce = [&](int32_t n, double* f) {
+        for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
+        for (int t = 0; t < nth; ++t)
+            if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
+                const double* b = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+                f[0] += b[0];
+                f[1] += b[1];
+                f[2] += b[2];
+            }
+        if (withContacts)
+            for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
+        if (Fg)
+            for (int d = 0; d < 3; ++d) f[d] += Fg[3 * n + d];
+    };
+    // Implicit viscosity (ViscousSolve.hpp): the explicit forces first, then
+    // the viscous correction q, applied as the force f - q.
+    const bool implicit = viscous_.active();
+    const double* Fq = nullptr;
+    viscous_.iterations = 0;
+    viscous_.seconds = 0;
+    if (implicit) {
+#pragma omp parallel for num_threads(nth) schedule(static)
+        for (int32_t i = 0; i < count; ++i) explicitForce(all ? i : ids[i], Fout + 3 * (all ? i : ids[i]));
+        Fq = viscous_.solve(dt, Fout);
+    }
+    double* dV = implicit && energyOn ? viscous_.velocityChange() : nullptr;
 #pragma omp parallel num_threads(nth) reduction(+ : ek, eg, ed)
     {
         double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < count; ++i) {
             const int32_t n = all ? i : ids[i];
-            double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
-            for (int t = 0; t < nth; ++t)
-                if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
-                    const double* b = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
-                    f[0] += b[0];
-                    f[1] += b[1];
-                    f[2] += b[2];
-                }
-            if (withContacts)
-                for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
-            if (Fg)
-                for (int d = 0; d < 3; ++d) f[d] += Fg[3 * n + d];
+            double f[3];
+            if (Fq)
+                for (int d = 0; d < 3; ++d) f[d] = Fout[3 * n + d] - Fq[3 * n + d];
+            else
+                explicitForce(n, f);
             const double invM = 1.0 / M[n];
             for (int d = 0; d < 3; ++d) {
                 Fout[3 * n + d] = f[d];
@@ -75,7 +95,8 @@ void IntegrationPhase::run(double dt) {
                     eg -= M[n] * g[d] * vOld * dt;
                 }
                 V[3 * n + d] = vOld + dt * a;
-                X[3 * n + d] += dt * V[3 * n + d];
+                if (dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
+                else X[3 * n + d] += dt * V[3 * n + d];
             }
             if (speed2) {
                 const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
@@ -84,11 +105,26 @@ void IntegrationPhase::run(double dt) {
             }
         }
     }
+    if (dV) {
+        w_.energy.viscous += viscous_.dissipation(dt, V);
+#pragma omp parallel for num_threads(nth) schedule(static)
+        for (int32_t i = 0; i < count; ++i) {
+            const int32_t n = all ? i : ids[i];
+            for (int d = 0; d < 3; ++d) X[3 * n + d] += dt * V[3 * n + d];
+        }
+    }
     if (energyOn) {
         w_.energy.kinetic = ek;
         w_.energy.gravity += eg;
         w_.energy.localDamping += ed;
     }
+}
+
+void IntegrationPhase::report(PhaseReport& r) const {
+    r.seconds.push_back({name(), seconds - viscous_.seconds});
+    r.seconds.push_back({"viscousSolve", viscous_.seconds});
+    r.counts.push_back({"viscousIterations", viscous_.iterations});
+    r.counts.push_back({"viscousIterationsTotal", viscous_.totalIterations});  // since the world was built
 }
 
 double IntegrationPhase::maxSpeed2(std::size_t piece) const {

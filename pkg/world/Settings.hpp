@@ -26,6 +26,9 @@ enum class BroadPhase : int {
     SurfaceFaces = 3  // C: surface tetrahedra only, interior faces skipped
 };
 
+// How the Kelvin-Voigt viscous force is integrated (ViscousSolve.hpp).
+enum class ViscousIntegration : int { Explicit = 0, Implicit = 1 };
+
 // What values a setting may take: any (bool), a closed or half-open range,
 // or named choices (enums; the index is the enum's value).
 struct SettingRange {
@@ -48,6 +51,15 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
       "Sum the energy ledger each step (QdemEngine takes it from O.trackEnergy).")                                   \
     X(bool, viscosityOn, "viscosity", true, anyValue(),                                                              \
       "Apply the Kelvin-Voigt viscous stress (False switches it off).")                                              \
+    X(ViscousIntegration, viscousIntegration, "viscousIntegration", ViscousIntegration::Explicit,                   \
+      oneOf({"explicit", "implicit"}),                                                                               \
+      "How the Kelvin-Voigt viscous force is integrated: 'explicit' (default: with the velocity of the last half "  \
+      "step, as every other force; the stable step shrinks as h^2 with viscosity) or 'implicit' (each step solves " \
+      "(M + dt C) v = M v_old + dt f for the new velocities by conjugate gradients: viscosity no longer limits "    \
+      "O.dt, elasticity and contacts stay explicit; one process only).  doc/formulation.md, section 2.1.")          \
+    X(double, viscousTolerance, "viscousTolerance", 1e-3, within(1e-14, 0.5),                                        \
+      "viscousIntegration='implicit': the conjugate gradients stop when the error of the step's velocity change "    \
+      "is at most this fraction of that change (kinetic-energy norm; a bound, doc/formulation.md 2.1).")           \
     X(double, localDamping, "damping", 0.0, withinOpenTop(0, 1),                                                     \
       "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping (which QDEM does not "         \
       "inherit): for quasi-static problems; 0 keeps the dynamics exact.")                                            \

@@ -145,7 +145,9 @@ void World::checkCurrentDt(double dt) const {
         if (asleep(i)) continue;  // does not move: checked while it was awake, and again when it wakes
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
-        const double beta = settings.viscosityOn ? m.beta() : 0.0;
+        // Implicit viscosity damps without limiting the step (stableDt()).
+        const bool implicit = settings.viscousIntegration == ViscousIntegration::Implicit;
+        const double beta = settings.viscosityOn && !implicit ? m.beta() : 0.0;
         double wc = 0, xic = 0;
         contactMode(i, wc, xic);  // as in stableDt()
         auto limitAt = [&](double we) {
@@ -228,7 +230,7 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
 
 StableDt World::stableDt() const {
     const double inf = std::numeric_limits<double>::infinity();
-    StableDt r{inf, inf, inf, inf, "none"};
+    StableDt r{inf, inf, inf, inf, "none", inf, inf};
     if (omegaCache_.size() != pieces.size()) {
         omegaCache_.resize(pieces.size());
         for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
@@ -247,18 +249,30 @@ StableDt World::stableDt() const {
         // quadrature, damping rates (c/m) add.
         const double w = std::sqrt(we * we + wc * wc);
         const double c = beta * we * we + 2 * xic * wc;
-        r.combined = std::min(r.combined, leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0));
+        r.combinedExplicit = std::min(r.combinedExplicit, leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0));
+        // Implicit viscosity: for one mode with explicit damping ratio xi_e
+        // and implicit xi_i the limit is leapfrogLimit(w, xi_e - xi_i)
+        // (doc/formulation.md 3), never below the undamped one.  Only the
+        // explicit (contact) damping is counted: the implicit part would
+        // raise the limit past 2/w only for modes that C damps as it damps
+        // K (stiffness-proportional), which large strains do not ensure.
+        const double ce = 2 * xic * wc;
+        r.combinedImplicit = std::min(r.combinedImplicit, leapfrogLimit(w, w > 0 ? ce / (2 * w) : 0.0));
     }
+    const bool implicit = settings.viscousIntegration == ViscousIntegration::Implicit;
+    r.combined = implicit ? r.combinedImplicit : r.combinedExplicit;
     if (spheres.omegaMax > 0) {
         // The same springs on the sphere side (undamped: the conservative bound).
         const double ds = leapfrogLimit(spheres.omegaMax, 0.0);
         r.contact = std::min(r.contact, ds);
         r.combined = std::min(r.combined, ds);
+        r.combinedExplicit = std::min(r.combinedExplicit, ds);
+        r.combinedImplicit = std::min(r.combinedImplicit, ds);
     }
-    const double lim = std::min({r.elastic, r.viscous, r.contact});
+    const double lim = std::min({r.elastic, implicit ? r.elastic : r.viscous, r.contact});
     if (std::isfinite(lim)) {
         if (r.contact == lim) r.limitedBy = "contact";
-        else if (r.viscous < r.elastic) r.limitedBy = "viscosity";
+        else if (!implicit && r.viscous < r.elastic) r.limitedBy = "viscosity";
         else r.limitedBy = "elasticity (P-wave)";
     }
     return r;
@@ -271,7 +285,11 @@ void World::checkDt(double dt) const {
         throw StabilityError(cat("QDEM: O.dt=", dt, " s exceeds the stable time step ", s.combined,
                                  " s by a factor ", dt / s.combined, " (limited by ", s.limitedBy,
                                  "; elastic limit ", s.elastic, " s, with viscosity ", s.viscous,
-                                 " s, contact ", s.contact, " s). Lower O.dt, the viscosity or the stiffness."));
+                                 " s, contact ", s.contact, " s). Lower O.dt, the viscosity or the stiffness",
+                                 s.limitedBy == "viscosity"
+                                     ? cat(", or set QdemEngine(viscousIntegration='implicit') (limit ",
+                                           s.combinedImplicit, " s).")
+                                     : std::string(".")));
 }
 
 }  // namespace qdem

@@ -57,6 +57,9 @@ struct StableDt {
     double contact;   // node-obstacle spring-dashpot, stiffest w kn / m over the surface nodes
     double combined;  // all of the above acting on one node: the step we enforce
     std::string limitedBy;
+    // The combined step with the viscous force integrated explicitly, and
+    // implicitly (settings.viscousIntegration): `combined` is one of them.
+    double combinedExplicit, combinedImplicit;
 };
 
 // Inverted elements found by World::countInverted.

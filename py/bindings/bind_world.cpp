@@ -162,6 +162,8 @@ void bindWorld(py::module_& m) {
                  d["viscous"] = s.viscous;
                  d["contact"] = s.contact;
                  d["combined"] = s.combined;
+                 d["combinedExplicit"] = s.combinedExplicit;
+                 d["combinedImplicit"] = s.combinedImplicit;
                  d["limitedBy"] = s.limitedBy;
                  return d;
              })
@@ -225,6 +227,15 @@ void bindWorld(py::module_& m) {
                                    for (const auto& [name, v] : w.report().counts) d[name] = v;
                                    return d;
                                })
+        .def_property_readonly(
+            "counts",
+            [](const World& w) {
+                py::dict d;
+                for (const auto& [name, v] : w.report().counts) d[name] = v;
+                return d;
+            },
+            "The phases' counters of the last step: contacts by kind (as contactCounts) and "
+            "viscousIterations (conjugate-gradient iterations of viscousIntegration='implicit').")
         .def_property_readonly("maxPieceOverlap", &World::maxPieceOverlap)
         .def(
             "pointPolygonContacts",

@@ -126,7 +126,9 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
 
     def stableDt(self):
         """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
-        current YADE obstacles included."""
+        current YADE obstacles included.  combinedExplicit and combinedImplicit are the
+        combined limit with the viscous force integrated explicitly and implicitly
+        (viscousIntegration); combined is the one in force."""
         self._syncObstacles()
         if self._spheres is not None and self.spheres:
             self._spheres.listAll(O)  # any sphere may come near: bound them all
@@ -234,7 +236,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         elif core.nSpheres:
             core.setSpheres(*_NO_SPHERES)
         dt = O.dt
-        key = (dt, core.nPieces, self.viscosity, coupling.version if coupling else None)
+        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, coupling.version if coupling else None)
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key

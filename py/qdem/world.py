@@ -77,7 +77,8 @@ class World:
         return p
 
     def stableDt(self):
-        """Stable time step: dict with elastic, viscous, contact, combined [s] and limitedBy."""
+        """Stable time step: dict with elastic, viscous, contact, combined [s] and limitedBy;
+        combinedExplicit / combinedImplicit: combined with explicit / implicit viscosity."""
         return self.core.stableDt()
 
 

@@ -271,6 +271,16 @@ precision throughout, as Debian's YADE.
         if "order" in res:
             text += "Fitted convergence order (element size): %.2f over all levels, %.2f over the finest three.\n\n" % (
                 res["order"], res["orderFine"])
+    # The implicit-viscosity study (its own script, run by make accuracy before
+    # this one; the committed log when it was not run).
+    for iv in (os.path.join(outdir, "implicit_viscosity.json"), os.path.join(ROOT, "bench", "logs",
+                                                                             "implicit_viscosity.json")):
+        if os.path.exists(iv):
+            sys.path.insert(0, HERE)
+            import implicit_viscosity
+            with open(iv) as f:
+                text += implicit_viscosity.section(json.load(f))
+            break
     text += "## Set-ups (the scripts' docstrings)\n\n"
     sys.path.insert(0, HERE)
     import run_accuracy

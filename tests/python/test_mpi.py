@@ -66,6 +66,10 @@ def test_error_on_one_rank_stops_every_rank(P):
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
+    # (e) implicit viscosity under MPI: refused on every rank, naming the fix.
+    for c in caught:
+        assert c["e"][0] == "ValueError" and "viscousIntegration='implicit' is not available under MPI" in c["e"][1]
+        assert "viscousIntegration='explicit'" in c["e"][1]
 
 
 def test_yade_floor_force_under_mpiexec_equals_serial():

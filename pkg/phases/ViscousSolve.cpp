@@ -1,0 +1,269 @@
+// Semi-implicit Kelvin-Voigt viscosity: Jacobi-preconditioned conjugate
+// gradients on (M + dt C(x)) D = dt f (ViscousSolve.hpp; derivation and
+// stopping rule in doc/formulation.md section 2.1).
+#include "ViscousSolve.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "../element/ElementKernel.hpp"
+#include "../element/ViscousOperator.hpp"
+#include "../world/World.hpp"
+
+namespace qdem {
+
+namespace {
+
+// Enough for a condition number of M + dt C of ~1e7 at a tolerance of 1e-6
+// (CG needs about sqrt(kappa)/2 ln(2/tol) iterations); beyond it the step
+// is not worth solving this way and the user is told so.
+constexpr int kMaxIterations = 5000;
+
+bool viscous(const World& w, const Material& m) { return w.settings.viscosityOn && m.viscosity > 0; }
+
+}  // namespace
+
+bool ViscousSolve::active() const {
+    if (w_.settings.viscousIntegration != ViscousIntegration::Implicit) return false;
+    if (w_.domain())  // every rank has the same settings: all refuse at the same step
+        throw InputError(
+            "QDEM: viscousIntegration='implicit' is not available under MPI yet (its conjugate gradients are not "
+            "distributed): set QdemEngine(viscousIntegration='explicit') with O.dt below "
+            "stableDt()['combinedExplicit'], or run on one process.");
+    if (!w_.settings.viscosityOn) return false;
+    for (const TetSegment& sg : w_.sleeping().awakeTets())
+        if (w_.materials[w_.pieces[sg.piece].material].viscosity > 0) return true;
+    return false;
+}
+
+template <class Fn>
+void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
+    constexpr int kSums = 4;
+    const int nth = layout_.nThreads;
+    partial_.assign(static_cast<std::size_t>(kSums) * nth, 0.0);
+    const bool all = w_.sleeping().everything();
+    const int32_t* ids = w_.sleeping().awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+#pragma omp parallel num_threads(nth)
+    {
+        double s[kSums] = {0, 0, 0, 0};
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < count; ++i) fn(all ? i : ids[i], s);
+        std::copy(s, s + kSums, partial_.data() + kSums * omp_get_thread_num());
+    }
+    for (int k = 0; k < nSums; ++k) {
+        sums[k] = 0;
+        for (int t = 0; t < nth; ++t) sums[k] += partial_[kSums * t + k];  // thread order: deterministic
+    }
+}
+
+void ViscousSolve::apply(const double* p, double* y) {
+    const int32_t* conn = w_.tetNodes.data();
+    const ViscousStressOnly law;
+    const bool all = w_.sleeping().everything();
+    const int32_t* ids = w_.sleeping().awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+#pragma omp parallel num_threads(layout_.nThreads)
+    {
+        const int th = omp_get_thread_num();
+        std::vector<double>& buf = layout_.buffers[th];
+        std::fill(buf.begin(), buf.end(), 0.0);
+        const int32_t lo = layout_.nodeLo[th];
+        BatchOut out;
+        for (const TetSegment& sg : layout_.share[th]) {
+            const Material& m = w_.materials[w_.pieces[sg.piece].material];
+            if (!viscous(w_, m)) continue;
+            const ElementParams prm{m.lambda(), m.mu(), m.beta()};
+            for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes) {
+                const int cnt = std::min<int32_t>(kLanes, sg.t1 - e0);
+                elementBatch<ViscousStressOnly, true, false>(law, e0, cnt, conn, w_.pos.data(), p, w_.tetB.data(),
+                                                             w_.tetVol0.data(), prm, out);
+                for (int l = 0; l < cnt; ++l) {
+                    const int32_t* c = conn + 4 * (e0 + l);
+                    for (int k = 0; k < 4; ++k) {
+                        double* o = buf.data() + 3 * (c[k] - lo);
+                        o[0] -= out.f[k][0][l];  // the kernel gives the force -C p
+                        o[1] -= out.f[k][1][l];
+                        o[2] -= out.f[k][2][l];
+                    }
+                }
+            }
+        }
+#pragma omp barrier
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < count; ++i) {
+            const int32_t n = all ? i : ids[i];
+            double s[3] = {0, 0, 0};
+            for (int t = 0; t < layout_.nThreads; ++t)
+                if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
+                    const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
+                    s[0] += b[0], s[1] += b[1], s[2] += b[2];
+                }
+            for (int d = 0; d < 3; ++d) y[3 * n + d] = s[d];
+        }
+    }
+}
+
+void ViscousSolve::diagonal(double* diag) {
+    const int32_t* conn = w_.tetNodes.data();
+    const bool all = w_.sleeping().everything();
+    const int32_t* ids = w_.sleeping().awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+#pragma omp parallel num_threads(layout_.nThreads)
+    {
+        const int th = omp_get_thread_num();
+        std::vector<double>& buf = layout_.buffers[th];
+        std::fill(buf.begin(), buf.end(), 0.0);
+        const int32_t lo = layout_.nodeLo[th];
+        const double* X = w_.pos.data();
+        for (const TetSegment& sg : layout_.share[th]) {
+            const Material& m = w_.materials[w_.pieces[sg.piece].material];
+            if (!viscous(w_, m)) continue;
+            const ElementParams prm{m.lambda(), m.mu(), m.beta()};
+            for (int32_t e = sg.t0; e < sg.t1; ++e) {
+                const int32_t* c = conn + 4 * e;
+                const Mat3 B = loadRowMajor(w_.tetB.data() + 9 * e);
+                const Mat3 F = edgeMatrix(X + 3 * c[0], X + 3 * c[1], X + 3 * c[2], X + 3 * c[3]) * B;
+                double d[4][3];
+                viscousDiagonal(F, B, w_.tetVol0[e], prm, d);
+                for (int k = 0; k < 4; ++k)
+                    for (int i = 0; i < 3; ++i) buf[3 * (c[k] - lo) + i] += d[k][i];
+            }
+        }
+#pragma omp barrier
+#pragma omp for schedule(static)
+        for (int32_t i = 0; i < count; ++i) {
+            const int32_t n = all ? i : ids[i];
+            double s[3] = {0, 0, 0};
+            for (int t = 0; t < layout_.nThreads; ++t)
+                if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
+                    const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
+                    s[0] += b[0], s[1] += b[1], s[2] += b[2];
+                }
+            for (int d = 0; d < 3; ++d) diag[3 * n + d] = s[d];
+        }
+    }
+}
+
+const double* ViscousSolve::solve(double dt, const double* f) {
+    const double t0 = omp_get_wtime();
+    const int nth = omp_get_max_threads();
+    if (!layout_.matches(nth, w_.sleeping().version()))
+        layout_.build(w_.tetNodes.data(), w_.sleeping().awakeTets(), nth, w_.sleeping().version());
+    const std::size_t n3 = 3 * w_.nNodes();
+    for (auto* v : {&x_, &r_, &z_, &p_, &cp_, &q_, &diag_, &delta_})
+        if (v->size() != n3) v->assign(n3, 0.0);
+    const double* M = w_.mass.data();
+    const uint8_t* blk = w_.blocked.data();
+    double* X = x_.data();
+    double* R = r_.data();
+    double* Z = z_.data();
+    double* P = p_.data();
+    double* CP = cp_.data();
+    double* Q = q_.data();
+    double* D = diag_.data();
+    const double tol2 = w_.settings.viscousTolerance * w_.settings.viscousTolerance;
+
+    // Jacobi preconditioner: the diagonal of M + dt C on the current shape.
+    diagonal(D);
+    // Warm start D = 0, i.e. v = v_{n-1/2} (the last step's solution to
+    // within its residual): the residual is dt f, no operator application.
+    double s[4];
+    nodeLoop(2, s, [&](int32_t n, double* acc) {
+        for (int d = 0; d < 3; ++d) {
+            const int32_t k = 3 * n + d;
+            D[k] = M[n] + dt * D[k];
+            X[k] = 0, Q[k] = 0;
+            if ((blk[n] >> d) & 1u) {
+                R[k] = Z[k] = P[k] = 0;
+                continue;
+            }
+            R[k] = dt * f[k];
+            Z[k] = R[k] / D[k];
+            P[k] = Z[k];
+            acc[0] += R[k] * Z[k];
+            acc[1] += R[k] * R[k] / M[n];
+        }
+    });
+    double rz = s[0], rMr = s[1];
+    iterations = 0;
+    // Stop when ||r||_{M^-1} <= tol ||D||_M: the velocity change's error is
+    // then at most tol times the change (doc/formulation.md 2.1).
+    while (rMr > 0) {
+        if (iterations == kMaxIterations)
+            throw StabilityError(cat("QDEM: the implicit viscous solve did not converge in ", kMaxIterations,
+                                     " iterations at step ", w_.iter, " (relative error bound ",
+                                     std::sqrt(rMr) / std::sqrt(std::max(s[2], 1e-300)), ", asked ",
+                                     w_.settings.viscousTolerance,
+                                     "): raise QdemEngine.viscousTolerance, lower O.dt, or use "
+                                     "viscousIntegration='explicit'."));
+        apply(P, CP);
+        nodeLoop(1, s, [&](int32_t n, double* acc) {
+            for (int d = 0; d < 3; ++d) {
+                const int32_t k = 3 * n + d;
+                if (!((blk[n] >> d) & 1u)) acc[0] += P[k] * (M[n] * P[k] + dt * CP[k]);
+            }
+        });
+        const double pAp = s[0];
+        if (!(pAp > 0) || !std::isfinite(pAp))
+            throw StabilityError(cat("QDEM: the implicit viscous solve broke down at step ", w_.iter,
+                                     " (p.Ap = ", pAp, "): positions or velocities are not finite; lower O.dt."));
+        const double alpha = rz / pAp;
+        nodeLoop(3, s, [&](int32_t n, double* acc) {
+            for (int d = 0; d < 3; ++d) {
+                const int32_t k = 3 * n + d;
+                Q[k] += alpha * CP[k];  // every DOF: the viscous force on blocked ones too
+                if ((blk[n] >> d) & 1u) continue;
+                X[k] += alpha * P[k];
+                R[k] -= alpha * (M[n] * P[k] + dt * CP[k]);
+                Z[k] = R[k] / D[k];
+                acc[0] += R[k] * Z[k];
+                acc[1] += R[k] * R[k] / M[n];
+                acc[2] += M[n] * X[k] * X[k];
+            }
+        });
+        ++iterations;
+        rMr = s[1];
+        if (rMr <= tol2 * s[2]) break;
+        const double beta = s[0] / rz;
+        rz = s[0];
+        nodeLoop(0, s, [&](int32_t n, double*) {
+            for (int d = 0; d < 3; ++d) {
+                const int32_t k = 3 * n + d;
+                if (!((blk[n] >> d) & 1u)) P[k] = Z[k] + beta * P[k];
+            }
+        });
+    }
+    totalIterations += iterations;
+    seconds = omp_get_wtime() - t0;
+    return Q;
+}
+
+double ViscousSolve::dissipation(double dt, const double* vNew) {
+    const double t0 = omp_get_wtime();
+    // The applied viscous force is -g, g = C v_old + q = C(v_old + D), with
+    // v_old + D the velocity the solve converged to (v_{n+1/2} within its
+    // residual).  Booked: dt g.v_{n+1/2} (= dt v_{n+1/2}.C v_{n+1/2} >= 0 when
+    // converged, the mirror of the explicit dt v_{n-1/2}.C v_{n-1/2};
+    // doc/formulation.md 2.1).  The element phase booked dt v_old.C v_old;
+    // what is left is dt (v_old.C delta + q.v_new), delta = v_new - v_old.
+    double* CD = cp_.data();
+    apply(delta_.data(), CD);
+    const double* Q = q_.data();
+    const double* Dl = delta_.data();
+    double s[4];
+    nodeLoop(1, s, [&](int32_t n, double* acc) {
+        for (int d = 0; d < 3; ++d) {
+            const int32_t k = 3 * n + d;
+            acc[0] += (vNew[k] - Dl[k]) * CD[k] + Q[k] * vNew[k];
+        }
+    });
+    seconds += omp_get_wtime() - t0;
+    return dt * s[0];
+}
+
+}  // namespace qdem

@@ -1,0 +1,61 @@
+// Semi-implicit Kelvin-Voigt viscosity (settings.viscousIntegration =
+// Implicit; doc/formulation.md section 2.1).
+//
+// The leapfrog's velocity update becomes
+//     (M + dt C(x_n)) v_{n+1/2} = M v_{n-1/2} + dt (f_elastic + f_contact + f_ext + m g)
+// with C the viscous operator on the current shape (ViscousOperator.hpp):
+// elasticity and contacts stay explicit.  Written for the increment
+// D = v_{n+1/2} - v_{n-1/2} it reads (M + dt C) D = dt f, where f is the
+// explicit force of the step *with* the viscous force at v_{n-1/2} (what the
+// element phase computes anyway), so D = 0 is the warm start that costs no
+// operator application.  Jacobi-preconditioned conjugate gradients over the
+// free DOFs of the awake nodes (blocked DOFs keep their velocity: D = 0
+// there) return q = C D; the integrator then applies the force f - q, so
+// the viscous forces applied are element forces, each summing to zero:
+// momentum is conserved whatever the tolerance.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../world/ThreadLayout.hpp"
+
+namespace qdem {
+
+class World;
+
+class ViscousSolve {
+public:
+    explicit ViscousSolve(World& w) : w_(w) {}
+    // Implicit viscosity asked for, viscosity on, and an awake piece viscous.
+    // Throws InputError under MPI (not distributed yet), naming the fix.
+    bool active() const;
+    // Solves for the step's viscous correction from the explicit forces f
+    // (3 per node, read on the awake nodes); returns q = C D (3 per node,
+    // valid on the awake nodes).  Throws StabilityError when the iterations
+    // do not converge.
+    const double* solve(double dt, const double* f);
+    // With the energy tracked: the integrator writes v_{n+1/2} - v_{n-1/2}
+    // here (3 per awake node), then dissipation() returns the work of the
+    // viscous correction in the step (doc/formulation.md 2.1, "Energy").
+    double* velocityChange() { return delta_.data(); }
+    double dissipation(double dt, const double* vNew);
+
+    int iterations = 0;    // of the last solve
+    long totalIterations = 0;
+    double seconds = 0;    // wall time of the last solve (and its energy term)
+
+private:
+    // y = C p over the awake tets (3 per node, written on the awake nodes).
+    void apply(const double* p, double* y);
+    void diagonal(double* d);
+    // Sums of a*b (and more) over the free DOFs of the awake nodes, per thread
+    // then in thread order: the same bits for a given thread count.
+    template <class Fn>
+    void nodeLoop(int nSums, double* sums, Fn&& fn);
+
+    World& w_;
+    ThreadLayout layout_;
+    std::vector<double> x_, r_, z_, p_, y_, cp_, q_, diag_, delta_, partial_;
+};
+
+}  // namespace qdem
