@@ -18,6 +18,7 @@
 
 #include "../world/Phase.hpp"
 #include "../world/Settings.hpp"
+#include "PieceContactData.hpp"
 
 namespace qdem {
 
@@ -28,7 +29,7 @@ struct PieceContactState;
 struct KindStep {
     double dt;
     bool friction;                     // settings.frictionOn
-    World& world;
+    const PieceContactData& world;     // what the phase declares of the world, read-only to kinds
     PieceContactPhase& phase;
     const PieceContactState& lists;    // neighbour pieces (nbrStart/nbrs), active pieces, Verlet lists
     // Per thread, 3 per surface node (index into World::surfNodes): the
@@ -45,7 +46,7 @@ public:
     // returns the number of contacts.
     virtual long run(KindStep& s) = 0;
     // Growth of its history with the surfaces (pieces added).
-    virtual void piecesAdded(const World&) {}
+    virtual void piecesAdded(const PieceContactData&) {}
     virtual void stateColumns(StateColumns&) {}
     virtual void report(PhaseReport&) const {}
 };

@@ -7,33 +7,35 @@
 #include <cmath>
 
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
+#include "ElementPhase.hpp"
+#include "SleepPhase.hpp"
 #include "IntegrationPhase.hpp"
 
 namespace qdem {
 
 void IntegrationPhase::run(double dt) {
-    const auto N = static_cast<int32_t>(w_.nNodes());
-    const ThreadLayout& layout = elements_.layout();
+    const auto N = static_cast<int32_t>(w_.mass.size());
+    const ThreadLayout& layout = w_.elements.layout();
     const int nth = layout.nThreads;
     const bool energyOn = w_.settings.trackEnergy;
-    const bool withContacts = w_.contactsActive_;
+    const bool withContacts = w_.contacts.active;
     const double g[3] = {w_.gravity[0], w_.gravity[1], w_.gravity[2]};
     double* X = w_.pos.data();
     double* V = w_.vel.data();
     double* Fout = w_.force.data();
     const double* Fext = w_.extForce.data();
-    const double* Fc = w_.contactForce_.data();
+    const double* Fc = w_.contacts.force.data();
     const double* M = w_.mass.data();
     // Under MPI: what other ranks computed on this rank's nodes (Domain.hpp).
-    const double* Fg = w_.domain() ? w_.domain()->ghostForce() : nullptr;
+    const double* Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
     const uint8_t* blk = w_.blocked.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
     double ek = 0, eg = 0, ed = 0;
     const double damp = w_.settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
-    const bool all = w_.sleeping().everything();
-    const int32_t* ids = w_.sleeping().awakeNodes().data();
-    const auto count = all ? N : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+    const bool all = w_.sleeping.everything();
+    const int32_t* ids = w_.sleeping.awakeNodes().data();
+    const auto count = all ? N : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
     const bool sleepOn = w_.settings.sleepVelocity > 0;
     if (sleepOn) {
         threadSpeed2_.resize(nth);
@@ -79,7 +81,7 @@ void IntegrationPhase::run(double dt) {
             }
             if (speed2) {
                 const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
-                double& m = speed2[w_.nodePiece[n]];
+                double& m = speed2[nodePiece[n]];
                 m = std::max(m, v2);
             }
         }

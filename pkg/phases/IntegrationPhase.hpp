@@ -1,25 +1,52 @@
 // The leapfrog update of the awake nodes: element forces (the element
 // phase's thread buffers), contact forces, gravity and external forces.
 #pragma once
+#include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
+#include "../core/Column.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../world/ContactForces.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 
 namespace qdem {
 
 class ElementPhase;
+class SleepPhase;
 
 class IntegrationPhase final : public Phase {
 public:
-    IntegrationPhase(World& world, const ElementPhase& elements) : Phase(world), elements_(elements) {}
+    // What it reads and writes of the world.
+    struct Data {
+        const Column<double>& mass;
+        const Column<double>& extForce;
+        const Column<uint8_t>& blocked;
+        const Column<int32_t>& nodePiece;
+        const std::vector<PieceInfo>& pieces;
+        const Eigen::Vector3d& gravity;
+        const Settings& settings;
+        const SleepPhase& sleeping;        // the awake nodes
+        const ElementPhase& elements;      // its thread buffers of element forces
+        const ContactForces& contacts;
+        DomainRef domain;                  // forces other ranks computed on this rank's nodes
+        Column<double>& pos;
+        Column<double>& vel;
+        Column<double>& force;             // the total force of the step, for output
+        Energy& energy;                    // kinetic, gravity work, local damping
+    };
+    explicit IntegrationPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "integrate"; }
     void run(double dt) override;
     // Largest squared node speed of a piece in the last run (sleeping on only).
     double maxSpeed2(std::size_t piece) const;
 
 private:
-    const ElementPhase& elements_;
+    Data w_;
     std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece
 };
 

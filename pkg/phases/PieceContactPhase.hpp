@@ -12,14 +12,17 @@
 
 #include "../world/Phase.hpp"
 #include "ContactKind.hpp"
+#include "PieceContactData.hpp"
 #include "PieceContactState.hpp"
 
 namespace qdem {
 
 class PieceContactPhase final : public Phase {
 public:
+    // What it reads and writes of the world (its kinds see the same).
+    using Data = PieceContactData;
     // Makes one kernel per row of the contact-kinds table (ContactKind.hpp).
-    explicit PieceContactPhase(World& world);
+    explicit PieceContactPhase(const Data& data);
     const char* name() const override { return "pieceContacts"; }
     void run(double dt) override;
     // Its time split into broad phase (lists), point-polygon (with the sum of
@@ -53,7 +56,10 @@ public:
     template <bool Friction>
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
+    const Data& data() const { return w_; }
+
 private:
+    Data w_;
     long listDomainVersion_ = -1;  // Domain::currentVersion the Verlet lists were built for
     struct Kind {
         const ContactKindRow* row;

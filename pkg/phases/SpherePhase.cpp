@@ -18,7 +18,6 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
-#include "../world/World.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -124,7 +123,7 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
 // centroid, with bounding radii and unit normals of the current shape.
 void SpherePhase::buildGrids() {
     SphereSet& S = w_.spheres;
-    const SurfaceIndex& surf = w_.surf_;
+    const SurfaceIndex& surf = w_.surface;
     const auto np = static_cast<int32_t>(w_.pieces.size());
     S.pieceUsed.assign(np, 0);
     for (int32_t p : S.pairPiece) S.pieceUsed[p] = 1;
@@ -161,7 +160,7 @@ void SpherePhase::run(double dt) {
     std::fill(S.forceTorque.begin(), S.forceTorque.end(), 0.0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
     buildGrids();
-    w_.beginContactForces();
+    w_.contacts.begin();
     const int nth = omp_get_max_threads();
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
@@ -176,7 +175,7 @@ void SpherePhase::run(double dt) {
 #pragma omp parallel for schedule(static) num_threads(nth)
         for (int32_t s = s0; s < s1; ++s)
             for (int th = 0; th < nth; ++th)
-                for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+                for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
     contacts_ = count;
     if (w_.settings.trackEnergy) {
@@ -189,13 +188,14 @@ void SpherePhase::run(double dt) {
 template <bool Friction>
 void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
     SphereSet& S = w_.spheres;
-    const SurfaceIndex& surf = w_.surf_;
+    const SurfaceIndex& surf = w_.surface;
     const int32_t n = S.size();
     constexpr int K = SphereSet::kSlots;
     const long stamp = w_.iter;
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
     const std::size_t nSurf = w_.surfNodes.size();
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    const double* X = w_.pos.data();  // (a local: the loop stores through narrow pointers)
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -225,7 +225,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 const double reach = R + mb.radius;
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
+                    overlap = C[d] - R <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= C[d] + R;
                 cl.clear();
                 const int& nc = cl.n;
                 const int32_t t0 = surf.pieceTriStart[pb];
@@ -237,7 +237,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
-                        cl.consider(C, t, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                        cl.consider(C, t, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                                     Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true);
                     });
                 }
@@ -254,7 +254,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                             if (!keep[k]) return;
                             const int32_t t = t0 + local;
                             const int32_t* c = &surf.tri[3 * t];
-                            if (frontFaceNearer(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                            if (frontFaceNearer(C, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                                                 Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
                                 keep[k] = false;
                         });

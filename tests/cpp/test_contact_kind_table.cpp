@@ -23,7 +23,7 @@ constexpr double kStiffness = 1000.0;  // [N/m]
 class NodeNodeRepulsion final : public ContactKind {
 public:
     long run(KindStep& s) override {
-        const World& w = s.world;
+        const PieceContactData& w = s.world;
         const PieceContactState& L = s.lists;  // neighbour pieces from the broad phase
         double* buf = s.threadForce[0].data();  // (runs on one thread)
         long n = 0;
