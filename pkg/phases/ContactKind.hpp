@@ -51,12 +51,26 @@ public:
     virtual void report(PhaseReport&) const {}
 };
 
+// What a kind needs the broad phase to register (bits of ContactKindRow::lists):
+// the phase builds, each step, the lists that some switched-on kind declares
+// and no others.
+enum Registration : unsigned {
+    RegisterNothing = 0,
+    // surface triangles near other pieces in cell lists, and each surface
+    // node's Verlet list of them (the seed's cases A/B/C: tetrahedra)
+    RegisterSurfaceTriangles = 1u << 0,
+    // feature edges near other pieces in box grids, and each registered
+    // edge's Verlet list of the higher pieces' edges
+    RegisterFeatureEdges = 1u << 1,
+};
+
 struct ContactKindRow {
     const char* name;       // its counter and timing name
-    const char* registers;  // what the broad phase registers for it
+    const char* registers;  // what the broad phase registers for it (in words, for the docs)
     const char* history;    // its contact history (keys by stable ids)
     bool Settings::*on;     // its switch; nullptr: always on
     std::unique_ptr<ContactKind> (*make)();
+    unsigned lists = RegisterNothing;  // Registration bits: the broad-phase lists it reads
 };
 
 // The table: the seed's point-polygon and edge-edge kinds, then rows added

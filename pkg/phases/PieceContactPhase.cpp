@@ -26,6 +26,19 @@ PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
 
 bool PieceContactPhase::kindOn(const Kind& k) const { return !k.row->on || w_.settings.*(k.row->on); }
 
+bool PieceContactPhase::anyKindOn() const {
+    for (const Kind& k : kinds_)
+        if (kindOn(k)) return true;
+    return false;
+}
+
+unsigned PieceContactPhase::listsWanted() const {
+    unsigned lists = RegisterNothing;
+    for (const Kind& k : kinds_)
+        if (kindOn(k)) lists |= k.row->lists;
+    return lists;
+}
+
 void PieceContactPhase::report(PhaseReport& r) const {
     // The sum of the thread buffers is booked to the first kind (point-polygon, the main user).
     r.seconds.push_back({"broadPhase", broadSeconds_});
@@ -45,9 +58,10 @@ void PieceContactPhase::run(double dt) {
     maxOverlap_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
-    bool anyKind = false;
-    for (const Kind& k : kinds_) anyKind = anyKind || kindOn(k);
-    if (np < 2 || !anyKind) return;
+    if (np < 2 || !anyKindOn()) return;
+    // The lists the switched-on kinds declare (their rows' Registration bits).
+    const unsigned lists = listsWanted();
+    const bool triLists = lists & RegisterSurfaceTriangles, edgeLists = lists & RegisterFeatureEdges;
 
     // Which pieces can touch another one at all?  Sweep and prune on x:
     // pieces sorted by the low end of their boxes, each compared only with
@@ -178,7 +192,7 @@ void PieceContactPhase::run(double dt) {
     for (std::size_t ip = 0; ip < np; ++ip) {
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
-        if (st_.pieceActive[ip] && w_.settings.pointPolygonOn && rebuild) {
+        if (st_.pieceActive[ip] && triLists && rebuild) {
             if (!tetItems) {
                 for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
                     addItem(t, &S.tri[3 * t], 3, r, ip);
@@ -190,7 +204,7 @@ void PieceContactPhase::run(double dt) {
             }
         }
         if (rebuild) st_.itemStart[ip + 1] = static_cast<int32_t>(st_.items.size());
-        if (st_.pieceActive[ip] && w_.settings.edgeEdgeOn && edgeRebuild) {
+        if (st_.pieceActive[ip] && edgeLists && edgeRebuild) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
@@ -232,7 +246,7 @@ void PieceContactPhase::run(double dt) {
         }
     }
     for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
-    if (verlet && rebuild && w_.settings.pointPolygonOn) {
+    if (verlet && rebuild && triLists) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(w_.surfNodes.size());
@@ -290,7 +304,7 @@ void PieceContactPhase::run(double dt) {
         ++st_.listBuilds;
         if (dom) listDomainVersion_ = dom->currentVersion();
     }
-    if (verlet && edgeRebuild && w_.settings.edgeEdgeOn) {
+    if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
         const auto ne = static_cast<int32_t>(st_.edgeItems.size());
         constexpr int KE = PieceContactState::kEdgeList;

@@ -57,6 +57,8 @@ public:
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
     const Data& data() const { return w_; }
+    // Some kind of the table is switched on (pieces then have neighbour lists).
+    bool anyKindOn() const;
 
 private:
     Data w_;
@@ -69,6 +71,8 @@ private:
     };
     std::vector<Kind> kinds_;  // in table order
     bool kindOn(const Kind& k) const;
+    // The Registration bits of the switched-on kinds: what the broad phase builds.
+    unsigned listsWanted() const;
 
     PieceContactState st_;
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0;

@@ -148,7 +148,7 @@ void SleepPhase::run(double dt) {
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
     const PieceContactState& pc = w_.pieceContacts.state();
-    const bool nbrsValid = pc.nbrStart.size() == np + 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn) && np > 1;
+    const bool nbrsValid = pc.nbrStart.size() == np + 1 && w_.pieceContacts.anyKindOn() && np > 1;
     auto fastNeighbour = [&](std::size_t p) {
         if (!nbrsValid) return false;
         for (int32_t q = pc.nbrStart[p]; q < pc.nbrStart[p + 1]; ++q) {

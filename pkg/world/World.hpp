@@ -215,6 +215,8 @@ public:
         return r;
     }
     long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
+    // The piece-contact lists and histories (diagnostics, tests).
+    const PieceContactState& pieceContactState() const { return pieceContactPhase_.state(); }
     const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Point-polygon contacts of the last step: kPP slots per surface node
     // holding 8 * (triangle within its piece) + feature (-1 = empty) and that piece; for diagnostics.
