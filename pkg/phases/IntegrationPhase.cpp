@@ -41,6 +41,19 @@ void IntegrationPhase::run(double dt) {
         threadSpeed2_.resize(nth);
         for (auto& t : threadSpeed2_) t.assign(w_.pieces.size(), 0.0);
     }
+    // The element phase's thread buffers as flat arrays (no vector of
+    // vectors to walk per node and thread).
+    bufPtr_.resize(nth);
+    bufLo_.resize(nth);
+    bufHi_.resize(nth);
+    for (int t = 0; t < nth; ++t) {
+        bufPtr_[t] = layout.buffers[t].data();
+        bufLo_[t] = layout.nodeLo[t];
+        bufHi_[t] = layout.nodeHi[t];
+    }
+    const double* const* buf = bufPtr_.data();
+    const int32_t* bufLo = bufLo_.data();
+    const int32_t* bufHi = bufHi_.data();
 #pragma omp parallel num_threads(nth) reduction(+ : ek, eg, ed)
     {
         double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
@@ -49,8 +62,8 @@ void IntegrationPhase::run(double dt) {
             const int32_t n = all ? i : ids[i];
             double f[3] = {Fext[3 * n] + M[n] * g[0], Fext[3 * n + 1] + M[n] * g[1], Fext[3 * n + 2] + M[n] * g[2]};
             for (int t = 0; t < nth; ++t)
-                if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
-                    const double* b = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+                if (n >= bufLo[t] && n <= bufHi[t]) {
+                    const double* b = buf[t] + 3 * (n - bufLo[t]);
                     f[0] += b[0];
                     f[1] += b[1];
                     f[2] += b[2];

@@ -48,6 +48,8 @@ public:
 private:
     Data w_;
     std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece
+    std::vector<const double*> bufPtr_;              // per thread: its element force buffer
+    std::vector<int32_t> bufLo_, bufHi_;             // and the node range it covers
 };
 
 }  // namespace qdem
