@@ -67,6 +67,7 @@ void PieceContactPhase::run(double dt) {
     // pieces sorted by the low end of their boxes, each compared only with
     // those starting before its box ends.  O(P log P + touching pairs).
     const double t0 = omp_get_wtime();
+    const double* X = w_.pos.data();  // (a local: the list loops store through narrow pointers)
     st_.pieceActive.assign(np, 0);
     st_.pieceOrder.resize(np);
     for (std::size_t i = 0; i < np; ++i) st_.pieceOrder[i] = static_cast<int32_t>(i);
@@ -143,7 +144,7 @@ void PieceContactPhase::run(double dt) {
             const int32_t i = all ? j : moving[j];
             const int32_t n = w_.surfNodes[i];
             if (!st_.pieceActive[w_.nodePiece[n]]) continue;
-            moved2 = std::max(moved2, (at(w_.pos, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
+            moved2 = std::max(moved2, (at(X, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
         }
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
         for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip)
@@ -173,7 +174,7 @@ void PieceContactPhase::run(double dt) {
                 if (!cur[nodes[k]]) return;
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
         for (int k = 0; k < n; ++k) {
-            const Vector3d x = at(w_.pos, nodes[k]);
+            const Vector3d x = at(X, nodes[k]);
             c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         }
         c /= n;
@@ -182,7 +183,7 @@ void PieceContactPhase::run(double dt) {
         // A/B/C register everything of their kind, as the paper measured.
         if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) return;
         double R = 0;
-        for (int k = 0; k < n; ++k) R = std::max(R, (at(w_.pos, nodes[k]) - c).squaredNorm());
+        for (int k = 0; k < n; ++k) R = std::max(R, (at(X, nodes[k]) - c).squaredNorm());
         R = std::sqrt(R);
         itemR = std::max(itemR, R);
         st_.items.push_back(id);
@@ -208,7 +209,7 @@ void PieceContactPhase::run(double dt) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
-                const Vector3d a = at(w_.pos, S.edge[2 * e]), b = at(w_.pos, S.edge[2 * e + 1]);
+                const Vector3d a = at(X, S.edge[2 * e]), b = at(X, S.edge[2 * e + 1]);
                 // Box grown by r (+ half the skin): two edges within reach
                 // r_a + r_b (+ skin) share a cell.
                 const double g = r + 0.5 * grow;
@@ -241,7 +242,7 @@ void PieceContactPhase::run(double dt) {
 #pragma omp for schedule(static) nowait
         for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
             const int32_t* c = &S.tri[3 * t];
-            const Vector3d n = (at(w_.pos, c[1]) - at(w_.pos, c[0])).cross(at(w_.pos, c[2]) - at(w_.pos, c[0])).normalized();
+            const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
             for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
         }
     }
@@ -258,7 +259,7 @@ void PieceContactPhase::run(double dt) {
         for (int32_t i = 0; i < ns; ++i) {
             const int32_t node = w_.surfNodes[i];
             const int32_t pa = w_.nodePiece[node];
-            const Vector3d A = at(w_.pos, node);
+            const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
             const double ra = w_.materials[w_.pieces[pa].material].radius;
