@@ -29,6 +29,8 @@ inline PairLaw pairLaw(const Material& a, const Material& b, double ma, double m
 }
 
 inline Vector3d at(const Column<double>& c, int32_t i) { return Vector3d(c[3 * i], c[3 * i + 1], c[3 * i + 2]); }
+// The same from a raw pointer hoisted out of a hot loop.
+inline Vector3d at(const double* c, int32_t i) { return Vector3d(c[3 * i], c[3 * i + 1], c[3 * i + 2]); }
 
 inline void addTo(double* buf, int32_t s, const Vector3d& f) {
     buf[3 * s] += f[0];

@@ -1,6 +1,7 @@
 // Closest-point geometry for surface contacts (inline: used in hot loops).
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

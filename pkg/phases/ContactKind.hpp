@@ -18,6 +18,7 @@
 
 #include "../world/Phase.hpp"
 #include "../world/Settings.hpp"
+#include "PieceContactData.hpp"
 
 namespace qdem {
 
@@ -28,7 +29,7 @@ struct PieceContactState;
 struct KindStep {
     double dt;
     bool friction;                     // settings.frictionOn
-    World& world;
+    const PieceContactData& world;     // what the phase declares of the world, read-only to kinds
     PieceContactPhase& phase;
     const PieceContactState& lists;    // neighbour pieces (nbrStart/nbrs), active pieces, Verlet lists
     // Per thread, 3 per surface node (index into World::surfNodes): the
@@ -45,17 +46,31 @@ public:
     // returns the number of contacts.
     virtual long run(KindStep& s) = 0;
     // Growth of its history with the surfaces (pieces added).
-    virtual void piecesAdded(const World&) {}
+    virtual void piecesAdded(const PieceContactData&) {}
     virtual void stateColumns(StateColumns&) {}
     virtual void report(PhaseReport&) const {}
 };
 
+// What a kind needs the broad phase to register (bits of ContactKindRow::lists):
+// the phase builds, each step, the lists that some switched-on kind declares
+// and no others.
+enum Registration : unsigned {
+    RegisterNothing = 0,
+    // surface triangles near other pieces in cell lists, and each surface
+    // node's Verlet list of them (the seed's cases A/B/C: tetrahedra)
+    RegisterSurfaceTriangles = 1u << 0,
+    // feature edges near other pieces in box grids, and each registered
+    // edge's Verlet list of the higher pieces' edges
+    RegisterFeatureEdges = 1u << 1,
+};
+
 struct ContactKindRow {
     const char* name;       // its counter and timing name
-    const char* registers;  // what the broad phase registers for it
+    const char* registers;  // what the broad phase registers for it (in words, for the docs)
     const char* history;    // its contact history (keys by stable ids)
     bool Settings::*on;     // its switch; nullptr: always on
     std::unique_ptr<ContactKind> (*make)();
+    unsigned lists = RegisterNothing;  // Registration bits: the broad-phase lists it reads
 };
 
 // The table: the seed's point-polygon and edge-edge kinds, then rows added

@@ -38,11 +38,11 @@ std::vector<ContactKindRow>& table() {
          "A/B/C: tetrahedra)",
          "6 slots per surface node: other piece, 8 x local triangle + feature, tangential spring, born-deep "
          "reference",
-         &Settings::pointPolygonOn, &makePointPolygon},
+         &Settings::pointPolygonOn, &makePointPolygon, RegisterSurfaceTriangles},
         {"edgeEdge", "feature edges near other pieces (box grids, Verlet lists of each registered edge)",
          "4 slots per surface edge (owned by the lower piece): other piece, local edge, side, tangential spring, "
          "born-deep reference",
-         &Settings::edgeEdgeOn, &makeEdgeEdge},
+         &Settings::edgeEdgeOn, &makeEdgeEdge, RegisterFeatureEdges},
     };
     return rows;
 }

@@ -9,7 +9,6 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -23,18 +22,23 @@ using namespace contact_detail;
 
 template <bool Friction>
 void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
-    const SurfaceIndex& S = w_.surf_;
+    const SurfaceIndex& S = w_.surface;
     const auto ne = static_cast<int32_t>(st_.edgeItems.size());
     constexpr int K = PieceContactState::kEE;
     const double sinFade2 = std::pow(std::sin(w_.settings.edgeFadeAngle), 2);
     const long stamp = w_.iter;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
-    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    const Domain* dom = w_.domain.built();
+    // (locals, not w_'s references: the loop stores through int8_t pointers
+    // that may alias anything, which would reload them)
+    const double* X = w_.pos.data();
+    const double* V = w_.vel.data();
+    const double* M = w_.mass.data();
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
-        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = st_.edgeItems[ie];
@@ -54,7 +58,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             st_.eeStamp[e] = stamp;
             const Material& ma = w_.materials[w_.pieces[pa].material];
             const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
-            const Vector3d p1 = at(w_.pos, a0), q1 = at(w_.pos, a1);
+            const Vector3d p1 = at(X, a0), q1 = at(X, a1);
             const double len1 = (q1 - p1).norm();
             int32_t newOther[K], newOtherPiece[K];
             int8_t newSide[K];
@@ -74,7 +78,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     // node of this edge, the one whose slots keep the pair's history
                     // (so a history row has one owner: Domain::rebalance).
                     if (dom && dom->owner(std::min(a0, a1)) != dom->rank()) return;
-                    const Vector3d p2 = at(w_.pos, b0), q2 = at(w_.pos, b1);
+                    const Vector3d p2 = at(X, b0), q2 = at(X, b1);
                     const SegPoints sp = closestSegmentSegment(p1, q1, p2, q2);
                     constexpr double kEnd = 1e-9;
                     if (sp.s <= kEnd || sp.s >= 1 - kEnd || sp.t <= kEnd || sp.t >= 1 - kEnd) return;
@@ -103,10 +107,10 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     // pushed back, not let through.
                     int sNow = d.dot(cross) < 0 ? -1 : 1;
                     if (dist <= 1e-12 * reach && slot < 0) {  // touching at first sight: ask the piece centres
-                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&w_.pieceLo_[3 * pa]) +
-                                                   Eigen::Map<const Vector3d>(&w_.pieceHi_[3 * pa]));
-                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&w_.pieceLo_[3 * pb]) +
-                                                   Eigen::Map<const Vector3d>(&w_.pieceHi_[3 * pb]));
+                        const Vector3d ca = 0.5 * (Eigen::Map<const Vector3d>(&w_.bounds.lo[3 * pa]) +
+                                                   Eigen::Map<const Vector3d>(&w_.bounds.hi[3 * pa]));
+                        const Vector3d cb = 0.5 * (Eigen::Map<const Vector3d>(&w_.bounds.lo[3 * pb]) +
+                                                   Eigen::Map<const Vector3d>(&w_.bounds.hi[3 * pb]));
                         sNow = (ca - cb).dot(cross) < 0 ? -1 : 1;
                     }
                     const int sUse = slot >= 0 && side[slot] != 0 ? side[slot] : sNow;
@@ -120,11 +124,11 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                         overlap = reach + dist;
                     }
                     if (overlap <= 0) return;
-                    const double m1 = (1 - sp.s) * w_.mass[a0] + sp.s * w_.mass[a1];
-                    const double m2 = (1 - sp.t) * w_.mass[b0] + sp.t * w_.mass[b1];
+                    const double m1 = (1 - sp.s) * M[a0] + sp.s * M[a1];
+                    const double m2 = (1 - sp.t) * M[b0] + sp.t * M[b1];
                     const PairLaw law = pairLaw(ma, mb, m1, m2);
-                    const Vector3d vRel = ((1 - sp.s) * at(w_.vel, a0) + sp.s * at(w_.vel, a1)) -
-                                          ((1 - sp.t) * at(w_.vel, b0) + sp.t * at(w_.vel, b1));
+                    const Vector3d vRel = ((1 - sp.s) * at(V, a0) + sp.s * at(V, a1)) -
+                                          ((1 - sp.t) * at(V, b0) + sp.t * at(V, b1));
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     // Area weight (doc/contacts.md, "Area weights"): the mean of
@@ -171,7 +175,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const double* hi = &st_.edgeHi[3 * ie];
                     bool overlap = true;  // the edge's box must reach the other piece's box
                     for (int d = 0; d < 3 && overlap; ++d)
-                        overlap = lo[d] <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= hi[d];
+                        overlap = lo[d] <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= hi[d];
                     if (!overlap) continue;
                     const int32_t j0 = st_.edgeStart[pb];
                     st_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });

@@ -9,7 +9,7 @@
 
 #include "../element/ElementKernel.hpp"
 #include "../element/MaterialLaw.hpp"
-#include "../world/World.hpp"
+#include "SleepPhase.hpp"
 #include "ElementPhase.hpp"
 
 namespace qdem {
@@ -45,7 +45,7 @@ void ElementPhase::elementRange(const Law& law, int32_t t0, int32_t t1, const Ma
 
 void ElementPhase::run(double dt) {
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, w_.sleeping().version())) layout_.build(w_.tetNodes.data(), w_.sleeping().awakeTets(), nth, w_.sleeping().version());
+    if (!layout_.matches(nth, w_.sleeping.version())) layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), nth, w_.sleeping.version());
     double diss = 0;
     const bool energyOn = w_.settings.trackEnergy;
 #pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
@@ -54,7 +54,7 @@ void ElementPhase::run(double dt) {
         std::vector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
-        double* pe = energyOn ? w_.threadPieceEnergy_[th].data() : nullptr;
+        double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
         for (const TetSegment& sg : layout_.share[th]) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
             const bool visc = w_.settings.viscosityOn && m.viscosity > 0;
@@ -78,7 +78,7 @@ void ElementPhase::run(double dt) {
 // Stress output
 
 void ElementPhase::stress(double* out) const {
-    const auto T = static_cast<int32_t>(w_.nTets());
+    const auto T = static_cast<int32_t>(w_.tetVol0.size());
 #pragma omp parallel for schedule(static)
     for (int32_t e = 0; e < T; ++e) {
         const PieceInfo& p = w_.pieces[w_.tetPiece[e]];

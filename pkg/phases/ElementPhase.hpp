@@ -2,17 +2,38 @@
 // phase sums them), and the Cauchy stress output.
 #pragma once
 #include <cstdint>
+#include <vector>
 
+#include "../core/Column.hpp"
+#include "../material/Material.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 #include "../world/ThreadLayout.hpp"
 
 namespace qdem {
 
-struct Material;
+class SleepPhase;
 
 class ElementPhase final : public Phase {
 public:
-    using Phase::Phase;
+    // What it reads and writes of the world.
+    struct Data {
+        const Column<double>& pos;
+        const Column<double>& vel;
+        const Column<int32_t>& tetNodes;
+        const Column<int32_t>& tetPiece;
+        const Column<double>& tetB;
+        const Column<double>& tetVol0;
+        const std::vector<PieceInfo>& pieces;
+        const std::vector<Material>& materials;
+        const Settings& settings;
+        const SleepPhase& sleeping;  // the awake tets
+        Energy& energy;              // viscous dissipation
+        std::vector<std::vector<double>>& threadPieceEnergy;  // strain energy per thread and piece
+    };
+    explicit ElementPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "elements"; }
     void run(double dt) override;
     // Per-thread node force buffers of the last run and the node range each covers.
@@ -24,6 +45,7 @@ private:
     template <class Law, bool Viscous, bool Energy>
     void elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
                       double& wEl, double& diss) const;
+    Data w_;
     ThreadLayout layout_;
 };
 

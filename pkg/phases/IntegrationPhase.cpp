@@ -7,44 +7,59 @@
 #include <cmath>
 
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
+#include "ElementPhase.hpp"
+#include "SleepPhase.hpp"
 #include "IntegrationPhase.hpp"
 
 namespace qdem {
 
 void IntegrationPhase::run(double dt) {
-    const auto N = static_cast<int32_t>(w_.nNodes());
-    const ThreadLayout& layout = elements_.layout();
+    const auto N = static_cast<int32_t>(w_.mass.size());
+    const ThreadLayout& layout = w_.elements.layout();
     const int nth = layout.nThreads;
     const bool energyOn = w_.settings.trackEnergy;
-    const bool withContacts = w_.contactsActive_;
+    const bool withContacts = w_.contacts.active;
     const double g[3] = {w_.gravity[0], w_.gravity[1], w_.gravity[2]};
     double* X = w_.pos.data();
     double* V = w_.vel.data();
     double* Fout = w_.force.data();
     const double* Fext = w_.extForce.data();
-    const double* Fc = w_.contactForce_.data();
+    const double* Fc = w_.contacts.force.data();
     const double* M = w_.mass.data();
     // Under MPI: what other ranks computed on this rank's nodes (Domain.hpp).
-    const double* Fg = w_.domain() ? w_.domain()->ghostForce() : nullptr;
+    const double* Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
     const uint8_t* blk = w_.blocked.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
     double ek = 0, eg = 0, ed = 0;
     const double damp = w_.settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
-    const bool all = w_.sleeping().everything();
-    const int32_t* ids = w_.sleeping().awakeNodes().data();
-    const auto count = all ? N : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+    const bool all = w_.sleeping.everything();
+    const int32_t* ids = w_.sleeping.awakeNodes().data();
+    const auto count = all ? N : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
     const bool sleepOn = w_.settings.sleepVelocity > 0;
     if (sleepOn) {
         threadSpeed2_.resize(nth);
         for (auto& t : threadSpeed2_) t.assign(w_.pieces.size(), 0.0);
     }
+    // The element phase's thread buffers as flat arrays (no vector of
+    // vectors to walk per node and thread).
+    bufPtr_.resize(nth);
+    bufLo_.resize(nth);
+    bufHi_.resize(nth);
+    for (int t = 0; t < nth; ++t) {
+        bufPtr_[t] = layout.buffers[t].data();
+        bufLo_[t] = layout.nodeLo[t];
+        bufHi_[t] = layout.nodeHi[t];
+    }
+    const double* const* buf = bufPtr_.data();
+    const int32_t* bufLo = bufLo_.data();
+    const int32_t* bufHi = bufHi_.data();
     // The explicit force on node n: element buffers, contacts, gravity, external.
     const auto explicitForce = [&](int32_t n, double* f) {
         for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
         for (int t = 0; t < nth; ++t)
-            if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
-                const double* b = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+            if (n >= bufLo[t] && n <= bufHi[t]) {
+                const double* b = buf[t] + 3 * (n - bufLo[t]);
                 f[0] += b[0];
                 f[1] += b[1];
                 f[2] += b[2];
@@ -100,7 +115,7 @@ void IntegrationPhase::run(double dt) {
             }
             if (speed2) {
                 const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
-                double& m = speed2[w_.nodePiece[n]];
+                double& m = speed2[nodePiece[n]];
                 m = std::max(m, v2);
             }
         }

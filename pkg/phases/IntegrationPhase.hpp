@@ -1,19 +1,47 @@
 // The leapfrog update of the awake nodes: element forces (the element
 // phase's thread buffers), contact forces, gravity and external forces.
 #pragma once
+#include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
+#include "../core/Column.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../world/ContactForces.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 #include "ViscousSolve.hpp"
 
 namespace qdem {
 
 class ElementPhase;
+class SleepPhase;
 
 class IntegrationPhase final : public Phase {
 public:
-    IntegrationPhase(World& world, const ElementPhase& elements) : Phase(world), elements_(elements), viscous_(world) {}
+    // What it reads and writes of the world.
+    struct Data {
+        const Column<double>& mass;
+        const Column<double>& extForce;
+        const Column<uint8_t>& blocked;
+        const Column<int32_t>& nodePiece;
+        const std::vector<PieceInfo>& pieces;
+        const Eigen::Vector3d& gravity;
+        const Settings& settings;
+        const SleepPhase& sleeping;        // the awake nodes
+        const ElementPhase& elements;      // its thread buffers of element forces
+        const ContactForces& contacts;
+        DomainRef domain;                  // forces other ranks computed on this rank's nodes
+        Column<double>& pos;
+        Column<double>& vel;
+        Column<double>& force;             // the total force of the step, for output
+        Energy& energy;                    // kinetic, gravity work, local damping
+        ViscousSolve::Data viscous;        // what the implicit viscous solve reads
+    };
+    explicit IntegrationPhase(const Data& data) : w_(data), viscous_(data.viscous) {}
     const char* name() const override { return "integrate"; }
     void run(double dt) override;
     // "integrate" without the implicit viscous solve, "viscousSolve", and its
@@ -24,9 +52,11 @@ public:
     double maxSpeed2(std::size_t piece) const;
 
 private:
-    const ElementPhase& elements_;
+    Data w_;
     ViscousSolve viscous_;  // settings.viscousIntegration = Implicit
     std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece
+    std::vector<const double*> bufPtr_;              // per thread: its element force buffer
+    std::vector<int32_t> bufLo_, bufHi_;             // and the node range it covers
 };
 
 }  // namespace qdem

@@ -10,7 +10,7 @@
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/ContactModel.hpp"
-#include "../world/World.hpp"
+#include "SleepPhase.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -24,7 +24,7 @@ void ObstaclePhase::run(double dt) {
     // Sleeping pieces still push on obstacles with what they pushed when
     // they fell asleep.
     for (std::size_t p = 0; p < w_.pieces.size(); ++p) {
-        const std::vector<double>& fr = w_.sleeping().frozenReaction(p);
+        const std::vector<double>& fr = w_.sleeping.frozenReaction(p);
         for (std::size_t k = 0; k + 7 <= fr.size(); k += 7) {
             Obstacle& o = w_.obstacles[static_cast<int>(fr[k])];
             o.reactionForce += Eigen::Vector3d(fr[k + 1], fr[k + 2], fr[k + 3]);
@@ -42,7 +42,7 @@ void ObstaclePhase::run(double dt) {
     pieceObstacleBegin_.assign(w_.pieces.size() + 1, 0);
     pieceObstacles_.clear();
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
-        const Eigen::Map<const Eigen::Vector3d> lo(&w_.pieceLo_[3 * ip]), hi(&w_.pieceHi_[3 * ip]);
+        const Eigen::Map<const Eigen::Vector3d> lo(&w_.bounds.lo[3 * ip]), hi(&w_.bounds.hi[3 * ip]);
         const double r = w_.materials[w_.pieces[ip].material].radius;
         for (int i = 0; i < nObs; ++i) {
             const Obstacle& o = w_.obstacles[i];
@@ -69,7 +69,7 @@ void ObstaclePhase::run(double dt) {
     checkStartOverlaps();
     if (pieceObstacles_.empty()) return;
 
-    w_.beginContactForces();
+    w_.contacts.begin();
     const int nth = omp_get_max_threads();
     // Reactions per thread and (piece, obstacle) pair: a piece that falls
     // asleep keeps its own.
@@ -79,40 +79,60 @@ void ObstaclePhase::run(double dt) {
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
     // Sleeping pieces' nodes are skipped (their history kept as it is).
-    const bool all = w_.sleeping().everything();
-    const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping().awakeSurf().size());
-    const int32_t* awakeSurf = w_.sleeping().awakeSurf().data();
+    const bool all = w_.sleeping.everything();
+    const auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping.awakeSurf().size());
+    const int32_t* awakeSurf = w_.sleeping.awakeSurf().data();
+    // Raw pointers in locals: the loop stores through int8_t pointers, which
+    // may alias anything, so members read through w_ would be reloaded.
+    const int32_t* surfNodes = w_.surfNodes.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
+    const double* X = w_.pos.data();
+    const double* V = w_.vel.data();
+    const double* M = w_.mass.data();
+    const double* W = w_.surfWeight.data();
+    const PieceInfo* pieces = w_.pieces.data();
+    const Material* materials = w_.materials.data();
+    const Obstacle* obstacles = w_.obstacles.data();
+    const int* pieceObstacles = pieceObstacles_.data();
+    const int* pieceObstacleBegin = pieceObstacleBegin_.data();
+    const PairConst* pairConsts = pairConst_.data();
+    int32_t* slotBody = slotBody_.data();
+    double* slotShear = slotShear_.data();
+    int8_t* slotSide = slotSide_.data();
+    double* Fc = w_.contacts.force.data();
+    const double regVelocity = w_.settings.frictionRegVelocity;
+    const bool frictionOn = w_.settings.frictionOn;
 
     long nWall = 0;
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
     {
         const int th = omp_get_thread_num();
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
-        double* pe = energyOn ? w_.threadPieceEnergy_[th].data() : nullptr;
+        double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < nSurf; ++i) {
             const int32_t s = all ? i : awakeSurf[i];
-            const int32_t node = w_.surfNodes[s];
-            const int ip = w_.nodePiece[node];
-            const int ob0 = pieceObstacleBegin_[ip], ob1 = pieceObstacleBegin_[ip + 1];
-            int32_t* body = &slotBody_[kSlots * s];
-            double* shear = &slotShear_[3 * kSlots * s];
-            int8_t* side = &slotSide_[kSlots * s];
+            const int32_t node = surfNodes[s];
+            const int ip = nodePiece[node];
+            const int ob0 = pieceObstacleBegin[ip], ob1 = pieceObstacleBegin[ip + 1];
+            int32_t* body = slotBody + kSlots * s;
+            double* shear = slotShear + 3 * kSlots * s;
+            int8_t* side = slotSide + kSlots * s;
             if (ob0 == ob1) {  // nothing near this piece: forget the history
                 for (int k = 0; k < kSlots; ++k) body[k] = -1;
                 continue;
             }
-            const Material& m = w_.materials[w_.pieces[ip].material];
-            const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * node]);
-            const Eigen::Map<const Eigen::Vector3d> v(&w_.vel[3 * node]);
+            const Material& m = materials[pieces[ip].material];
+            const Eigen::Map<const Eigen::Vector3d> x(X + 3 * node);
+            const Eigen::Map<const Eigen::Vector3d> v(V + 3 * node);
             int32_t newBody[kSlots];
             int8_t newSide[kSlots];
             Eigen::Vector3d newShear[kSlots];
             int used = 0;
             Eigen::Vector3d fNode = Eigen::Vector3d::Zero();
             for (int j = ob0; j < ob1; ++j) {
-                const int io = pieceObstacles_[j];
-                const Obstacle& o = w_.obstacles[io];
+                const int io = pieceObstacles[j];
+                const Obstacle& o = obstacles[io];
                 int slot = -1;
                 for (int k = 0; k < kSlots; ++k)
                     if (body[k] == o.bodyId) slot = k;
@@ -121,17 +141,16 @@ void ObstaclePhase::run(double dt) {
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
                 // Springs scaled by the node's share of the surface area
                 // (surfWeight, World.hpp); the dashpots keep their damping ratio.
-                const PairLaw law = pairLaw(pairConst_[j], w_.mass[node]);
-                const double wa = w_.surfWeight[s], swa = std::sqrt(wa);
+                const PairLaw law = pairLaw(pairConsts[j], M[node]);
+                const double wa = W[s], swa = std::sqrt(wa);
                 const double mu = law.mu;
-                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, w_.settings.frictionRegVelocity,
-                                 w_.mass[node]};
+                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, regVelocity, M[node]};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
-                    lawForce(w_.settings.frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
+                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
                 newBody[used] = o.bodyId;
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;
@@ -157,7 +176,7 @@ void ObstaclePhase::run(double dt) {
                 if (k < used)
                     for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
             }
-            for (int d = 0; d < 3; ++d) w_.contactForce_[3 * node + d] += fNode[d];
+            for (int d = 0; d < 3; ++d) Fc[3 * node + d] += fNode[d];
         }
     }
     contacts_ = nWall;

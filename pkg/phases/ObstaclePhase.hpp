@@ -6,14 +6,41 @@
 #include <vector>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/Obstacle.hpp"
 #include "../core/Column.hpp"
+#include "../material/Material.hpp"
+#include "../world/ContactForces.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceBounds.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 
 namespace qdem {
 
+class SleepPhase;
+
 class ObstaclePhase final : public Phase {
 public:
-    using Phase::Phase;
+    // What it reads and writes of the world.
+    struct Data {
+        const Column<double>& pos;
+        const Column<double>& vel;
+        const Column<double>& mass;
+        const Column<int32_t>& nodePiece;
+        const Column<int32_t>& surfNodes;
+        const Column<double>& surfWeight;
+        const std::vector<PieceInfo>& pieces;
+        const std::vector<Material>& materials;
+        const Settings& settings;
+        const SleepPhase& sleeping;      // awake surface nodes, sleeping pieces' frozen reactions
+        const PieceBounds& bounds;       // which obstacles a piece can reach
+        std::vector<Obstacle>& obstacles;  // their reactions
+        ContactForces& contacts;
+        Energy& energy;                  // contact damping, friction, boundary work
+        std::vector<std::vector<double>>& threadPieceEnergy;  // contact energy with obstacles per piece
+    };
+    explicit ObstaclePhase(const Data& data) : w_(data) {}
     const char* name() const override { return "obstacles"; }
     // Contact forces on the awake surface nodes (World::contactForce), the
     // obstacles' reactions (sleeping pieces' frozen ones included), energies.
@@ -44,6 +71,8 @@ private:
     // Refuses (InputError) a piece whose nodes start inside a wall, box or
     // facet, once per piece and obstacle list.
     void checkStartOverlaps();
+
+    Data w_;
 
     Column<int32_t> slotBody_;  // YADE body id, -1 = empty
     Column<double> slotShear_;

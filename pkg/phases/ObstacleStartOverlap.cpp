@@ -14,7 +14,6 @@
 #include <sstream>
 
 #include "../core/Errors.hpp"
-#include "../world/World.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {

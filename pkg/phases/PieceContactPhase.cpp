@@ -11,7 +11,7 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
+#include "SleepPhase.hpp"
 #include "../world/WorldState.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -20,11 +20,24 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
-PieceContactPhase::PieceContactPhase(World& world) : Phase(world) {
+PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
     for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
 }
 
 bool PieceContactPhase::kindOn(const Kind& k) const { return !k.row->on || w_.settings.*(k.row->on); }
+
+bool PieceContactPhase::anyKindOn() const {
+    for (const Kind& k : kinds_)
+        if (kindOn(k)) return true;
+    return false;
+}
+
+unsigned PieceContactPhase::listsWanted() const {
+    unsigned lists = RegisterNothing;
+    for (const Kind& k : kinds_)
+        if (kindOn(k)) lists |= k.row->lists;
+    return lists;
+}
 
 void PieceContactPhase::report(PhaseReport& r) const {
     // The sum of the thread buffers is booked to the first kind (point-polygon, the main user).
@@ -46,27 +59,29 @@ void PieceContactPhase::run(double dt) {
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
-    bool anyKind = false;
-    for (const Kind& k : kinds_) anyKind = anyKind || kindOn(k);
-    if (np < 2 || !anyKind) return;
+    if (np < 2 || !anyKindOn()) return;
+    // The lists the switched-on kinds declare (their rows' Registration bits).
+    const unsigned lists = listsWanted();
+    const bool triLists = lists & RegisterSurfaceTriangles, edgeLists = lists & RegisterFeatureEdges;
 
     // Which pieces can touch another one at all?  Sweep and prune on x:
     // pieces sorted by the low end of their boxes, each compared only with
     // those starting before its box ends.  O(P log P + touching pairs).
     const double t0 = omp_get_wtime();
+    const double* X = w_.pos.data();  // (a local: the list loops store through narrow pointers)
     st_.pieceActive.assign(np, 0);
     st_.pieceOrder.resize(np);
     for (std::size_t i = 0; i < np; ++i) st_.pieceOrder[i] = static_cast<int32_t>(i);
     std::sort(st_.pieceOrder.begin(), st_.pieceOrder.end(),
-              [&](int32_t a, int32_t b) { return w_.pieceLo_[3 * a] < w_.pieceLo_[3 * b]; });
+              [&](int32_t a, int32_t b) { return w_.bounds.lo[3 * a] < w_.bounds.lo[3 * b]; });
     st_.pairs.clear();
     for (std::size_t i = 0; i < np; ++i) {
         const int32_t a = st_.pieceOrder[i];
         for (std::size_t j = i + 1; j < np; ++j) {
             const int32_t b = st_.pieceOrder[j];
-            if (w_.pieceLo_[3 * b] > w_.pieceHi_[3 * a]) break;
-            if (w_.pieceLo_[3 * a + 1] <= w_.pieceHi_[3 * b + 1] && w_.pieceLo_[3 * b + 1] <= w_.pieceHi_[3 * a + 1] &&
-                w_.pieceLo_[3 * a + 2] <= w_.pieceHi_[3 * b + 2] && w_.pieceLo_[3 * b + 2] <= w_.pieceHi_[3 * a + 2])
+            if (w_.bounds.lo[3 * b] > w_.bounds.hi[3 * a]) break;
+            if (w_.bounds.lo[3 * a + 1] <= w_.bounds.hi[3 * b + 1] && w_.bounds.lo[3 * b + 1] <= w_.bounds.hi[3 * a + 1] &&
+                w_.bounds.lo[3 * a + 2] <= w_.bounds.hi[3 * b + 2] && w_.bounds.lo[3 * b + 2] <= w_.bounds.hi[3 * a + 2])
                 st_.pairs.insert(st_.pairs.end(), {a, b, b, a});
         }
     }
@@ -80,11 +95,11 @@ void PieceContactPhase::run(double dt) {
     for (std::size_t i = 0; i < np; ++i) st_.pieceActive[i] = st_.nbrStart[i + 1] > st_.nbrStart[i];
     // A sleeping piece whose neighbours all sleep has nothing moving near it:
     // its contacts are skipped (their history kept).
-    if (w_.sleeping().nAsleep() > 0)
+    if (w_.sleeping.nAsleep() > 0)
         for (std::size_t i = 0; i < np; ++i) {
-            if (!w_.sleeping().asleep(i)) continue;
+            if (!w_.sleeping.asleep(i)) continue;
             bool all = true;
-            for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1] && all; ++q) all = w_.sleeping().asleep(st_.nbrs[q]);
+            for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1] && all; ++q) all = w_.sleeping.asleep(st_.nbrs[q]);
             frozen_[i] = all;
         }
     const bool any = !st_.pairs.empty();
@@ -98,13 +113,13 @@ void PieceContactPhase::run(double dt) {
         for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q)
             st_.nbrLaw[q] = pairConst(w_.materials[w_.pieces[i].material], w_.materials[w_.pieces[st_.nbrs[q]].material]);
     }
-    w_.beginContactForces();
+    w_.contacts.begin();
 
     double rMax = 0;
     for (std::size_t ip = 0; ip < np; ++ip)
         if (st_.pieceActive[ip]) rMax = std::max(rMax, w_.materials[w_.pieces[ip].material].radius);
-    if (w_.surf_.sharpAngle != w_.settings.edgeFeatureAngle) w_.surf_.classifyEdges(w_.refPos.data(), w_.settings.edgeFeatureAngle);
-    const SurfaceIndex& S = w_.surf_;
+    if (w_.surface.sharpAngle != w_.settings.edgeFeatureAngle) w_.surface.classifyEdges(w_.refPos.data(), w_.settings.edgeFeatureAngle);
+    const SurfaceIndex& S = w_.surface;
     const bool tetItems = w_.settings.broadPhase != BroadPhase::Triangles;
 
     // Verlet lists (default mode): rebuild only when a surface node has moved
@@ -113,7 +128,7 @@ void PieceContactPhase::run(double dt) {
     const double skin = w_.settings.verletSkin * rMax;
     // Under MPI (Domain.hpp) only owned and ghost nodes are current: what is
     // registered must be current, and lists are rebuilt when the set changes.
-    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    const Domain* dom = w_.domain.built();
     const uint8_t* cur = dom ? dom->currentMask().data() : nullptr;
     bool rebuild = !verlet || !st_.listValid || st_.listTris != S.nTris() || st_.listSkin != skin ||
                    st_.listActive.size() != np || (dom && listDomainVersion_ != dom->currentVersion());
@@ -121,8 +136,8 @@ void PieceContactPhase::run(double dt) {
     if (!rebuild) {
         // Only the awake pieces' nodes move; under MPI the current ones (the
         // owned and the ghosts: a ghost face moving in counts as much).
-        const bool all = w_.sleeping().everything();
-        const std::vector<int32_t>& moving = dom ? dom->currentSurf() : w_.sleeping().awakeSurf();
+        const bool all = w_.sleeping.everything();
+        const std::vector<int32_t>& moving = dom ? dom->currentSurf() : w_.sleeping.awakeSurf();
         const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(moving.size());
         double moved2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
@@ -130,11 +145,11 @@ void PieceContactPhase::run(double dt) {
             const int32_t i = all ? j : moving[j];
             const int32_t n = w_.surfNodes[i];
             if (!st_.pieceActive[w_.nodePiece[n]]) continue;
-            moved2 = std::max(moved2, (at(w_.pos, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
+            moved2 = std::max(moved2, (at(X, n) - Eigen::Map<const Vector3d>(&st_.listPos[3 * i])).squaredNorm());
         }
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
-        for (std::size_t ip = 0; ip < np && w_.sleeping().nAsleep() > 0; ++ip)
-            if (st_.pieceActive[ip] && w_.sleeping().asleep(ip)) moved2 = std::max(moved2, w_.sleeping().moved2(ip));
+        for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip)
+            if (st_.pieceActive[ip] && w_.sleeping.asleep(ip)) moved2 = std::max(moved2, w_.sleeping.moved2(ip));
         rebuild = moved2 > 0.25 * skin * skin;
     }
     const double grow = verlet ? skin : 0.0;
@@ -160,16 +175,16 @@ void PieceContactPhase::run(double dt) {
                 if (!cur[nodes[k]]) return;
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
         for (int k = 0; k < n; ++k) {
-            const Vector3d x = at(w_.pos, nodes[k]);
+            const Vector3d x = at(X, nodes[k]);
             c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         }
         c /= n;
         lo.array() -= r + grow, hi.array() += r + grow;
         // Ours filters out elements far from other pieces; the seed's cases
         // A/B/C register everything of their kind, as the paper measured.
-        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.pieceLo_.data(), w_.pieceHi_.data())) return;
+        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) return;
         double R = 0;
-        for (int k = 0; k < n; ++k) R = std::max(R, (at(w_.pos, nodes[k]) - c).squaredNorm());
+        for (int k = 0; k < n; ++k) R = std::max(R, (at(X, nodes[k]) - c).squaredNorm());
         R = std::sqrt(R);
         itemR = std::max(itemR, R);
         st_.items.push_back(id);
@@ -179,7 +194,7 @@ void PieceContactPhase::run(double dt) {
     for (std::size_t ip = 0; ip < np; ++ip) {
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
-        if (st_.pieceActive[ip] && w_.settings.pointPolygonOn && rebuild) {
+        if (st_.pieceActive[ip] && triLists && rebuild) {
             if (!tetItems) {
                 for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
                     addItem(t, &S.tri[3 * t], 3, r, ip);
@@ -191,16 +206,16 @@ void PieceContactPhase::run(double dt) {
             }
         }
         if (rebuild) st_.itemStart[ip + 1] = static_cast<int32_t>(st_.items.size());
-        if (st_.pieceActive[ip] && w_.settings.edgeEdgeOn && edgeRebuild) {
+        if (st_.pieceActive[ip] && edgeLists && edgeRebuild) {
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
-                const Vector3d a = at(w_.pos, S.edge[2 * e]), b = at(w_.pos, S.edge[2 * e + 1]);
+                const Vector3d a = at(X, S.edge[2 * e]), b = at(X, S.edge[2 * e + 1]);
                 // Box grown by r (+ half the skin): two edges within reach
                 // r_a + r_b (+ skin) share a cell.
                 const double g = r + 0.5 * grow;
                 const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
-                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.pieceLo_.data(), w_.pieceHi_.data())) continue;
+                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) continue;
                 edgeR = std::max(edgeR, (b - a).norm());
                 st_.edgeItems.push_back(e);
                 st_.edgeLo.insert(st_.edgeLo.end(), {lo[0], lo[1], lo[2]});
@@ -228,12 +243,12 @@ void PieceContactPhase::run(double dt) {
 #pragma omp for schedule(static) nowait
         for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
             const int32_t* c = &S.tri[3 * t];
-            const Vector3d n = (at(w_.pos, c[1]) - at(w_.pos, c[0])).cross(at(w_.pos, c[2]) - at(w_.pos, c[0])).normalized();
+            const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
             for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
         }
     }
-    for (std::size_t ip = 0; ip < np && w_.sleeping().nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping().asleep(ip) && st_.pieceActive[ip];
-    if (verlet && rebuild && w_.settings.pointPolygonOn) {
+    for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
+    if (verlet && rebuild && triLists) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(w_.surfNodes.size());
@@ -245,7 +260,7 @@ void PieceContactPhase::run(double dt) {
         for (int32_t i = 0; i < ns; ++i) {
             const int32_t node = w_.surfNodes[i];
             const int32_t pa = w_.nodePiece[node];
-            const Vector3d A = at(w_.pos, node);
+            const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
             const double ra = w_.materials[w_.pieces[pa].material].radius;
@@ -255,7 +270,7 @@ void PieceContactPhase::run(double dt) {
                 const double reach = ra + w_.materials[w_.pieces[pb].material].radius + skin;
                 bool overlap = true;
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = A[d] - reach <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= A[d] + reach;
+                    overlap = A[d] - reach <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= A[d] + reach;
                 if (!overlap) continue;
                 const int32_t i0 = st_.itemStart[pb];
                 const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
@@ -284,14 +299,14 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.list[static_cast<std::size_t>(KL) * i], std::max(0, st_.listCount[i]),
                         &st_.listFlat[st_.listStart[i]]);
         st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
-        w_.sleepPhase_.listsRebuilt();  // lists now from the current positions
+        w_.sleeping.listsRebuilt();  // lists now from the current positions
         st_.listSkin = skin;
         st_.listTris = S.nTris();
         st_.listValid = true;
         ++st_.listBuilds;
         if (dom) listDomainVersion_ = dom->currentVersion();
     }
-    if (verlet && edgeRebuild && w_.settings.edgeEdgeOn) {
+    if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
         const auto ne = static_cast<int32_t>(st_.edgeItems.size());
         constexpr int KE = PieceContactState::kEdgeList;
@@ -325,14 +340,14 @@ void PieceContactPhase::run(double dt) {
     broadSeconds_ = omp_get_wtime() - t0;
 
     // Thread buffers: only awake pieces' nodes are read (and so zeroed).
-    const bool all = w_.sleeping().everything();
+    const bool all = w_.sleeping.everything();
 #pragma omp parallel num_threads(nth)
     {
         auto& b = st_.threadForce[omp_get_thread_num()];
         if (all) std::fill(b.begin(), b.end(), 0.0);
         else
             for (std::size_t ip = 0; ip < np; ++ip)
-                if (!w_.sleeping().asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+                if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
     }
     // The kinds of the table, in order (ContactKind.hpp).
     KindStep ks{dt, w_.settings.frictionOn, w_, *this, st_, st_.threadForce};
@@ -345,13 +360,13 @@ void PieceContactPhase::run(double dt) {
     const double tSum = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
     // (Under MPI the ghosts' too: their owners get them back, Domain.hpp.)
-    const std::vector<int32_t>& summed = dom ? dom->currentSurf() : w_.sleeping().awakeSurf();
+    const std::vector<int32_t>& summed = dom ? dom->currentSurf() : w_.sleeping.awakeSurf();
     const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(summed.size());
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t j = 0; j < ns; ++j) {
         const int32_t s = all ? j : summed[j];
         for (int th = 0; th < nth; ++th)
-            for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
+            for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
     }
     sumSeconds_ = omp_get_wtime() - tSum;
     maxOverlap_ = ks.maxOverlap;
@@ -382,7 +397,7 @@ void PieceContactPhase::stateColumns(StateColumns& c) {
 }
 
 void PieceContactPhase::piecesAdded() {
-    st_.resizeHistory(w_.surfNodes.size(), w_.surfaceIndex().nEdges());
+    st_.resizeHistory(w_.surfNodes.size(), w_.surface.nEdges());
     for (Kind& k : kinds_) k.kernel->piecesAdded(w_);
     frozen_.resize(w_.pieces.size(), 0);
     normalsFresh_.resize(w_.pieces.size(), 0);
@@ -398,7 +413,7 @@ void PieceContactPhase::checkFields(const WorldState& s) const {
 }
 
 void PieceContactPhase::loadFields(const WorldState& s) {
-    const SurfaceIndex& S = w_.surf_;
+    const SurfaceIndex& S = w_.surface;
     if (s.fields.count("eePiece") > 0) {
         s.get("eePiece", st_.eePiece.data(), st_.eePiece.size());
         return;

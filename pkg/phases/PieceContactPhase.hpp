@@ -12,14 +12,17 @@
 
 #include "../world/Phase.hpp"
 #include "ContactKind.hpp"
+#include "PieceContactData.hpp"
 #include "PieceContactState.hpp"
 
 namespace qdem {
 
 class PieceContactPhase final : public Phase {
 public:
+    // What it reads and writes of the world (its kinds see the same).
+    using Data = PieceContactData;
     // Makes one kernel per row of the contact-kinds table (ContactKind.hpp).
-    explicit PieceContactPhase(World& world);
+    explicit PieceContactPhase(const Data& data);
     const char* name() const override { return "pieceContacts"; }
     void run(double dt) override;
     // Its time split into broad phase (lists), point-polygon (with the sum of
@@ -53,7 +56,12 @@ public:
     template <bool Friction>
     void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
 
+    const Data& data() const { return w_; }
+    // Some kind of the table is switched on (pieces then have neighbour lists).
+    bool anyKindOn() const;
+
 private:
+    Data w_;
     long listDomainVersion_ = -1;  // Domain::currentVersion the Verlet lists were built for
     struct Kind {
         const ContactKindRow* row;
@@ -63,6 +71,8 @@ private:
     };
     std::vector<Kind> kinds_;  // in table order
     bool kindOn(const Kind& k) const;
+    // The Registration bits of the switched-on kinds: what the broad phase builds.
+    unsigned listsWanted() const;
 
     PieceContactState st_;
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0;

@@ -13,7 +13,6 @@
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -27,7 +26,7 @@ using namespace contact_detail;
 
 template <bool Friction>
 void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
-    const SurfaceIndex& S = w_.surf_;
+    const SurfaceIndex& S = w_.surface;
     const auto ns = static_cast<int32_t>(w_.surfNodes.size());
     const bool tets = w_.settings.broadPhase != BroadPhase::Triangles;
     const bool interiorFacesToo = w_.settings.broadPhase == BroadPhase::AllTets || w_.settings.broadPhase == BroadPhase::SurfaceTets;
@@ -46,7 +45,11 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const int32_t* tri = S.tri.data();
     const double* normal = st_.triNormal.data();
     const double* X = w_.pos.data();
-    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    // (locals, not w_'s references: the loop stores through narrow pointers
+    // that may alias anything, which would reload them)
+    const int32_t* surfNodes = w_.surfNodes.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
+    const Domain* dom = w_.domain.built();
     struct Tunnel {
         int32_t node = -1, pa = -1, pb = -1;
         double depth = 0, speed = 0, mass = 0, kn = 0;
@@ -55,16 +58,16 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
 #pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
-        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy_[omp_get_thread_num()].data() : nullptr;
+        double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
         Candidate* const cand = cl.c;
         TriLanes lanes;
         TriLanesOut near;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t s = 0; s < ns; ++s) {
-            const int32_t node = w_.surfNodes[s];
+            const int32_t node = surfNodes[s];
             if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
-            const int32_t pa = w_.nodePiece[node];
+            const int32_t pa = nodePiece[node];
             if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
                 st_.ppStamp[s] = stamp;
                 continue;
@@ -94,7 +97,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     if (st_.nbrs[q] == pb) return st_.nbrLaw[q];
                 return pairConst(ma, w_.materials[w_.pieces[pb].material]);  // listed before the pieces parted
             };
-            const Vector3d A = at(w_.pos, node);
+            const Vector3d A = at(X, node);
             cl.clear();
             int& nc = cl.n;
             bool& anyBehind = cl.anyBehind;
@@ -103,7 +106,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             // behind it: possibly inside that piece).
             auto consider = [&](int32_t t, double reach) {
                 const int32_t* c = &S.tri[3 * t];
-                cl.consider(A, t, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                cl.consider(A, t, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                             Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions);
             };
             if (useList) {
@@ -154,7 +157,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     const Vector3d lo = A.array() - reach, hi = A.array() + reach;
                     bool overlap = true;
                     for (int d = 0; d < 3 && overlap; ++d)
-                        overlap = lo[d] <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= hi[d];
+                        overlap = lo[d] <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= hi[d];
                     if (!overlap) continue;
                 }
                 const int32_t i0 = st_.itemStart[pb];
@@ -181,7 +184,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             int32_t f[3], n = 0;
                             for (int j = 0; j < 4; ++j)
                                 if (j != k) f[n++] = w_.tetNodes[4 * id + j];
-                            const TriPoint cp = closestOnTriangle(A, at(w_.pos, f[0]), at(w_.pos, f[1]), at(w_.pos, f[2]));
+                            const TriPoint cp = closestOnTriangle(A, at(X, f[0]), at(X, f[1]), at(X, f[2]));
                             ++interiorTests;
                             if ((A - cp.point).norm() < reach) ++interiorNear;
                         }
@@ -201,9 +204,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     for (int i = 0; i < nc && !found; ++i) found = cand[i].tri == t;
                     if (found || !active[triPiece[t]]) continue;
                     const int32_t* c = tri + 3 * t;
-                    const Vector3d a = at(w_.pos, c[0]);
+                    const Vector3d a = at(X, c[0]);
                     if ((A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t)) >= 0) continue;  // in front: ends as usual
-                    const TriPoint cp = closestOnTriangle(A, a, at(w_.pos, c[1]), at(w_.pos, c[2]));
+                    const TriPoint cp = closestOnTriangle(A, a, at(X, c[1]), at(X, c[2]));
                     const double dist = (A - cp.point).norm();
                     const double h = (A - a).dot(Eigen::Map<const Vector3d>(normal + 3 * t));
                     // Behind the plane and at most a reach beside the triangle
@@ -234,7 +237,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             const int32_t t = tets ? S.tetFaceTri[4 * id + k] : id;
                             if (t < 0) continue;
                             const int32_t* c = &S.tri[3 * t];
-                            if (frontFaceNearer(A, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                            if (frontFaceNearer(A, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                                                 Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), db)) {
                                 keep[i] = false;
                                 killedBy = t;

@@ -6,7 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../world/World.hpp"
+#include "../world/WorldState.hpp"
+#include "IntegrationPhase.hpp"
+#include "ObstaclePhase.hpp"
+#include "PieceContactPhase.hpp"
 #include "SleepPhase.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
@@ -21,7 +24,7 @@ void SleepPhase::awakeSetChanged() {
     awakeNodes_.clear();
     awakeSurf_.clear();
     nAsleep_ = 0;
-    const Domain* d = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    const Domain* d = w_.domain.built();
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
             ++nAsleep_;
@@ -47,7 +50,7 @@ void SleepPhase::awakeSetChanged() {
 
 void SleepPhase::wakeOne(std::size_t p) {
     asleep_[p] = 0;
-    w_.pieceContactPhase_.sleepChanged(p, true);
+    w_.pieceContacts.sleepChanged(p, true);
     slowFor_[p] = 0;
     pieceSpeed2_[p] = 0;
     frozenReaction_[p].clear();
@@ -82,14 +85,14 @@ void SleepPhase::setDynamic(std::size_t p, bool dynamic) {
         putToSleep(p);
         awakeSetChanged();
     }
-    w_.updatePieceBounds(true);  // its box is no longer updated by the step (and may not exist yet)
+    w_.bounds.update(true);  // its box is no longer updated by the step (and may not exist yet)
 }
 
 void SleepPhase::putToSleep(std::size_t p) {
     const PieceInfo& P = w_.pieces[p];
     // Velocities to zero: the kinetic energy left is booked as removed.
     // (Under MPI each rank books its own nodes' share: Domain::finishStep sums.)
-    const Domain* dom = w_.domain() && w_.domain()->built() ? w_.domain() : nullptr;
+    const Domain* dom = w_.domain.built();
     double ek = 0;
     for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n)
         for (int d = 0; d < 3; ++d) {
@@ -101,9 +104,9 @@ void SleepPhase::putToSleep(std::size_t p) {
     // What it pushed on obstacles this step stays in their reactions.
     std::vector<double>& fr = frozenReaction_[p];
     fr.clear();
-    const std::vector<int>& pieceObstacles_ = w_.obstaclePhase_.pieceObstacles();
-    const std::vector<int>& pieceObstacleBegin_ = w_.obstaclePhase_.pieceObstacleBegin();
-    const std::vector<double>& pairReaction_ = w_.obstaclePhase_.pairReaction();
+    const std::vector<int>& pieceObstacles_ = w_.obstacleContacts.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = w_.obstacleContacts.pieceObstacleBegin();
+    const std::vector<double>& pairReaction_ = w_.obstacleContacts.pairReaction();
     if (pieceObstacleBegin_.size() == w_.pieces.size() + 1 && pairReaction_.size() == 6 * pieceObstacles_.size())
         for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {
             fr.push_back(pieceObstacles_[j]);
@@ -112,7 +115,7 @@ void SleepPhase::putToSleep(std::size_t p) {
     // How far it moved since the Verlet lists were built: other nodes may
     // only move the rest of half the skin before the lists are rebuilt.
     double m2 = 0;
-    const PieceContactState& pc = w_.pieceContactPhase_.state();
+    const PieceContactState& pc = w_.pieceContacts.state();
     if (pc.listValid && pc.listPos.size() == 3 * w_.surfNodes.size())
         for (int32_t s = P.surfBegin; s < P.surfEnd; ++s) {
             const int32_t n = w_.surfNodes[s];
@@ -123,7 +126,7 @@ void SleepPhase::putToSleep(std::size_t p) {
         }
     sleepMoved2_[p] = m2;
     asleep_[p] = 1;
-    w_.pieceContactPhase_.sleepChanged(p, false);
+    w_.pieceContacts.sleepChanged(p, false);
     ++sleepCount_;
 }
 
@@ -137,15 +140,15 @@ void SleepPhase::run(double dt) {
     // Largest node speed of each awake piece, from the integration (under
     // MPI the largest over the ranks: every rank then decides alike, as the
     // pieces' boxes, neighbours and obstacles are the global ones too).
-    for (std::size_t p = 0; p < np; ++p) pieceSpeed2_[p] = asleep_[p] ? pieceSpeed2_[p] : w_.integrationPhase_.maxSpeed2(p);
-    if (w_.domain() && w_.domain()->built()) w_.domain_->comm().allreduceMax(pieceSpeed2_.data(), static_cast<int>(np));
+    for (std::size_t p = 0; p < np; ++p) pieceSpeed2_[p] = asleep_[p] ? pieceSpeed2_[p] : w_.integration.maxSpeed2(p);
+    if (Domain* dom = w_.domain.built()) dom->comm().allreduceMax(pieceSpeed2_.data(), static_cast<int>(np));
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) continue;
         const double m = pieceSpeed2_[p];
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
-    const PieceContactState& pc = w_.pieceContactPhase_.state();
-    const bool nbrsValid = pc.nbrStart.size() == np + 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn) && np > 1;
+    const PieceContactState& pc = w_.pieceContacts.state();
+    const bool nbrsValid = pc.nbrStart.size() == np + 1 && w_.pieceContacts.anyKindOn() && np > 1;
     auto fastNeighbour = [&](std::size_t p) {
         if (!nbrsValid) return false;
         for (int32_t q = pc.nbrStart[p]; q < pc.nbrStart[p + 1]; ++q) {
@@ -154,8 +157,8 @@ void SleepPhase::run(double dt) {
         }
         return false;
     };
-    const std::vector<int>& pieceObstacles_ = w_.obstaclePhase_.pieceObstacles();
-    const std::vector<int>& pieceObstacleBegin_ = w_.obstaclePhase_.pieceObstacleBegin();
+    const std::vector<int>& pieceObstacles_ = w_.obstacleContacts.pieceObstacles();
+    const std::vector<int>& pieceObstacleBegin_ = w_.obstacleContacts.pieceObstacleBegin();
     auto movingObstacle = [&](std::size_t p) {
         if (pieceObstacleBegin_.size() != np + 1) return false;
         for (int j = pieceObstacleBegin_[p]; j < pieceObstacleBegin_[p + 1]; ++j) {

@@ -9,14 +9,45 @@
 #include <cstdint>
 #include <vector>
 
+#include "../contact/Obstacle.hpp"
+#include "../contact/SphereSet.hpp"
+#include "../core/Column.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceBounds.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 #include "../world/ThreadLayout.hpp"
 
 namespace qdem {
 
+class ObstaclePhase;
+class PieceContactPhase;
+class IntegrationPhase;
+
 class SleepPhase final : public Phase {
 public:
-    using Phase::Phase;
+    // What it reads and writes of the world: the node states it zeroes, and
+    // what tells whether something moves near a piece.
+    struct Data {
+        const Column<double>& pos;
+        Column<double>& vel;                 // zeroed when a piece falls asleep
+        const Column<double>& mass;
+        const Column<int32_t>& surfNodes;
+        const std::vector<PieceInfo>& pieces;
+        const std::vector<Obstacle>& obstacles;
+        const SphereSet& spheres;            // pieces a sphere is near
+        const Settings& settings;
+        const Eigen::Vector3d& gravity;
+        DomainRef domain;                    // under MPI: owned nodes, decisions alike on every rank
+        Energy& energy;                      // kinetic energy removed at sleep
+        PieceBounds& bounds;                 // a held piece's box, no longer updated by the step
+        const ObstaclePhase& obstacleContacts;// what a piece pushed on obstacles, which it can reach
+        PieceContactPhase& pieceContacts;    // neighbour pieces, Verlet lists; told of sleep changes
+        const IntegrationPhase& integration; // the pieces' largest node speeds
+    };
+    explicit SleepPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "sleep"; }
     // Puts slow pieces to sleep and wakes those something moves near.
     void run(double dt) override;
@@ -67,6 +98,7 @@ public:
     void setCounts(long sleeps, long wakes) { sleepCount_ = sleeps, wakeCount_ = wakes; }
 
 private:
+    Data w_;
     void putToSleep(std::size_t p);
     void wakeOne(std::size_t p);
 

@@ -20,7 +20,6 @@
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/World.hpp"
 #include "../world/WorldState.hpp"
 #include "SpherePhase.hpp"
 
@@ -167,7 +166,7 @@ void SpherePhase::listActive() {
             const int32_t pb = S.pairPiece[q];
             bool overlap = true;
             for (int d = 0; d < 3 && overlap; ++d)
-                overlap = S.pos[3 * i + d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= S.pos[3 * i + d] + R;
+                overlap = S.pos[3 * i + d] - R <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= S.pos[3 * i + d] + R;
             if (overlap) S.active.push_back(q);
         }
     }
@@ -282,7 +281,7 @@ void SpherePhase::loadFields(const WorldState& s) {
 // centroid, with bounding radii and unit normals of the current shape.
 void SpherePhase::buildGrids() {
     SphereSet& S = w_.spheres;
-    const SurfaceIndex& surf = w_.surf_;
+    const SurfaceIndex& surf = w_.surface;
     const auto np = static_cast<int32_t>(w_.pieces.size());
     S.pieceUsed.assign(np, 0);
     for (int32_t p : S.pairPiece) S.pieceUsed[p] = 1;
@@ -292,7 +291,7 @@ void SpherePhase::buildGrids() {
     S.triRadius.resize(surf.nTris());
     S.triNormal.resize(3 * surf.nTris());
     S.triCurrent.resize(surf.nTris());
-    const Domain* dom = w_.domain_.get();
+    const Domain* dom = w_.domain.any();
     for (int32_t p = 0; p < np; ++p) {
         if (!S.pieceUsed[p]) continue;
         const int32_t t0 = surf.pieceTriStart[p], t1 = surf.pieceTriStart[p + 1];
@@ -331,7 +330,7 @@ void SpherePhase::run(double dt) {
     std::fill(S.pairComputed.begin(), S.pairComputed.end(), 0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
     buildGrids();
-    w_.beginContactForces();
+    w_.contacts.begin();
     const int nth = omp_get_max_threads();
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
@@ -346,12 +345,12 @@ void SpherePhase::run(double dt) {
 #pragma omp parallel for schedule(static) num_threads(nth)
         for (int32_t s = s0; s < s1; ++s)
             for (int th = 0; th < nth; ++th)
-                for (int d = 0; d < 3; ++d) w_.contactForce_[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+                for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
     }
     contacts_ = count;
     // Under MPI each rank holds only the pairs it computed: the sums come
     // with the end-of-step reduction (unpackPairs).
-    if (!w_.domain_) sumPairForces();
+    if (!w_.domain.any()) sumPairForces();
     if (w_.settings.trackEnergy) {
         w_.energy.contactElastic += eEl;
         w_.energy.contactDamping += eDamp;
@@ -362,15 +361,16 @@ void SpherePhase::run(double dt) {
 template <bool Friction>
 void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
     SphereSet& S = w_.spheres;
-    const SurfaceIndex& surf = w_.surf_;
+    const SurfaceIndex& surf = w_.surface;
     const int32_t n = S.size();
     constexpr int K = SphereSet::kSlots;
     const long stamp = w_.iter;
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
     const std::size_t nSurf = w_.surfNodes.size();
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
-    const Domain* dom = w_.domain_.get();
+    const Domain* dom = w_.domain.any();
     const int me = dom ? dom->rank() : 0;
+    const double* X = w_.pos.data();  // (a local: the loop stores through narrow pointers)
 
 #pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
     {
@@ -392,7 +392,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 const double reach = R + mb.radius;
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= w_.pieceHi_[3 * pb + d] && w_.pieceLo_[3 * pb + d] <= C[d] + R;
+                    overlap = C[d] - R <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= C[d] + R;
                 const int32_t t0 = surf.pieceTriStart[pb];
                 const double qr = S.pieceTriRadius[pb] + reach;
                 // Under MPI the pair is computed by the owner of the lowest-id
@@ -434,7 +434,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                         const double Rt = S.triRadius[t] + reach;
                         if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
                         const int32_t* c = &surf.tri[3 * t];
-                        cl.consider(C, t, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                        cl.consider(C, t, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                                     Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true);
                     });
                 }
@@ -452,7 +452,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                             const int32_t t = t0 + local;
                             if (!S.triCurrent[t]) return;
                             const int32_t* c = &surf.tri[3 * t];
-                            if (frontFaceNearer(C, at(w_.pos, c[0]), at(w_.pos, c[1]), at(w_.pos, c[2]),
+                            if (frontFaceNearer(C, at(X, c[0]), at(X, c[1]), at(X, c[2]),
                                                 Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
                                 keep[k] = false;
                         });

@@ -6,13 +6,40 @@
 #include <cstdint>
 #include <vector>
 
+#include "../contact/SphereSet.hpp"
+#include "../contact/SurfaceIndex.hpp"
+#include "../core/Column.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../material/Material.hpp"
+#include "../world/ContactForces.hpp"
+#include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
+#include "../world/PieceBounds.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 
 namespace qdem {
 
 class SpherePhase final : public Phase {
 public:
-    using Phase::Phase;
+    // What it reads and writes of the world.
+    struct Data {
+        const Column<double>& pos;
+        const Column<double>& vel;
+        const Column<double>& mass;
+        const Column<int32_t>& surfNodes;
+        const std::vector<PieceInfo>& pieces;
+        const std::vector<Material>& materials;
+        const Settings& settings;
+        const long& iter;                  // the step contacts are stamped with
+        const SurfaceIndex& surface;
+        const PieceBounds& bounds;         // which pieces a sphere can touch
+        DomainRef domain;                  // under MPI: who computes a (sphere, piece) pair
+        SphereSet& spheres;                // states in, forces and torques out, contact history
+        ContactForces& contacts;
+        Energy& energy;                    // contact elastic (a state), damping, friction
+    };
+    explicit SpherePhase(const Data& data) : w_(data) {}
     const char* name() const override { return "spheres"; }
     void run(double dt) override;
     void report(PhaseReport& r) const override {
@@ -65,6 +92,7 @@ private:
     void buildGrids();
     template <bool Friction>
     void sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count);
+    Data w_;
     long contacts_ = 0;
 };
 

@@ -12,7 +12,7 @@
 #include "../core/Format.hpp"
 #include "../element/ElementKernel.hpp"
 #include "../element/ViscousOperator.hpp"
-#include "../world/World.hpp"
+#include "SleepPhase.hpp"
 
 namespace qdem {
 
@@ -23,19 +23,19 @@ namespace {
 // is not worth solving this way and the user is told so.
 constexpr int kMaxIterations = 5000;
 
-bool viscous(const World& w, const Material& m) { return w.settings.viscosityOn && m.viscosity > 0; }
+bool viscous(const Settings& s, const Material& m) { return s.viscosityOn && m.viscosity > 0; }
 
 }  // namespace
 
 bool ViscousSolve::active() const {
     if (w_.settings.viscousIntegration != ViscousIntegration::Implicit) return false;
-    if (w_.domain())  // every rank has the same settings: all refuse at the same step
+    if (w_.domain.any())  // every rank has the same settings: all refuse at the same step
         throw InputError(
             "QDEM: viscousIntegration='implicit' is not available under MPI yet (its conjugate gradients are not "
             "distributed): set QdemEngine(viscousIntegration='explicit') with O.dt below "
             "stableDt()['combinedExplicit'], or run on one process.");
     if (!w_.settings.viscosityOn) return false;
-    for (const TetSegment& sg : w_.sleeping().awakeTets())
+    for (const TetSegment& sg : w_.sleeping.awakeTets())
         if (w_.materials[w_.pieces[sg.piece].material].viscosity > 0) return true;
     return false;
 }
@@ -45,9 +45,9 @@ void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
     constexpr int kSums = 4;
     const int nth = layout_.nThreads;
     partial_.assign(static_cast<std::size_t>(kSums) * nth, 0.0);
-    const bool all = w_.sleeping().everything();
-    const int32_t* ids = w_.sleeping().awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+    const bool all = w_.sleeping.everything();
+    const int32_t* ids = w_.sleeping.awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
 #pragma omp parallel num_threads(nth)
     {
         double s[kSums] = {0, 0, 0, 0};
@@ -64,9 +64,9 @@ void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
 void ViscousSolve::apply(const double* p, double* y) {
     const int32_t* conn = w_.tetNodes.data();
     const ViscousStressOnly law;
-    const bool all = w_.sleeping().everything();
-    const int32_t* ids = w_.sleeping().awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+    const bool all = w_.sleeping.everything();
+    const int32_t* ids = w_.sleeping.awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
@@ -76,7 +76,7 @@ void ViscousSolve::apply(const double* p, double* y) {
         BatchOut out;
         for (const TetSegment& sg : layout_.share[th]) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
-            if (!viscous(w_, m)) continue;
+            if (!viscous(w_.settings, m)) continue;
             const ElementParams prm{m.lambda(), m.mu(), m.beta()};
             for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes) {
                 const int cnt = std::min<int32_t>(kLanes, sg.t1 - e0);
@@ -110,9 +110,9 @@ void ViscousSolve::apply(const double* p, double* y) {
 
 void ViscousSolve::diagonal(double* diag) {
     const int32_t* conn = w_.tetNodes.data();
-    const bool all = w_.sleeping().everything();
-    const int32_t* ids = w_.sleeping().awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.nNodes()) : static_cast<int32_t>(w_.sleeping().awakeNodes().size());
+    const bool all = w_.sleeping.everything();
+    const int32_t* ids = w_.sleeping.awakeNodes().data();
+    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
@@ -122,7 +122,7 @@ void ViscousSolve::diagonal(double* diag) {
         const double* X = w_.pos.data();
         for (const TetSegment& sg : layout_.share[th]) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
-            if (!viscous(w_, m)) continue;
+            if (!viscous(w_.settings, m)) continue;
             const ElementParams prm{m.lambda(), m.mu(), m.beta()};
             for (int32_t e = sg.t0; e < sg.t1; ++e) {
                 const int32_t* c = conn + 4 * e;
@@ -152,9 +152,9 @@ void ViscousSolve::diagonal(double* diag) {
 const double* ViscousSolve::solve(double dt, const double* f) {
     const double t0 = omp_get_wtime();
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, w_.sleeping().version()))
-        layout_.build(w_.tetNodes.data(), w_.sleeping().awakeTets(), nth, w_.sleeping().version());
-    const std::size_t n3 = 3 * w_.nNodes();
+    if (!layout_.matches(nth, w_.sleeping.version()))
+        layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), nth, w_.sleeping.version());
+    const std::size_t n3 = 3 * w_.mass.size();
     for (auto* v : {&x_, &r_, &z_, &p_, &cp_, &q_, &diag_, &delta_})
         if (v->size() != n3) v->assign(n3, 0.0);
     const double* M = w_.mass.data();

@@ -17,15 +17,35 @@
 #include <cstdint>
 #include <vector>
 
+#include "../core/Column.hpp"
+#include "../material/Material.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
 #include "../world/ThreadLayout.hpp"
 
 namespace qdem {
 
-class World;
+class SleepPhase;
 
 class ViscousSolve {
 public:
-    explicit ViscousSolve(World& w) : w_(w) {}
+    // What it reads of the world (the integration phase declares it for it).
+    struct Data {
+        const Column<double>& pos;        // the current shape C(x) is built on
+        const Column<double>& mass;
+        const Column<uint8_t>& blocked;   // prescribed DOFs keep their velocity
+        const Column<int32_t>& tetNodes;
+        const Column<double>& tetB;
+        const Column<double>& tetVol0;
+        const std::vector<PieceInfo>& pieces;
+        const std::vector<Material>& materials;
+        const Settings& settings;
+        const long& iter;                 // named in its errors
+        const SleepPhase& sleeping;       // the awake tets and nodes
+        DomainRef domain;                 // refused under MPI
+    };
+    explicit ViscousSolve(const Data& data) : w_(data) {}
     // Implicit viscosity asked for, viscosity on, and an awake piece viscous.
     // Throws InputError under MPI (not distributed yet), naming the fix.
     bool active() const;
@@ -53,7 +73,7 @@ private:
     template <class Fn>
     void nodeLoop(int nSums, double* sums, Fn&& fn);
 
-    World& w_;
+    Data w_;
     ThreadLayout layout_;
     std::vector<double> x_, r_, z_, p_, y_, cp_, q_, diag_, delta_, partial_;
 };

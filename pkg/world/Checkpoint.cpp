@@ -85,8 +85,8 @@ void World::loadState(const WorldState& s) {
         energyTotal_ = energy;
         if (domain_->rank() != 0) energy = Energy{};
     }
-    updatePieceBounds(true);    // sleeping pieces' boxes are not updated by the step
-    contactsActive_ = false;
+    bounds_.update(true);  // sleeping pieces' boxes are not updated by the step
+    contactForces_.reset();
     for (Phase* p : phases()) p->stateLoaded();
 }
 

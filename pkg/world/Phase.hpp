@@ -1,10 +1,17 @@
 // One stage of World::step, with the state it owns.
 //
 // A phase is run once per step (a virtual call per phase and step, never per
-// node or contact).  It declares what a restart must keep of its state
-// (stateColumns: named arrays that Checkpoint.cpp saves and loads without
-// knowing the phase), grows its per-node and per-piece state when pieces are
-// added, and is told when a loaded state replaced its arrays.
+// node or contact).  It sees no World: each phase class declares, as its
+// nested `Data`, the arrays and objects it reads (const) and writes, and the
+// world hands it those at construction (World.hpp).  A phase therefore
+// cannot reach into data it does not declare; pkg/phases/*.cpp include no
+// World.hpp (tests/cpp/test_phase_data.cpp checks that).  In the phases,
+// `w_` is that declared part of the world.
+//
+// A phase declares what a restart must keep of its state (stateColumns:
+// named arrays that Checkpoint.cpp saves and loads without knowing the
+// phase), grows its per-node and per-piece state when pieces are added, and
+// is told when a loaded state replaced its arrays.
 #pragma once
 #include <cstddef>
 #include <string>
@@ -13,7 +20,6 @@
 
 namespace qdem {
 
-class World;
 struct WorldState;
 
 // What the phases measured in the last step: wall times [s] and counters,
@@ -57,7 +63,7 @@ struct StateColumns {
 
 class Phase {
 public:
-    explicit Phase(World& world) : w_(world) {}
+    Phase() = default;
     virtual ~Phase() = default;
     Phase(const Phase&) = delete;
     Phase& operator=(const Phase&) = delete;
@@ -81,9 +87,6 @@ public:
     virtual void loadFields(const WorldState&) {}
     // A saved state was loaded (columns and fields): derived data is stale.
     virtual void stateLoaded() {}
-
-protected:
-    World& w_;
 };
 
 }  // namespace qdem

@@ -47,7 +47,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     refPos.resize(3 * N);
     force.resize(3 * N, 0.0);
     extForce.resize(3 * N, 0.0);
-    contactForce_.resize(3 * N, 0.0);
+    contactForces_.force.resize(3 * N, 0.0);
     mass.resize(N, 0.0);
     blocked.resize(N, 0);
     nodePiece.resize(N, pieceId);
@@ -171,58 +171,6 @@ void World::checkFinite() const {
                                      ") after step ", iter, ": the integration blew up"));
 }
 
-// Bounding boxes of the pieces (grown by the particle radius) from their
-// surface nodes: where each piece can touch anything this step.
-void World::updatePieceBounds(bool all) {
-    const std::size_t np = pieces.size();
-    pieceLo_.resize(3 * np);
-    pieceHi_.resize(3 * np);
-    if (domain_ && domain_->built()) {
-        // Under MPI only this rank's surface nodes and its ghosts are current:
-        // its boxes hold them (what this rank's contacts of the piece can
-        // reach), empty boxes (lo > hi, touching nothing) for the others.
-        for (std::size_t ip = 0; ip < np; ++ip)
-            for (int d = 0; d < 3; ++d) pieceLo_[3 * ip + d] = 1e300, pieceHi_[3 * ip + d] = -1e300;
-        for (const int32_t s : domain_->currentSurf()) {
-            const int32_t n = surfNodes[s];
-            const int32_t ip = nodePiece[n];
-            const double r = materials[pieces[ip].material].radius;
-            for (int d = 0; d < 3; ++d) {
-                pieceLo_[3 * ip + d] = std::min(pieceLo_[3 * ip + d], pos[3 * n + d] - r);
-                pieceHi_[3 * ip + d] = std::max(pieceHi_[3 * ip + d], pos[3 * n + d] + r);
-            }
-        }
-        // With sleeping on, every rank decides which pieces sleep: they need
-        // the same boxes (neighbour pieces, obstacles near), so the whole
-        // pieces' boxes (one reduction).
-        // So does the sphere coupling: which (sphere, piece) pairs may touch
-        // sizes the reduction of their forces (SpherePhase::listActive), and
-        // YADE's copy of the scene on each rank moves the proxies by them.
-        if (settings.sleepVelocity > 0 || !spheres.pairPiece.empty()) {
-            for (std::size_t i = 0; i < 3 * np; ++i) pieceHi_[i] = -pieceHi_[i];
-            domain_->comm().allreduceMin(pieceLo_.data(), static_cast<int>(3 * np));
-            domain_->comm().allreduceMin(pieceHi_.data(), static_cast<int>(3 * np));
-            for (std::size_t i = 0; i < 3 * np; ++i) pieceHi_[i] = -pieceHi_[i];
-        }
-        return;
-    }
-    for (std::size_t ip = 0; ip < np; ++ip) {
-        if (sleepPhase_.asleep(ip) && !all) continue;  // has not moved
-        const PieceInfo& p = pieces[ip];
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-        for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
-            const Eigen::Vector3d x(pos[3 * surfNodes[s]], pos[3 * surfNodes[s] + 1], pos[3 * surfNodes[s] + 2]);
-            lo = lo.cwiseMin(x);
-            hi = hi.cwiseMax(x);
-        }
-        const double r = materials[p.material].radius;
-        for (int d = 0; d < 3; ++d) {
-            pieceLo_[3 * ip + d] = lo[d] - r;
-            pieceHi_[3 * ip + d] = hi[d] + r;
-        }
-    }
-}
-
 const std::vector<double>& World::pieceBoxes() {
     const bool split = domain_ && domain_->built();
     if (split && boxesIter_ == iter && boxes_.size() == 6 * pieces.size()) return boxes_;
@@ -244,16 +192,6 @@ const std::vector<double>& World::pieceBoxes() {
         for (int d = 0; d < 3; ++d) boxes_[6 * p + 3 + d] = -boxes_[6 * p + 3 + d];
     boxesIter_ = split ? iter : -1;
     return boxes_;
-}
-
-void World::beginContactForces() {
-    if (contactsActive_) return;
-    for (std::size_t p = 0; p < pieces.size(); ++p) {
-        if (sleepPhase_.asleep(p)) continue;  // not integrated: its contact forces are not read
-        for (int32_t i = pieces[p].surfBegin; i < pieces[p].surfEnd; ++i)
-            for (int d = 0; d < 3; ++d) contactForce_[3 * surfNodes[i] + d] = 0.0;
-    }
-    contactsActive_ = true;
 }
 
 void World::setGravity(const Eigen::Vector3d& g) {

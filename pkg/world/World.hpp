@@ -22,7 +22,10 @@
 #include "../mesh/TetMesh.hpp"
 #include "../parallel/Communicator.hpp"
 #include "../parallel/Partition.hpp"
+#include "ContactForces.hpp"
 #include "Energy.hpp"
+#include "PieceBounds.hpp"
+#include "PieceInfo.hpp"
 #include "../phases/ElementPhase.hpp"
 #include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
@@ -36,19 +39,6 @@
 namespace qdem {
 
 class Domain;
-
-struct PieceInfo {
-    int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
-    int32_t tetBegin, tetEnd;    // [begin, end) in the global tet arrays
-    int32_t surfBegin, surfEnd;  // [begin, end) in surfNodes
-    int material;
-    Surface surface;             // in global node / tet ids
-    double volume = 0, mass = 0;
-    double minSurfaceNodeMass = 0;
-    // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
-    // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.
-    double minSurfaceMassPerWeight = 0;
-};
 
 // Stable time step and which limit sets it.
 struct StableDt {
@@ -228,6 +218,8 @@ public:
         return r;
     }
     long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
+    // The piece-contact lists and histories (diagnostics, tests).
+    const PieceContactState& pieceContactState() const { return pieceContactPhase_.state(); }
     const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Box (lo, hi) of each piece's surface nodes now, grown by its particle
     // radius: 6 per piece.  Under MPI the whole pieces' (a reduction of the
@@ -247,21 +239,61 @@ public:
     World& operator=(const World&) = delete;
 
 private:
-    // The phases of World::step, each with its own state (pkg/phases/).  They
-    // are friends while the shared data they read is being given accessors.
-    friend class ObstaclePhase;
-    friend class ElementPhase;
-    friend class IntegrationPhase;
-    friend class PieceContactPhase;
-    friend class SpherePhase;
-    friend class SleepPhase;
+    // Derived per-step data the phases share (each phase declares which it
+    // reads or writes: its Data).
+    // The surfaces of all pieces in global ids, with their adjacency.
+    SurfaceIndex surf_;
+    // Where each piece can touch anything this step.
+    PieceBounds bounds_{{.pos = pos, .surfNodes = surfNodes, .nodePiece = nodePiece, .pieces = pieces,
+                         .materials = materials, .settings = settings, .sleeping = sleepPhase_, .spheres = spheres,
+                         .domain = {domain_}}};
+    // Per node, from obstacles, piece contacts and spheres.
+    ContactForces contactForces_{pieces, surfNodes, sleepPhase_};
+    // Energy states per piece (elastic, contact with obstacles, contact with
+    // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
+    std::vector<double> pieceEnergy_;
+    std::vector<std::vector<double>> threadPieceEnergy_;
+    // Under MPI: this rank's share of the world and its exchanges.
+    std::unique_ptr<Domain> domain_;
+
+    // The phases of World::step, each with its own state (pkg/phases/) and
+    // given only the data it declares (Phase.hpp).  Domain, which moves
+    // every row of the world between ranks, is the one friend.
     friend class Domain;
-    ObstaclePhase obstaclePhase_{*this};
-    PieceContactPhase pieceContactPhase_{*this};
-    SpherePhase spherePhase_{*this};
-    ElementPhase elementPhase_{*this};
-    IntegrationPhase integrationPhase_{*this, elementPhase_};
-    SleepPhase sleepPhase_{*this};
+    ObstaclePhase obstaclePhase_{{.pos = pos, .vel = vel, .mass = mass, .nodePiece = nodePiece, .surfNodes = surfNodes,
+                                  .surfWeight = surfWeight, .pieces = pieces, .materials = materials,
+                                  .settings = settings, .sleeping = sleepPhase_, .bounds = bounds_,
+                                  .obstacles = obstacles, .contacts = contactForces_, .energy = energy,
+                                  .threadPieceEnergy = threadPieceEnergy_}};
+    PieceContactPhase pieceContactPhase_{{.pos = pos, .vel = vel, .refPos = refPos, .mass = mass,
+                                          .nodePiece = nodePiece, .tetNodes = tetNodes, .surfNodes = surfNodes,
+                                          .surfWeight = surfWeight, .pieces = pieces, .materials = materials,
+                                          .settings = settings, .iter = iter, .surface = surf_,
+                                          .sleeping = sleepPhase_, .bounds = bounds_, .domain = {domain_},
+                                          .contacts = contactForces_, .energy = energy,
+                                          .threadPieceEnergy = threadPieceEnergy_}};
+    SpherePhase spherePhase_{{.pos = pos, .vel = vel, .mass = mass, .surfNodes = surfNodes, .pieces = pieces,
+                              .materials = materials, .settings = settings, .iter = iter, .surface = surf_,
+                              .bounds = bounds_, .domain = {domain_}, .spheres = spheres, .contacts = contactForces_,
+                              .energy = energy}};
+    ElementPhase elementPhase_{{.pos = pos, .vel = vel, .tetNodes = tetNodes, .tetPiece = tetPiece, .tetB = tetB,
+                                .tetVol0 = tetVol0, .pieces = pieces, .materials = materials, .settings = settings,
+                                .sleeping = sleepPhase_, .energy = energy, .threadPieceEnergy = threadPieceEnergy_}};
+    IntegrationPhase integrationPhase_{{.mass = mass, .extForce = extForce, .blocked = blocked,
+                                        .nodePiece = nodePiece, .pieces = pieces, .gravity = gravity,
+                                        .settings = settings, .sleeping = sleepPhase_, .elements = elementPhase_,
+                                        .contacts = contactForces_, .domain = {domain_}, .pos = pos, .vel = vel,
+                                        .force = force, .energy = energy,
+                                        .viscous = {.pos = pos, .mass = mass, .blocked = blocked,
+                                                    .tetNodes = tetNodes, .tetB = tetB, .tetVol0 = tetVol0,
+                                                    .pieces = pieces, .materials = materials,
+                                                    .settings = settings, .iter = iter,
+                                                    .sleeping = sleepPhase_, .domain = {domain_}}}};
+    SleepPhase sleepPhase_{{.pos = pos, .vel = vel, .mass = mass, .surfNodes = surfNodes, .pieces = pieces,
+                            .obstacles = obstacles, .spheres = spheres, .settings = settings, .gravity = gravity,
+                            .domain = {domain_}, .energy = energy, .bounds = bounds_,
+                            .obstacleContacts = obstaclePhase_, .pieceContacts = pieceContactPhase_,
+                            .integration = integrationPhase_}};
     // In the order of the step; Checkpoint.cpp, addPiece and report() visit
     // them (a fixed array: report() is called every step from Python).
     const std::array<Phase*, 6> phases_{&obstaclePhase_,    &pieceContactPhase_, &spherePhase_,
@@ -273,32 +305,17 @@ private:
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();
 
-    void updatePieceBounds(bool all = false);  // all: sleeping pieces' too (after a load)
-    void beginContactForces();
     double elementOmegaMax(const PieceInfo& p) const;
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
 
-    // Under MPI: this rank's share of the world and its exchanges.
-    std::unique_ptr<Domain> domain_;
     Energy energyTotal_;
     long gatheredIter_ = -1;  // the step gatherAll() last made every node current at
     long rowsGatheredIter_ = -1;  // and gatherState() every history row
     void prepareDomain();
     // Throws InputError under MPI unless gatherAll() made every node current this step.
     void requireGathered(const char* what) const;
-    // Energy states per piece (elastic, contact with obstacles, contact with
-    // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
-    std::vector<double> pieceEnergy_;
-    std::vector<std::vector<double>> threadPieceEnergy_;
-    Column<double> contactForce_;  // per node, from obstacles (and later piece contacts)
-    bool contactsActive_ = false;  // contactForce_ holds forces for the coming update
-    // The surfaces of all pieces in global ids, with their adjacency.
-    SurfaceIndex surf_;
-    // Per piece: bounding box of its surface nodes grown by its particle
-    // radius (3 + 3 each), updated each step for the awake pieces.
-    std::vector<double> pieceLo_, pieceHi_;
     std::vector<double> boxes_;  // pieceBoxes(), made at step boxesIter_
     long boxesIter_ = -1;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max

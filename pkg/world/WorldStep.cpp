@@ -44,20 +44,20 @@ void World::step(double dt) {
     // this world's obstacles and gravity, contact forces and energy states
     // summed afresh, the pieces' boxes from the current positions.
     sleepPhase_.checkLoadedRest();
-    contactsActive_ = false;
+    contactForces_.reset();
     if (settings.trackEnergy) {
         energy.contactElastic = 0;  // a state: summed afresh by the contact phases
         beginPieceEnergy();
     }
-    updatePieceBounds();
+    bounds_.update();
     if (domain_) spherePhase_.listActive();  // the same pairs on every rank: they size the reduction
-    // Forces: contacts (into contactForce_), then elements (thread buffers).
+    // Forces: contacts (into contactForces_), then elements (thread buffers).
     run(obstaclePhase_);
     run(pieceContactPhase_);
     run(spherePhase_);
     run(elementPhase_);
     // Under MPI: partial forces on ghosts to their owners.
-    if (domain_) domain_->returnGhostForces(elementPhase_.layout(), contactForce_.data(), contactsActive_);
+    if (domain_) domain_->returnGhostForces(elementPhase_.layout(), contactForces_.force.data(), contactForces_.active);
     // Motion, the energy states of the step, the clock.
     run(integrationPhase_);
     if (settings.trackEnergy && error.empty()) finishPieceEnergy();

@@ -21,7 +21,7 @@ py::array columnView(const Column<T>& c, std::size_t offset, std::vector<py::ssi
     T* data = (*keep)->data() + offset;
     py::array_t<T> a(shape, data, base);
     if (!writable) py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-    return std::move(a);
+    return a;  // moved (C++20: implicit move to the base type)
 }
 
 // Copies an (n, k) array-like into a flat vector, with a clear error on shape.

@@ -23,7 +23,7 @@ constexpr double kStiffness = 1000.0;  // [N/m]
 class NodeNodeRepulsion final : public ContactKind {
 public:
     long run(KindStep& s) override {
-        const World& w = s.world;
+        const PieceContactData& w = s.world;
         const PieceContactState& L = s.lists;  // neighbour pieces from the broad phase
         double* buf = s.threadForce[0].data();  // (runs on one thread)
         long n = 0;
@@ -111,4 +111,36 @@ TEST(ContactKindTable, SeedKindsAreRowsWithSwitches) {
     EXPECT_EQ(t[0].on, &Settings::pointPolygonOn);
     EXPECT_STREQ(t[1].name, "edgeEdge");
     EXPECT_EQ(t[1].on, &Settings::edgeEdgeOn);
+}
+
+// The broad phase builds the lists the switched-on rows declare, and no
+// others: a row's Registration bits are all it takes (no switch of the seed's
+// kinds is read for that).
+TEST(ContactKindTable, BroadPhaseBuildsTheListsTheRowsDeclare) {
+    const auto lists = [](unsigned declared) {
+        const ContactKindRow row{"listsTest", "as declared", "none", nullptr, &makeNodeNode, declared};
+        addContactKind(row);
+        World w;
+        Material m;
+        m.radius = 0.01;
+        const int mat = w.addMaterial(m);
+        w.addPiece(apexTet(0.0, -1), mat);
+        w.addPiece(apexTet(0.015, +1), mat);
+        w.settings.pointPolygonOn = false;
+        w.settings.edgeEdgeOn = false;
+        w.step(1e-9);
+        removeContactKind(row.name);
+        // Verlet lists of triangles built, feature edges registered.
+        return std::pair<long, std::size_t>{w.verletRebuilds(), w.pieceContactState().edgeItems.size()};
+    };
+    EXPECT_EQ(lists(RegisterNothing), (std::pair<long, std::size_t>{0, 0}));
+    const auto tris = lists(RegisterSurfaceTriangles);
+    EXPECT_EQ(tris.first, 1);
+    EXPECT_EQ(tris.second, 0u);
+    const auto edges = lists(RegisterFeatureEdges);
+    EXPECT_EQ(edges.first, 0);
+    EXPECT_GT(edges.second, 0u);  // the tets' edges are all feature edges
+    const auto both = lists(RegisterSurfaceTriangles | RegisterFeatureEdges);
+    EXPECT_EQ(both.first, 1);
+    EXPECT_EQ(both.second, edges.second);
 }

@@ -99,7 +99,8 @@ def waitQuiet():
 
 stopAt = time.time() + float(os.environ.get("ARCH_TIME_LIMIT", "1e9"))
 res = {"old_build": old, "new_build": new, "rounds": rounds, "runs": []}
-benches = ["elements", "cubes27", "shogi", "spheres"]
+# ARCH_BENCHES=cubes27,elements: only those (default: all four)
+benches = os.environ.get("ARCH_BENCHES", "elements,cubes27,shogi,spheres").split(",")
 for r in range(rounds):
     if time.time() > stopAt:
         break

@@ -1,0 +1,43 @@
+// What the piece-contact phase and its contact kinds (ContactKind.hpp) read
+// and write of the world.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../contact/SurfaceIndex.hpp"
+#include "../core/Column.hpp"
+#include "../material/Material.hpp"
+#include "../parallel/DomainRef.hpp"
+#include "../world/ContactForces.hpp"
+#include "../world/Energy.hpp"
+#include "../world/PieceBounds.hpp"
+#include "../world/PieceInfo.hpp"
+#include "../world/Settings.hpp"
+
+namespace qdem {
+
+class SleepPhase;
+
+struct PieceContactData {
+    const Column<double>& pos;
+    const Column<double>& vel;
+    const Column<double>& refPos;      // feature edges are classified on the reference shape
+    const Column<double>& mass;
+    const Column<int32_t>& nodePiece;
+    const Column<int32_t>& tetNodes;   // the seed's cases A/B/C register tetrahedra
+    const Column<int32_t>& surfNodes;
+    const Column<double>& surfWeight;
+    const std::vector<PieceInfo>& pieces;
+    const std::vector<Material>& materials;
+    const Settings& settings;
+    const long& iter;                  // the step contacts are stamped with
+    SurfaceIndex& surface;             // triangles, edges; feature edges re-classified when the angle changes
+    SleepPhase& sleeping;              // the awake set; told when the Verlet lists are rebuilt
+    const PieceBounds& bounds;         // which pieces can touch
+    DomainRef domain;                  // under MPI: owned and current nodes, who computes a contact
+    ContactForces& contacts;
+    Energy& energy;                    // contact damping and friction
+    std::vector<std::vector<double>>& threadPieceEnergy;  // contact energy between pieces, per piece
+};
+
+}  // namespace qdem

@@ -1,0 +1,23 @@
+// Where a piece's nodes, tets and surface nodes sit in the world's shared
+// arrays, and its material and mass properties.
+#pragma once
+#include <cstdint>
+
+#include "../mesh/Surface.hpp"
+
+namespace qdem {
+
+struct PieceInfo {
+    int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
+    int32_t tetBegin, tetEnd;    // [begin, end) in the global tet arrays
+    int32_t surfBegin, surfEnd;  // [begin, end) in surfNodes
+    int material;
+    Surface surface;             // in global node / tet ids
+    double volume = 0, mass = 0;
+    double minSurfaceNodeMass = 0;
+    // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
+    // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.
+    double minSurfaceMassPerWeight = 0;
+};
+
+}  // namespace qdem
