@@ -81,7 +81,7 @@ def count(build, a):
         total = int(m.group(1).replace(",", ""))
     phases = {}
     for ph in PHASES:
-        m = re.search(r"^\s*([\d,]+)\s+\([\d.]+%\)\s+\S*:qdem::" + ph + r"::run\(double\)", ann, re.M)
+        m = re.search(r"^\s*([\d,]+)\s+\(\s*[\d.]+%\)\s+\S*:qdem::" + ph + r"::run\(double\)", ann, re.M)
         if m:
             phases[ph] = int(m.group(1).replace(",", ""))
     os.unlink(out)
