@@ -4,7 +4,9 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <type_traits>
 
 #include "../parallel/Domain.hpp"
 #include "ElementPhase.hpp"
@@ -55,7 +57,10 @@ void IntegrationPhase::run(double dt) {
     const int32_t* bufLo = bufLo_.data();
     const int32_t* bufHi = bufHi_.data();
     // The explicit force on node n: element buffers, contacts, gravity, external.
-    const auto explicitForce = [&](int32_t n, double* f) {
+    // (Captures by value here and below: a captured reference is read through
+    // the closure, and every store through a double pointer in the loop would
+    // reload it.)
+    const auto explicitForce = [=](int32_t n, double* f) {
         for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
         for (int t = 0; t < nth; ++t)
             if (n >= bufLo[t] && n <= bufHi[t]) {
@@ -81,45 +86,54 @@ void IntegrationPhase::run(double dt) {
         Fq = viscous_.solve(dt, Fout);
     }
     double* dV = implicit && energyOn ? viscous_.velocityChange() : nullptr;
-#pragma omp parallel num_threads(nth) reduction(+ : ek, eg, ed)
-    {
-        double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
+    // The update, compiled twice: the explicit path carries no test of the
+    // implicit solve's arrays per node and DOF.
+    const auto advance = [=, this](auto implicitTag) {
+        constexpr bool Implicit = decltype(implicitTag)::value;
+        double ekT = 0, egT = 0, edT = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT)
+        {
+            double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static)
-        for (int32_t i = 0; i < count; ++i) {
-            const int32_t n = all ? i : ids[i];
-            double f[3];
-            if (Fq)
-                for (int d = 0; d < 3; ++d) f[d] = Fout[3 * n + d] - Fq[3 * n + d];
-            else
-                explicitForce(n, f);
-            const double invM = 1.0 / M[n];
-            for (int d = 0; d < 3; ++d) {
-                Fout[3 * n + d] = f[d];
-                const double vOld = V[3 * n + d];
-                const bool free = !((blk[n] >> d) & 1u);
-                if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
-                    const double vm = vOld + 0.5 * dt * f[d] * invM;
-                    const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
-                    f[d] -= fd;
-                    if (energyOn) ed += fd * vm * dt;
+            for (int32_t i = 0; i < count; ++i) {
+                const int32_t n = all ? i : ids[i];
+                double f[3];
+                if constexpr (Implicit)
+                    for (int d = 0; d < 3; ++d) f[d] = Fout[3 * n + d] - Fq[3 * n + d];
+                else
+                    explicitForce(n, f);
+                const double invM = 1.0 / M[n];
+                for (int d = 0; d < 3; ++d) {
+                    Fout[3 * n + d] = f[d];
+                    const double vOld = V[3 * n + d];
+                    const bool free = !((blk[n] >> d) & 1u);
+                    if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
+                        const double vm = vOld + 0.5 * dt * f[d] * invM;
+                        const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                        f[d] -= fd;
+                        if (energyOn) edT += fd * vm * dt;
+                    }
+                    const double a = free ? f[d] * invM : 0.0;
+                    if (energyOn) {
+                        const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
+                        ekT += 0.5 * M[n] * vMid * vMid;
+                        egT -= M[n] * g[d] * vOld * dt;
+                    }
+                    V[3 * n + d] = vOld + dt * a;
+                    if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
+                    else X[3 * n + d] += dt * V[3 * n + d];
                 }
-                const double a = free ? f[d] * invM : 0.0;
-                if (energyOn) {
-                    const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
-                    ek += 0.5 * M[n] * vMid * vMid;
-                    eg -= M[n] * g[d] * vOld * dt;
+                if (speed2) {
+                    const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
+                    double& m = speed2[nodePiece[n]];
+                    m = std::max(m, v2);
                 }
-                V[3 * n + d] = vOld + dt * a;
-                if (dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
-                else X[3 * n + d] += dt * V[3 * n + d];
-            }
-            if (speed2) {
-                const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
-                double& m = speed2[nodePiece[n]];
-                m = std::max(m, v2);
             }
         }
-    }
+        return std::array<double, 3>{ekT, egT, edT};
+    };
+    const std::array<double, 3> e = Fq ? advance(std::true_type{}) : advance(std::false_type{});
+    ek = e[0], eg = e[1], ed = e[2];
     if (dV) {
         w_.energy.viscous += viscous_.dissipation(dt, V);
 #pragma omp parallel for num_threads(nth) schedule(static)
