@@ -85,18 +85,13 @@ def coreStepper(world, dt):
 
 # --- (a) 27 cubes on a floor ---------------------------------------------------------------------------------
 
-def cubes27(a):
-    """scripts/bench/bench_cubes27.py's stack (3x3x3 cubes of edge 4 m, seed
-    Table 1 material, neighbours overlapping by 2 mm), at a{cells}^3 cells of
-    12 tets per cube instead of 8^3 so that a thousand steps take seconds; each
-    cube is thrown with its own velocity (up to 1 m/s) and spin, so the stack
-    moves: faces slide and part, edge-edge contacts come and go and the Verlet
-    lists are rebuilt.  dt = 0.8 x the stable step (the coarse mesh allows 4x
-    Table 1's 6.4e-6 s)."""
+def cubes27World(cells):
+    """The thrown 27-cube stack of cubes27() with `cells`^3 cells of 12 tets
+    per cube, its floor, and dt = 0.8 x its stable step."""
     mat = qdem.QdemMat()
     r, L = mat.radius, 4.0
     w = qdem.World()
-    cube = qdem.boxMesh((L, L, L), (a.cells,) * 3, tetsPerCell=12)
+    cube = qdem.boxMesh((L, L, L), (cells,) * 3, tetsPerCell=12)
     gap = 2 * r - 0.002
     rng = np.random.RandomState(3)
     for i in range(3):
@@ -105,7 +100,18 @@ def cubes27(a):
                 w.addPiece(cube, mat, pos=(i * (L + gap), j * (L + gap), L / 2 + r - 0.001 + k * (L + gap)),
                            vel=tuple(rng.uniform(-1, 1, 3)), angVel=tuple(rng.uniform(-0.2, 0.2, 3)))
     floor(w.core)
-    dt = 0.8 * w.stableDt()["combined"]
+    return w, 0.8 * w.stableDt()["combined"]
+
+
+def cubes27(a):
+    """scripts/bench/bench_cubes27.py's stack (3x3x3 cubes of edge 4 m, seed
+    Table 1 material, neighbours overlapping by 2 mm), at a{cells}^3 cells of
+    12 tets per cube instead of 8^3 so that a thousand steps take seconds; each
+    cube is thrown with its own velocity (up to 1 m/s) and spin, so the stack
+    moves: faces slide and part, edge-edge contacts come and go and the Verlet
+    lists are rebuilt.  dt = 0.8 x the stable step (the coarse mesh allows 4x
+    Table 1's 6.4e-6 s)."""
+    w, dt = cubes27World(a.cells)
     rec = Recorder(w.core, coreStepper(w, dt))
     rec.run(checkpoints(0, a.steps, a.checkpoints))
     return rec, dict(dt=dt)

@@ -12,8 +12,6 @@ are counted, not Python's or the set-up's.  Scenes:
   cubes27  scripts/arch/scenes.py's thrown 27-cube stack (Table 1 material,
            `--cells`^3 cells of 12 tets per cube: 8 gives the bench's 165,888
            tets), `--steps` steps from the start: Verlet rebuilds included.
-  rooks    the two shogi rooks of scripts/arch/scenes.py after the push (soft
-           material), point-polygon and edge-edge on curved pieces.
 Per phase (inclusive instructions of each phase's run()) when the build names
 its phases so (qdem::<Name>Phase::run); the total always.  Also reported:
 instructions read (Ir) is what valgrind counts; it is not time (cache misses
@@ -36,27 +34,12 @@ PHASES = ["ObstaclePhase", "PieceContactPhase", "SpherePhase", "ElementPhase", "
 def inner(a):
     """Runs inside valgrind: builds the scene and steps it."""
     sys.path.insert(0, os.path.join(ROOT, "scripts", "arch"))
-    import numpy as np
-    import qdem
     from qdem import _core
     _core.setThreads(1)
-    if a.scene == "cubes27":
-        mat = qdem.QdemMat()
-        r, L = mat.radius, 4.0
-        w = qdem.World()
-        cube = qdem.boxMesh((L, L, L), (a.cells,) * 3, tetsPerCell=12)
-        gap = 2 * r - 0.002
-        rng = np.random.RandomState(3)
-        for i in range(3):
-            for j in range(3):
-                for k in range(3):
-                    w.addPiece(cube, mat, pos=(i * (L + gap), j * (L + gap), L / 2 + r - 0.001 + k * (L + gap)),
-                               vel=tuple(rng.uniform(-1, 1, 3)), angVel=tuple(rng.uniform(-0.2, 0.2, 3)))
-        import scenes
-        scenes.floor(w.core)
-        dt = 0.8 * w.stableDt()["combined"]
-    else:
+    if a.scene != "cubes27":
         raise SystemExit("unknown scene " + a.scene)
+    import scenes
+    w, dt = scenes.cubes27World(a.cells)
     w.core.step(dt, a.steps)
     print("STEPS %d rebuilds %d tets %d" % (a.steps, w.core.verletRebuilds, w.core.nTets))
 
