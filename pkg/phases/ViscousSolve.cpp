@@ -97,13 +97,7 @@ void ViscousSolve::apply(const double* p, double* y) {
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < count; ++i) {
             const int32_t n = all ? i : ids[i];
-            double s[3] = {0, 0, 0};
-            for (int t = 0; t < layout_.nThreads; ++t)
-                if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
-                    const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
-                    s[0] += b[0], s[1] += b[1], s[2] += b[2];
-                }
-            for (int d = 0; d < 3; ++d) y[3 * n + d] = s[d];
+            layout_.sumNode(n, y + 3 * n);
         }
     }
 }
@@ -138,13 +132,7 @@ void ViscousSolve::diagonal(double* diag) {
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < count; ++i) {
             const int32_t n = all ? i : ids[i];
-            double s[3] = {0, 0, 0};
-            for (int t = 0; t < layout_.nThreads; ++t)
-                if (n >= layout_.nodeLo[t] && n <= layout_.nodeHi[t]) {
-                    const double* b = layout_.buffers[t].data() + 3 * (n - layout_.nodeLo[t]);
-                    s[0] += b[0], s[1] += b[1], s[2] += b[2];
-                }
-            for (int d = 0; d < 3; ++d) diag[3 * n + d] = s[d];
+            layout_.sumNode(n, diag + 3 * n);
         }
     }
 }

@@ -25,6 +25,15 @@ struct ThreadLayout {
     std::vector<std::vector<double>> buffers;
 
     bool matches(int threads, long v) const { return threads == nThreads && v == version; }
+    // Node n's sum over the buffers that cover it (3 values into s).
+    void sumNode(int32_t n, double* s) const {
+        s[0] = s[1] = s[2] = 0;
+        for (int t = 0; t < nThreads; ++t)
+            if (n >= nodeLo[t] && n <= nodeHi[t]) {
+                const double* b = buffers[t].data() + 3 * (n - nodeLo[t]);
+                s[0] += b[0], s[1] += b[1], s[2] += b[2];
+            }
+    }
     // ranges: the segments to compute, in tet order (one per piece).
     void build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v);
 };
