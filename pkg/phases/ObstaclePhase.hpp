@@ -42,7 +42,7 @@ public:
     };
     explicit ObstaclePhase(const Data& data) : w_(data) {}
     const char* name() const override { return "obstacles"; }
-    // Contact forces on the awake surface nodes (World::contactForce), the
+    // Contact forces on the awake surface nodes (ContactForces), the
     // obstacles' reactions (sleeping pieces' frozen ones included), energies.
     void run(double dt) override;
     void report(PhaseReport& r) const override {

@@ -54,7 +54,7 @@ struct PieceContactState {
     std::vector<int32_t> pieceOrder, pairs, nbrFill;  // sweep-and-prune work arrays
 
     // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
-    // (pieceLo, pieceHi: the pieces' boxes, World::pieceLo_/pieceHi_.)
+    // (pieceLo, pieceHi: the pieces' boxes, PieceBounds::lo/hi.)
     bool nearOther(int32_t pa, const double* lo, const double* hi, const double* pieceLo, const double* pieceHi) const {
         for (int32_t q = nbrStart[pa]; q < nbrStart[pa + 1]; ++q) {
             const int32_t pb = nbrs[q];

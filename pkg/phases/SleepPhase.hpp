@@ -32,20 +32,20 @@ public:
     // what tells whether something moves near a piece.
     struct Data {
         const Column<double>& pos;
-        Column<double>& vel;                 // zeroed when a piece falls asleep
+        Column<double>& vel;                    // zeroed when a piece falls asleep
         const Column<double>& mass;
         const Column<int32_t>& surfNodes;
         const std::vector<PieceInfo>& pieces;
         const std::vector<Obstacle>& obstacles;
-        const SphereSet& spheres;            // pieces a sphere is near
+        const SphereSet& spheres;               // pieces a sphere is near
         const Settings& settings;
         const Eigen::Vector3d& gravity;
-        DomainRef domain;                    // under MPI: owned nodes, decisions alike on every rank
-        Energy& energy;                      // kinetic energy removed at sleep
-        PieceBounds& bounds;                 // a held piece's box, no longer updated by the step
-        const ObstaclePhase& obstacleContacts;// what a piece pushed on obstacles, which it can reach
-        PieceContactPhase& pieceContacts;    // neighbour pieces, Verlet lists; told of sleep changes
-        const IntegrationPhase& integration; // the pieces' largest node speeds
+        DomainRef domain;                       // under MPI: owned nodes, decisions alike on every rank
+        Energy& energy;                         // kinetic energy removed at sleep
+        PieceBounds& bounds;                    // a held piece's box, no longer updated by the step
+        const ObstaclePhase& obstacleContacts;  // what a piece pushed on obstacles, which it can reach
+        PieceContactPhase& pieceContacts;       // neighbour pieces, Verlet lists; told of sleep changes
+        const IntegrationPhase& integration;    // the pieces' largest node speeds
     };
     explicit SleepPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "sleep"; }

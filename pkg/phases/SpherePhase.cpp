@@ -154,7 +154,7 @@ void SpherePhase::sumPairForces() {
 
 // A pair can hold contacts only when the sphere's box meets the piece's box
 // (grown by its particle radius), the test the contact loop starts with.
-// Under MPI the piece boxes are the whole pieces' (World::updatePieceBounds
+// Under MPI the piece boxes are the whole pieces' (PieceBounds::update
 // reduces them when spheres are coupled) and the spheres are YADE's, the
 // same on every rank: so is this list, which sizes the reduction.
 void SpherePhase::listActive() {
