@@ -95,7 +95,6 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         self.iterPeriod = 1
         self.initRun = True
         self.qdemId = qdemId or lifecycle.newId()
-        lifecycle.engines[self.qdemId] = self
         # The command names the engine by an id that YADE saves with the scene:
         # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
         self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId

@@ -27,7 +27,6 @@ import base64
 import io
 import json
 import uuid
-import weakref
 
 import numpy as np
 
@@ -36,9 +35,9 @@ from . import parallel
 FORMAT = 1
 TAG = "qdem"
 
-# Engine and recorder objects by their id (the id is in the PyRunner command,
-# which YADE saves with the scene); weak, so O.engines owns them.
-engines = weakref.WeakValueDictionary()
+# No table of engines: O.engines hands back the QdemEngine and VtkRecorder
+# objects themselves (YADE keeps the Python object of a Python subclass), so
+# a command finds its engine there by the id it names (qdemObject).
 _pending = []  # the QDEM exception of the step that failed, for the wrappers of O.run/O.step/O.wait
 
 
@@ -76,7 +75,7 @@ def sceneBlob(world, O):
     for name, data in core.saveState().items():
         arrays["state:" + name] = np.frombuffer(data, dtype=np.uint8)
     for e in O.engines:
-        obj = engines.get(_idOf(e))
+        obj = qdemObject(e)
         if obj is not None:
             if obj.world is not world:
                 raise RuntimeError("O.save: engine %r steps a qdem.World other than the default one; only the "
@@ -179,16 +178,32 @@ def afterLoad(O):
     _rebind(O, states)
 
 
+def qdemObject(e):
+    """e itself when it is a QdemEngine or a VtkRecorder, else None."""
+    from .engine import QdemEngine
+    from .recorder import VtkRecorder
+    return e if isinstance(e, (QdemEngine, VtkRecorder)) else None
+
+
+def _inEngines(O, qid):
+    for e in O.engines:
+        obj = qdemObject(e)
+        if obj is not None and obj.qdemId == qid:
+            return obj
+    return None
+
+
 def engineFor(qid):
-    """The engine object of a PyRunner command; rebuilt from O.tags when a
-    scene was loaded without qdem's wrappers (e.g. qdem imported after O.load)."""
-    obj = engines.get(qid)
+    """The engine object whose PyRunner command names `qid`, found in
+    O.engines; rebuilt from O.tags when a scene was loaded without qdem's
+    wrappers (e.g. qdem imported after O.load)."""
+    from yade import O
+    obj = _inEngines(O, qid)
     if obj is not None:
         return obj
-    from yade import O
     if _blob(O):
         afterLoad(O)
-        obj = engines.get(qid)
+        obj = _inEngines(O, qid)
         if obj is not None:
             return obj
     from . import parallel

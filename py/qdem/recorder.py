@@ -95,7 +95,6 @@ class VtkRecorder(PyRunner, metaclass=EngineMeta):
         self.frames = []
         self._last = None  # (step, time) of the last frame
         self.qdemId = qdemId or lifecycle.newId()
-        lifecycle.engines[self.qdemId] = self
         self.command = "import qdem.recorder; qdem.recorder._record('%s')" % self.qdemId
 
     def __repr__(self):
@@ -157,9 +156,10 @@ class VtkRecorder(PyRunner, metaclass=EngineMeta):
 def initialFrames(world):
     """Called by QdemEngine before the world's first step: every recorder of the
     world that has no frame yet writes the initial state (step 0, t = 0)."""
-    for obj in list(lifecycle.engines.values()):
-        if isinstance(obj, VtkRecorder) and obj.world is world and obj._last is None and not obj.dead:
-            obj.record()
+    from yade import O
+    for e in O.engines:
+        if isinstance(e, VtkRecorder) and e.world is world and e._last is None and not e.dead:
+            e.record()
 
 
 def _record(qdemId):

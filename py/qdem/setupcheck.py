@@ -58,9 +58,7 @@ def check(engine, O):
         raise SetupError("InteractionLoop is at O.engines[%d], after QdemEngine (O.engines[%d]): put QdemEngine "
                          "after it so both add their forces in the same step." % (loops[0], i))
     others = [e for k, e in enumerate(engines) if k != i and not getattr(e, "dead", False)
-              and lifecycle._idOf(e) and lifecycle.engines.get(lifecycle._idOf(e)) is not None
-              and type(lifecycle.engines.get(lifecycle._idOf(e))).__name__ == "QdemEngine"
-              and lifecycle.engines[lifecycle._idOf(e)].world is engine.world]
+              and type(lifecycle.qdemObject(e)).__name__ == "QdemEngine" and e.world is engine.world]
     if others and not engine.dead:
         raise SetupError("Two QdemEngines step the same QDEM world (O.engines[%d] and another): QDEM time would "
                          "run at twice O.time. Keep one QdemEngine per world (set dead=True on the other)." % i)

@@ -284,3 +284,22 @@ def test_yade_batch_job_logs_are_ignored_by_git():
     r = subprocess.run(["git", "check-ignore", "--no-index", "-v"] + logs, cwd=root, capture_output=True, text=True)
     ignored = {l.split("\t")[-1] for l in r.stdout.splitlines()}
     assert ignored == set(logs), "not ignored: %s" % sorted(set(logs) - ignored)
+
+
+def test_a_command_finds_its_engine_in_O_engines_and_nowhere_else(tmp_path):
+    """The PyRunner command of a QdemEngine or VtkRecorder names an id, and the
+    object is looked up in O.engines (YADE hands back the Python object): no
+    table of engines keeps one alive or findable once it left O.engines."""
+    from yade import O, ForceResetter, NewtonIntegrator
+    from qdem import lifecycle
+    O.reset()
+    e = qdem.QdemEngine(label="qeFind")
+    r = qdem.VtkRecorder(fileBase=str(tmp_path / "find-"), iterPeriod=10)
+    O.engines = [ForceResetter(), e, r, NewtonIntegrator()]
+    assert lifecycle.engineFor(e.qdemId) is e
+    assert lifecycle.engineFor(r.qdemId) is r
+    O.engines = [ForceResetter(), NewtonIntegrator()]
+    for obj in (e, r):  # still alive here, but no longer an engine of the scene
+        with pytest.raises(RuntimeError, match="no engine for command id"):
+            lifecycle.engineFor(obj.qdemId)
+    O.reset()
