@@ -83,4 +83,21 @@ def dampingRatio(mesh, material, mode=0):
     return float(material.viscosity) / lame(material)[1] * omega / 2.0
 
 
-__all__ = ["lame", "naturalFrequencies", "viscosityForDamping", "dampingRatio"]
+def modeShape(mesh, material, omega):
+    """The free vibration mode of the piece (dense solve: meshes of up to a
+    few thousand nodes) whose angular frequency is nearest ``omega`` [rad/s]:
+    (shape, nodeMass), the displacement shape per node (n, 3) in the mesh's
+    node order and the lumped node masses [kg] (n,)."""
+    m = asMesh(mesh)
+    lam, mu = lame(material)
+    rows, cols, vals, lumped = _stiffness(m.nodes, m.tets.astype(np.int64), lam, mu)
+    n = 3 * len(m.nodes)
+    K = np.zeros((n, n))
+    np.add.at(K, (rows, cols), vals)
+    minv = 1 / np.sqrt(np.repeat(lumped * float(material.density), 3))
+    w2, V = np.linalg.eigh(minv[:, None] * K * minv[None, :])
+    k = np.argmin(np.abs(np.sqrt(np.abs(w2)) - omega))
+    return (minv * V[:, k]).reshape(-1, 3), lumped * float(material.density)
+
+
+__all__ = ["lame", "naturalFrequencies", "viscosityForDamping", "dampingRatio", "modeShape"]

@@ -22,19 +22,11 @@ def _cube_mode(xi, cells=6):
     mesh = qdem.boxMesh((0.4, 0.4, 0.4), (cells,) * 3, tetsPerCell=6)
     mat.viscosity = modes.viscosityForDamping(mesh, mat, xi)
     omega = modes.naturalFrequencies(mesh, mat, 1)[0]
-    lam, mu = modes.lame(mat)
-    rows, cols, vals, lumped = modes._stiffness(mesh.nodes, mesh.tets.astype(np.int64), lam, mu)
-    n = 3 * len(mesh.nodes)
-    K = np.zeros((n, n))
-    np.add.at(K, (rows, cols), vals)
-    minv = 1 / np.sqrt(np.repeat(lumped * mat.density, 3))
-    w2, V = np.linalg.eigh(minv[:, None] * K * minv[None, :])
-    k = np.argmin(np.abs(np.sqrt(np.abs(w2)) - omega))
-    shape = (minv * V[:, k]).reshape(-1, 3)
+    shape, nodeMass = modes.modeShape(mesh, mat, omega)
     w = qdem.World()
     p = w.addPiece(mesh, mat, reorder=False)
     p.vel[:] = 1e-3 * shape / np.abs(shape).max()  # small: linear regime
-    return w, p, shape, lumped * mat.density, omega
+    return w, p, shape, nodeMass, omega
 
 
 def _decay_rate(w, p, shape, mass, omega, dt, periods):
