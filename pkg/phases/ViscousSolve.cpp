@@ -45,14 +45,13 @@ void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
     constexpr int kSums = 4;
     const int nth = layout_.nThreads;
     partial_.assign(static_cast<std::size_t>(kSums) * nth, 0.0);
-    const bool all = w_.sleeping.everything();
-    const int32_t* ids = w_.sleeping.awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
+    const AwakeNodes awake = awakeNodes();
+    const int32_t count = awake.count;
 #pragma omp parallel num_threads(nth)
     {
         double s[kSums] = {0, 0, 0, 0};
 #pragma omp for schedule(static)
-        for (int32_t i = 0; i < count; ++i) fn(all ? i : ids[i], s);
+        for (int32_t i = 0; i < count; ++i) fn(awake[i], s);
         std::copy(s, s + kSums, partial_.data() + kSums * omp_get_thread_num());
     }
     for (int k = 0; k < nSums; ++k) {
@@ -61,12 +60,17 @@ void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
     }
 }
 
+ViscousSolve::AwakeNodes ViscousSolve::awakeNodes() const {
+    const bool all = w_.sleeping.everything();
+    const std::vector<int32_t>& ids = w_.sleeping.awakeNodes();
+    return {all ? nullptr : ids.data(), static_cast<int32_t>(all ? w_.mass.size() : ids.size())};
+}
+
 void ViscousSolve::apply(const double* p, double* y) {
     const int32_t* conn = w_.tetNodes.data();
     const ViscousStressOnly law;
-    const bool all = w_.sleeping.everything();
-    const int32_t* ids = w_.sleeping.awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
+    const AwakeNodes awake = awakeNodes();
+    const int32_t count = awake.count;
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
@@ -96,7 +100,7 @@ void ViscousSolve::apply(const double* p, double* y) {
 #pragma omp barrier
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < count; ++i) {
-            const int32_t n = all ? i : ids[i];
+            const int32_t n = awake[i];
             layout_.sumNode(n, y + 3 * n);
         }
     }
@@ -104,9 +108,8 @@ void ViscousSolve::apply(const double* p, double* y) {
 
 void ViscousSolve::diagonal(double* diag) {
     const int32_t* conn = w_.tetNodes.data();
-    const bool all = w_.sleeping.everything();
-    const int32_t* ids = w_.sleeping.awakeNodes().data();
-    const auto count = all ? static_cast<int32_t>(w_.mass.size()) : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
+    const AwakeNodes awake = awakeNodes();
+    const int32_t count = awake.count;
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
@@ -131,7 +134,7 @@ void ViscousSolve::diagonal(double* diag) {
 #pragma omp barrier
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < count; ++i) {
-            const int32_t n = all ? i : ids[i];
+            const int32_t n = awake[i];
             layout_.sumNode(n, diag + 3 * n);
         }
     }

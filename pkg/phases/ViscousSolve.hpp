@@ -65,6 +65,13 @@ public:
     double seconds = 0;    // wall time of the last solve (and its energy term)
 
 private:
+    // The awake nodes: the i-th is awake[i] (every node when nothing sleeps).
+    struct AwakeNodes {
+        const int32_t* ids;  // nullptr: all nodes, in order
+        int32_t count;
+        int32_t operator[](int32_t i) const { return ids ? ids[i] : i; }
+    };
+    AwakeNodes awakeNodes() const;
     // y = C p over the awake tets (3 per node, written on the awake nodes).
     void apply(const double* p, double* y);
     void diagonal(double* d);
