@@ -1,51 +1,37 @@
 // The element kernel, generic over the material law: gather node data,
 // F = Ds * B, the law's first Piola stress (and strain energy), the
 // law-independent Kelvin-Voigt viscous stress, scatter nodal forces.
-// elementBatch evaluates kLanes tetrahedra at once: node data are gathered
-// into lane arrays, the arithmetic runs as one straight-line loop over lanes
-// (which the compiler turns into SIMD code), forces are scattered back.
-// tetStress is the scalar (Eigen) reference; the unit tests compare the two.
+// elementBlock evaluates one TetBlock (kLanes tetrahedra) at once: node data
+// are gathered into lane arrays (NodeGather.hpp), the arithmetic runs as one
+// straight-line loop over lanes (which the compiler turns into SIMD code), the
+// caller scatters the forces back.  elementBatch does the same for tets read
+// straight from the world arrays.  tetStress is the scalar (Eigen) reference;
+// the unit tests compare the two.
 #pragma once
 #include <cstdint>
 
+#include "NodeGather.hpp"
+#include "TetBlock.hpp"
 #include "Tetra.hpp"
 
 namespace qdem {
 
-constexpr int kLanes = 8;
-
-struct BatchOut {
+struct alignas(64) BatchOut {
     double f[4][3][kLanes];  // nodal forces per lane
     double wElastic[kLanes]; // V0 * strain energy density
     double diss[kLanes];     // V0 * viscous dissipation rate
 };
 
-// Computes forces for tets e0 .. e0+count-1 (count <= kLanes).  Lanes beyond
-// count are padded with the last tet and must be ignored by the caller.
-// Law: one of laws/*.hpp (its lane() is inlined: no virtual call).
+// Forces for the kLanes tets of block blk (padding lanes included: the caller
+// drops them).  Law: one of laws/*.hpp (its lane() is inlined: no virtual call).
 template <class Law, bool Viscous, bool Energy>
-__attribute__((noinline)) void elementBatch(const Law& law, int32_t e0, int count, const int32_t* conn, const double* X,
-                         const double* V, const double* Bs, const double* vol, const ElementParams& p,
-                         BatchOut& out) {
-    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], B[9][kLanes], V0[kLanes], aux[kLanes];
-    for (int l = 0; l < kLanes; ++l) {
-        const int32_t e = e0 + (l < count ? l : count - 1);
-        const int32_t* c = conn + 4 * e;
-        const double* x0 = X + 3 * c[0];
-        for (int k = 0; k < 3; ++k) {
-            const double* xk = X + 3 * c[k + 1];
-            for (int i = 0; i < 3; ++i) dx[k][i][l] = xk[i] - x0[i];
-        }
-        if constexpr (Viscous) {
-            const double* v0 = V + 3 * c[0];
-            for (int k = 0; k < 3; ++k) {
-                const double* vk = V + 3 * c[k + 1];
-                for (int i = 0; i < 3; ++i) dv[k][i][l] = vk[i] - v0[i];
-            }
-        }
-        for (int m = 0; m < 9; ++m) B[m][l] = Bs[9 * e + m];
-        V0[l] = vol[e];
-    }
+__attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk, const double* X, const double* V,
+                                            const ElementParams& p, BatchOut& out) {
+    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], aux[kLanes];
+    gatherEdges(X, blk.node, dx);
+    if constexpr (Viscous) gatherEdges(V, blk.node, dv);
+    const auto& B = blk.B;
+    const auto& V0 = blk.vol;
     const double blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
@@ -106,6 +92,17 @@ __attribute__((noinline)) void elementBatch(const Law& law, int32_t e0, int coun
     }
     if constexpr (Energy && Law::kEnergyFinish)
         for (int l = 0; l < kLanes; ++l) out.wElastic[l] += V0[l] * law.energyFinish(aux[l]);
+}
+
+// Computes forces for tets e0 .. e0+count-1 (1 <= count <= kLanes) of the
+// world arrays.  Lanes beyond count are padded with the last tet and must be
+// ignored by the caller.
+template <class Law, bool Viscous, bool Energy>
+inline void elementBatch(const Law& law, int32_t e0, int count, const int32_t* conn, const double* X, const double* V,
+                         const double* Bs, const double* vol, const ElementParams& p, BatchOut& out) {
+    TetBlock b;
+    fillTetBlock(b, e0, count, conn, Bs, vol);
+    elementBlock<Law, Viscous, Energy>(law, b, X, V, p, out);
 }
 
 // Stress of one element (elastic + viscous) and the pieces of it that the

@@ -321,7 +321,7 @@ void Domain::returnGhostForces(const ThreadLayout& layout, const double* contact
             // The buffers in thread order, as the owner's integration sums its own.
             for (int t = 0; t < layout.nThreads; ++t)
                 if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
-                    const double* s = layout.buffers[t].data() + 3 * (n - layout.nodeLo[t]);
+                    const double* s = layout.buffers[t].data() + layout.stride * (n - layout.nodeLo[t]);
                     f[0] += s[0], f[1] += s[1], f[2] += s[2];
                 }
             if (contacts)

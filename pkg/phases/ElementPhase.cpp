@@ -15,47 +15,64 @@
 namespace qdem {
 
 template <class Law, bool Viscous, bool Energy>
-void ElementPhase::elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
-                         double& wEl, double& diss) const {
+void ElementPhase::elementRange(const Law& law, const TetBlock* blocks, const BlockSegment& sg, const Material& m,
+                                double* buf, int32_t lo, double& wEl, double& diss) const {
     const ElementParams prm{m.lambda(), m.mu(), Viscous ? m.beta() : 0.0};
-    const int32_t* conn = w_.tetNodes.data();
+    const double* X = w_.pos.data();
+    const double* V = w_.vel.data();
     double w = 0, d = 0;
     BatchOut out;
-    for (int32_t e0 = t0; e0 < t1; e0 += kLanes) {
-        const int count = std::min<int32_t>(kLanes, t1 - e0);
-        elementBatch<Law, Viscous, Energy>(law, e0, count, conn, w_.pos.data(), w_.vel.data(), w_.tetB.data(), w_.tetVol0.data(),
-                                           prm, out);
-        for (int l = 0; l < count; ++l) {
-            const int32_t* c = conn + 4 * (e0 + l);
-            for (int k = 0; k < 4; ++k) {
-                double* o = buf + 3 * (c[k] - lo);
-                o[0] += out.f[k][0][l];
-                o[1] += out.f[k][1][l];
-                o[2] += out.f[k][2][l];
-            }
-            if constexpr (Energy) {
+    const TetBlock* b = blocks + sg.first;
+    for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes, ++b) {
+        const int count = std::min<int32_t>(kLanes, sg.t1 - e0);
+        elementBlock<Law, Viscous, Energy>(law, *b, X, V, prm, out);
+        scatterForces(out.f, b->node, count, buf, lo);
+        if constexpr (Energy)
+            for (int l = 0; l < count; ++l) {
                 w += out.wElastic[l];
                 d += out.diss[l];
             }
-        }
     }
     wEl += w;
     diss += d;
 }
 
+void ElementPhase::buildLayout(int threads) {
+    layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), threads, w_.sleeping.version(), kForceStride);
+    blocks_.resize(layout_.nThreads);
+    const int32_t* conn = w_.tetNodes.data();
+    const double* Bs = w_.tetB.data();
+    const double* vol = w_.tetVol0.data();
+#pragma omp parallel for num_threads(layout_.nThreads) schedule(static, 1)
+    for (int t = 0; t < layout_.nThreads; ++t) {  // each thread fills its own blocks (first touch)
+        ThreadBlocks& tb = blocks_[t];
+        tb.segments.clear();
+        int32_t n = 0;
+        for (const TetSegment& sg : layout_.share[t]) {
+            tb.segments.push_back({sg.piece, n, sg.t0, sg.t1});
+            n += (sg.t1 - sg.t0 + kLanes - 1) / kLanes;
+        }
+        tb.blocks.resize(n);
+        for (const BlockSegment& s : tb.segments)
+            for (int32_t e0 = s.t0, i = s.first; e0 < s.t1; e0 += kLanes, ++i)
+                fillTetBlock(tb.blocks[i], e0, std::min<int32_t>(kLanes, s.t1 - e0), conn, Bs, vol);
+    }
+}
+
 void ElementPhase::run(double dt) {
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, w_.sleeping.version())) layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), nth, w_.sleeping.version());
+    if (!layout_.matches(nth, w_.sleeping.version())) buildLayout(nth);
     double diss = 0;
     const bool energyOn = w_.settings.trackEnergy;
 #pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
     {
         const int th = omp_get_thread_num();
-        std::vector<double>& buf = layout_.buffers[th];
+        AlignedVector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
-        for (const TetSegment& sg : layout_.share[th]) {
+        const TetBlock* blocks = blocks_[th].blocks.data();
+        for (const BlockSegment& sg : blocks_[th].segments) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
             const bool visc = w_.settings.viscosityOn && m.viscosity > 0;
             double w = 0;
@@ -63,10 +80,10 @@ void ElementPhase::run(double dt) {
             // kernel below is compiled per law, with no call through a pointer.
             withLaw(m, [&](const auto& law) {
                 using Law = std::decay_t<decltype(law)>;
-                if (visc && energyOn) elementRange<Law, true, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-                else if (visc) elementRange<Law, true, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-                else if (energyOn) elementRange<Law, false, true>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
-                else elementRange<Law, false, false>(law, sg.t0, sg.t1, m, buf.data(), lo, w, diss);
+                if (visc && energyOn) elementRange<Law, true, true>(law, blocks, sg, m, buf.data(), lo, w, diss);
+                else if (visc) elementRange<Law, true, false>(law, blocks, sg, m, buf.data(), lo, w, diss);
+                else if (energyOn) elementRange<Law, false, true>(law, blocks, sg, m, buf.data(), lo, w, diss);
+                else elementRange<Law, false, false>(law, blocks, sg, m, buf.data(), lo, w, diss);
             });
             if (energyOn) pe[3 * sg.piece] += w;  // strain energy per piece (sleeping ones keep theirs)
         }

@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "../core/Aligned.hpp"
 #include "../core/Column.hpp"
+#include "../element/TetBlock.hpp"
 #include "../material/Material.hpp"
 #include "../world/Energy.hpp"
 #include "../world/Phase.hpp"
@@ -36,17 +38,31 @@ public:
     explicit ElementPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "elements"; }
     void run(double dt) override;
-    // Per-thread node force buffers of the last run and the node range each covers.
+    // Per-thread node force buffers of the last run (layout().stride doubles
+    // per node) and the node range each covers.
     const ThreadLayout& layout() const { return layout_; }
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
     void stress(double* out) const;
 
 private:
+    // A thread's share as tet blocks: segment s covers blocks
+    // [first, first + ceil((t1 - t0) / kLanes)), tets t0 .. t1-1 of one piece.
+    struct BlockSegment {
+        int32_t piece, first, t0, t1;
+    };
+    struct ThreadBlocks {
+        AlignedVector<TetBlock> blocks;
+        std::vector<BlockSegment> segments;
+    };
+    // Rebuilds layout_ (force buffers padded to kForceStride doubles per
+    // node) and blocks_ from it, when the awake set or thread count changed.
+    void buildLayout(int threads);
     template <class Law, bool Viscous, bool Energy>
-    void elementRange(const Law& law, int32_t t0, int32_t t1, const Material& m, double* buf, int32_t lo,
-                      double& wEl, double& diss) const;
+    void elementRange(const Law& law, const TetBlock* blocks, const BlockSegment& sg, const Material& m, double* buf,
+                      int32_t lo, double& wEl, double& diss) const;
     Data w_;
     ThreadLayout layout_;
+    std::vector<ThreadBlocks> blocks_;  // per thread
 };
 
 }  // namespace qdem

@@ -54,6 +54,7 @@ void IntegrationPhase::run(double dt) {
         bufHi_[t] = layout.nodeHi[t];
     }
     const double* const* buf = bufPtr_.data();
+    const int stride = layout.stride;
     const int32_t* bufLo = bufLo_.data();
     const int32_t* bufHi = bufHi_.data();
     // The explicit force on node n: element buffers, contacts, gravity, external.
@@ -64,7 +65,7 @@ void IntegrationPhase::run(double dt) {
         for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
         for (int t = 0; t < nth; ++t)
             if (n >= bufLo[t] && n <= bufHi[t]) {
-                const double* b = buf[t] + 3 * (n - bufLo[t]);
+                const double* b = buf[t] + stride * (n - bufLo[t]);
                 f[0] += b[0];
                 f[1] += b[1];
                 f[2] += b[2];

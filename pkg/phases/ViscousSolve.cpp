@@ -74,7 +74,7 @@ void ViscousSolve::apply(const double* p, double* y) {
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
-        std::vector<double>& buf = layout_.buffers[th];
+        AlignedVector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
         BatchOut out;
@@ -113,7 +113,7 @@ void ViscousSolve::diagonal(double* diag) {
 #pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
-        std::vector<double>& buf = layout_.buffers[th];
+        AlignedVector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
         const double* X = w_.pos.data();

@@ -5,7 +5,9 @@
 
 namespace qdem {
 
-void ThreadLayout::build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v) {
+void ThreadLayout::build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v,
+                         int doublesPerNode) {
+    stride = doublesPerNode;
     nThreads = std::max(1, threads);
     version = v;
     long total = 0;
@@ -34,7 +36,7 @@ void ThreadLayout::build(const int32_t* tetNodes, const std::vector<TetSegment>&
             if (at == ranges[r].t1 && ++r < ranges.size()) at = ranges[r].t0;
         }
         if (nodeHi[t] < nodeLo[t]) nodeLo[t] = 0, nodeHi[t] = -1;  // empty share
-        buffers[t].assign(3 * static_cast<std::size_t>(nodeHi[t] - nodeLo[t] + 1), 0.0);
+        buffers[t].assign(static_cast<std::size_t>(stride) * static_cast<std::size_t>(nodeHi[t] - nodeLo[t] + 1), 0.0);
     }
 }
 

@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "../core/Aligned.hpp"
+
 namespace qdem {
 
 struct TetSegment {
@@ -22,7 +24,11 @@ struct ThreadLayout {
     long version = -1;                           // the World's awake-set version it was built for
     std::vector<std::vector<TetSegment>> share;  // per thread
     std::vector<int32_t> nodeLo, nodeHi;         // node range [lo, hi] touched by each share
-    std::vector<std::vector<double>> buffers;
+    // Per thread: `stride` doubles per node from nodeLo on (3, or 4 with a
+    // zero pad so that the element kernel adds a node's force with one
+    // aligned vector operation: NodeGather.hpp).
+    std::vector<AlignedVector<double>> buffers;
+    int stride = 3;
 
     bool matches(int threads, long v) const { return threads == nThreads && v == version; }
     // Node n's sum over the buffers that cover it (3 values into s).
@@ -30,12 +36,14 @@ struct ThreadLayout {
         s[0] = s[1] = s[2] = 0;
         for (int t = 0; t < nThreads; ++t)
             if (n >= nodeLo[t] && n <= nodeHi[t]) {
-                const double* b = buffers[t].data() + 3 * (n - nodeLo[t]);
+                const double* b = buffers[t].data() + stride * (n - nodeLo[t]);
                 s[0] += b[0], s[1] += b[1], s[2] += b[2];
             }
     }
-    // ranges: the segments to compute, in tet order (one per piece).
-    void build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v);
+    // ranges: the segments to compute, in tet order (one per piece);
+    // doublesPerNode: the buffers' stride.
+    void build(const int32_t* tetNodes, const std::vector<TetSegment>& ranges, int threads, long v,
+               int doublesPerNode = 3);
 };
 
 }  // namespace qdem
