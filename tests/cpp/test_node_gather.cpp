@@ -1,0 +1,87 @@
+// The element kernel's node gather and force scatter (NodeGather.hpp) against
+// plain scalar loops: the same numbers to the bit, including a node at the
+// very end of the array (read with a masked vector load: nothing past it),
+// lanes that share nodes (the scatter's store-to-load chain), and partial
+// blocks (lanes past `count` add nothing).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "core/Aligned.hpp"
+#include "element/NodeGather.hpp"
+
+using namespace qdem;
+
+namespace {
+
+// Node ids with repeats and the last node of the array, in every corner.
+void makeBlock(int32_t (&node)[4][kLanes], int32_t nNodes) {
+    const int32_t pattern[4][kLanes] = {{0, 5, nNodes - 1, 7, 3, 3, 9, 2},
+                                        {1, nNodes - 1, 4, 8, 5, 10, 3, 11},
+                                        {2, 6, 5, nNodes - 1, 12, 4, 13, 3},
+                                        {nNodes - 1, 7, 6, 9, 14, 15, 1, 0}};
+    std::memcpy(node, pattern, sizeof(pattern));
+}
+
+}  // namespace
+
+TEST(NodeGather, EdgesEqualScalarLoopsUpToTheLastNode) {
+    const int32_t N = 17;
+    // Exactly 3N doubles: an unmasked 4-wide load of the last node would
+    // read one past the end (AddressSanitizer builds flag it).
+    std::vector<double> X(3 * N);
+    for (int i = 0; i < 3 * N; ++i) X[i] = 0.37 * i - 0.011 * i * i + (i % 3) * 1e-9;
+    int32_t node[4][kLanes];
+    makeBlock(node, N);
+    alignas(64) double d[3][3][kLanes];
+    gatherEdges(X.data(), node, d);
+    for (int l = 0; l < kLanes; ++l)
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 3; ++i) {
+                const double want = X[3 * node[k + 1][l] + i] - X[3 * node[0][l] + i];
+                EXPECT_EQ(d[k][i][l], want) << "lane " << l << " edge " << k << " component " << i;
+            }
+}
+
+TEST(NodeGather, ScatterAddsLaneByLaneLikeTheScalarCode) {
+    const int32_t N = 17, lo = 0;
+    int32_t node[4][kLanes];
+    makeBlock(node, N);
+    alignas(64) double f[4][3][kLanes];
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < 3; ++i)
+            for (int l = 0; l < kLanes; ++l) f[k][i][l] = 1.0 / (1 + k + 7 * i + 13 * l) - 0.03 * l;
+    for (int count : {1, 3, 4, 5, 8}) {
+        AlignedVector<double> buf(kForceStride * N, 0.25), want(kForceStride * N, 0.25);
+        scatterForces(f, node, count, buf.data(), lo);
+        for (int l = 0; l < count; ++l)  // the scalar order: lanes, then corners
+            for (int k = 0; k < 4; ++k)
+                for (int i = 0; i < 3; ++i) want[kForceStride * node[k][l] + i] += f[k][i][l];
+        for (int32_t n = 0; n < N; ++n) {
+            for (int i = 0; i < 3; ++i)
+                EXPECT_EQ(buf[kForceStride * n + i], want[kForceStride * n + i])
+                    << "count " << count << " node " << n << " component " << i;
+            EXPECT_EQ(buf[kForceStride * n + 3], 0.25) << "the pad slot only ever receives zeros";
+        }
+    }
+}
+
+TEST(NodeGather, ScatterIntoABufferStartingAtNodeLo) {
+    const int32_t N = 17, lo = 0;
+    int32_t node[4][kLanes];
+    makeBlock(node, N);
+    for (auto& row : node)
+        for (int32_t& n : row) n += 100;  // a thread whose nodes start at 100
+    alignas(64) double f[4][3][kLanes];
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < 3; ++i)
+            for (int l = 0; l < kLanes; ++l) f[k][i][l] = k + 0.5 * i + 0.25 * l;
+    AlignedVector<double> buf(kForceStride * N, 0.0), want(kForceStride * N, 0.0);
+    scatterForces(f, node, kLanes, buf.data(), lo + 100);
+    for (int l = 0; l < kLanes; ++l)
+        for (int k = 0; k < 4; ++k)
+            for (int i = 0; i < 3; ++i) want[kForceStride * (node[k][l] - 100) + i] += f[k][i][l];
+    for (std::size_t j = 0; j < buf.size(); ++j) EXPECT_EQ(buf[j], want[j]) << j;
+}
