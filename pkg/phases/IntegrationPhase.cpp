@@ -87,14 +87,18 @@ void IntegrationPhase::run(double dt) {
         Fq = viscous_.solve(dt, Fout);
     }
     double* dV = implicit && energyOn ? viscous_.velocityChange() : nullptr;
-    // The update, compiled twice: the explicit path carries no test of the
-    // implicit solve's arrays per node and DOF.
-    const auto advance = [=, this](auto implicitTag) {
+    // The update, compiled per combination of the implicit solve, local
+    // damping, energy tracking and sleep tracking: the common run (explicit,
+    // none of the three) carries no test of them per node and DOF.
+    const auto advance = [=, this](auto implicitTag, auto dampTag, auto energyTag, auto sleepTag) {
         constexpr bool Implicit = decltype(implicitTag)::value;
+        constexpr bool Damp = decltype(dampTag)::value;
+        constexpr bool EnergyOn = decltype(energyTag)::value;
+        constexpr bool SleepOn = decltype(sleepTag)::value;
         double ekT = 0, egT = 0, edT = 0;
 #pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT)
         {
-            double* speed2 = sleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
+            double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static)
             for (int32_t i = 0; i < count; ++i) {
                 const int32_t n = all ? i : ids[i];
@@ -108,14 +112,15 @@ void IntegrationPhase::run(double dt) {
                     Fout[3 * n + d] = f[d];
                     const double vOld = V[3 * n + d];
                     const bool free = !((blk[n] >> d) & 1u);
-                    if (damp > 0 && free) {  // YADE's rule: against the mid-step velocity
-                        const double vm = vOld + 0.5 * dt * f[d] * invM;
-                        const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
-                        f[d] -= fd;
-                        if (energyOn) edT += fd * vm * dt;
-                    }
+                    if constexpr (Damp)
+                        if (free) {  // YADE's rule: against the mid-step velocity
+                            const double vm = vOld + 0.5 * dt * f[d] * invM;
+                            const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                            f[d] -= fd;
+                            if constexpr (EnergyOn) edT += fd * vm * dt;
+                        }
                     const double a = free ? f[d] * invM : 0.0;
-                    if (energyOn) {
+                    if constexpr (EnergyOn) {
                         const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
                         ekT += 0.5 * M[n] * vMid * vMid;
                         egT -= M[n] * g[d] * vOld * dt;
@@ -124,7 +129,7 @@ void IntegrationPhase::run(double dt) {
                     if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
                     else X[3 * n + d] += dt * V[3 * n + d];
                 }
-                if (speed2) {
+                if constexpr (SleepOn) {
                     const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
                     double& m = speed2[nodePiece[n]];
                     m = std::max(m, v2);
@@ -133,7 +138,17 @@ void IntegrationPhase::run(double dt) {
         }
         return std::array<double, 3>{ekT, egT, edT};
     };
-    const std::array<double, 3> e = Fq ? advance(std::true_type{}) : advance(std::false_type{});
+    // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
+    const auto withFlag = [](bool on, auto&& next) {
+        return on ? next(std::true_type{}) : next(std::false_type{});
+    };
+    const std::array<double, 3> e = withFlag(Fq != nullptr, [&](auto im) {
+        return withFlag(damp > 0, [&](auto dm) {
+            return withFlag(energyOn, [&](auto en) {
+                return withFlag(sleepOn, [&](auto sl) { return advance(im, dm, en, sl); });
+            });
+        });
+    });
     ek = e[0], eg = e[1], ed = e[2];
     if (dV) {
         w_.energy.viscous += viscous_.dissipation(dt, V);
