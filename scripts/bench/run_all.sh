@@ -6,9 +6,10 @@ cd "$(dirname "$0")/../.."
 mkdir -p out/bench
 BUILD=${BUILD:-build}
 
-echo "bench: QDEM element + integration on the 165,888-tet Figure 6 mesh"
-"$BUILD"/bench_elements "${QDEM_BENCH_STEPS:-200}" 3 > out/bench/elements_qdem.json
-cat out/bench/elements_qdem.json
+echo "bench: QDEM element + integration and whole step, 165,888 and 1,327,104 tets (Hilbert-ordered as addPiece)"
+OMP_WAIT_POLICY=passive "$BUILD"/bench_elements --steps "${QDEM_BENCH_STEPS:-200}" --cubes 3,6 \
+  > out/bench/elements_qdem.json 2> out/bench/elements_qdem.log
+/usr/bin/python3.11 scripts/bench/perf_tables.py elements out/bench/elements_qdem.json
 
 echo "bench: YADE's own tetrahedral FEM on the same mesh (2 threads)"
 yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 27 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
@@ -16,7 +17,7 @@ yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 27 --out out/bench/yade_
 
 /usr/bin/python3.11 scripts/bench/merge_elements.py out/bench/elements_qdem.json out/bench/yade_fem.json \
   > out/bench/elements.json
-cat out/bench/elements.json
+grep -A4 '"qdem_ns_per_tet_step"\|"yade_fem_over_qdem"' out/bench/elements.json || true
 
 echo "bench: 27 cubes, seed Figure 6 cases A/B/C and ours, by phase"
 /usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-20}" --out out/bench
