@@ -7,6 +7,9 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <time.h>
+
+#include <cmath>
 #include <cstdio>
 
 namespace bench {
@@ -38,8 +41,33 @@ inline double ownCpuSeconds() {
     return r.ru_utime.tv_sec + r.ru_stime.tv_sec + 1e-6 * (r.ru_utime.tv_usec + r.ru_stime.tv_usec);
 }
 
-// One timed run: construct before it, call finish(wallSeconds) after it.
+// This process's own share of the load average: the kernel's 1-minute load
+// is an exponential average (time constant 60 s) of the running threads, so
+// the same average of this process's CPU use (cores) estimates how much of
+// load1 is the benchmark itself.  Updated at each probe (runs back to back).
+struct OwnLoad {
+    double ema = 0, lastWall = -1, lastCpu = 0;
+    double update() {
+        timespec ts{};
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        const double wall = ts.tv_sec + 1e-9 * ts.tv_nsec, cpu = ownCpuSeconds();
+        if (lastWall >= 0 && wall > lastWall) {
+            const double w = std::exp(-(wall - lastWall) / 60.0);
+            ema = w * ema + (1 - w) * (cpu - lastCpu) / (wall - lastWall);
+        }
+        lastWall = wall;
+        lastCpu = cpu;
+        return ema;
+    }
+};
+inline OwnLoad& ownLoad() {
+    static OwnLoad o;
+    return o;
+}
+
+// One timed run: construct before it, call othersCores(wallSeconds) after it.
 struct LoadProbe {
+    double own = ownLoad().update();  // this benchmark's share of load1
     double load1 = loadAverage1();
     double busy0 = machineBusySeconds();
     double own0 = ownCpuSeconds();
@@ -49,17 +77,19 @@ struct LoadProbe {
         const double others = (machineBusySeconds() - busy0) - (ownCpuSeconds() - own0);
         return wallSeconds > 0 ? (others > 0 ? others : 0.0) / wallSeconds : 0.0;
     }
+    // The load average less this benchmark's own share: what others put there.
+    double othersLoad() const { return load1 - own > 0 ? load1 - own : 0.0; }
 };
 
-// The rule every benchmark here applies.  The load average counts this
-// benchmark's own running threads too, so a run on `threads` threads is
-// judged on load1 - (threads - 1) (the literal "load > 1.5" for one thread).
+// The rule every benchmark here applies.  "Load > 1.5" for a benchmark on
+// one of the 2 cores means others kept more than half a core busy over the
+// last minute; the load average counts this benchmark's own threads too, so
+// the rule is read on the load less the benchmark's own share (OwnLoad), and
+// on what other processes used during the run itself (LoadProbe::othersCores).
 struct BusyRule {
-    double maxLoad = 1.5;     // 1-minute load average, own extra threads discounted
+    double maxLoad = 1.5;     // 1-minute load average of a one-thread run
     double maxOthers = 0.2;   // cores used by other processes during the run
-    bool busy(double load1, double others, int threads) const {
-        return load1 - (threads - 1) > maxLoad || others > maxOthers;
-    }
+    bool busy(const LoadProbe& p, double others) const { return p.othersLoad() > maxLoad - 1 || others > maxOthers; }
 };
 
 }  // namespace bench

@@ -149,7 +149,7 @@ std::unique_ptr<World> makeScene(int cubesPerAxis, MaterialLaw law) {
 }
 
 struct Run {
-    double stepNs, elementNs, integrateNs, load1, others;
+    double stepNs, elementNs, integrateNs, load1, ownLoad, others;
     bool busy;
 };
 
@@ -170,8 +170,8 @@ Run run(World& w, int threads, int steps, bool viscous, const bench::BusyRule& r
     const double wall = omp_get_wtime() - t0;
     const double others = probe.othersCores(wall);
     const double perTetStep = 1e9 / (double(steps) * double(w.nTets()));
-    return {wall * perTetStep, el * perTetStep, in * perTetStep, probe.load1, others,
-            rule.busy(probe.load1, others, threads)};
+    return {wall * perTetStep, el * perTetStep, in * perTetStep, probe.load1, probe.own, others,
+            rule.busy(probe, others)};
 }
 
 const char* shortName(MaterialLaw l) { return l == MaterialLaw::SaintVenantKirchhoff ? "svk" : "snh"; }
@@ -184,9 +184,9 @@ int main(int argc, char** argv) {
     const std::time_t now = std::time(nullptr);
     std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
     std::printf("{\"benchmark\": \"bench_elements\", \"label\": \"%s\", \"date\": \"%s\", \"cpus\": %d, "
-                "\"repeats\": %d, \"busy_rule\": {\"max_load1_minus_extra_threads\": %g, \"max_other_cores\": %g}, "
+                "\"repeats\": %d, \"busy_rule\": {\"max_load1_less_own_share\": %g, \"max_other_cores\": %g}, "
                 "\"units\": \"ns per tet per step\", \"meshes\": [",
-                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxLoad, o.rule.maxOthers);
+                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxLoad - 1, o.rule.maxOthers);
     const std::size_t smallTets = 27 * 6144;
     for (std::size_t mi = 0; mi < o.cubes.size(); ++mi) {
         const int cubes = o.cubes[mi];
@@ -205,9 +205,9 @@ int main(int argc, char** argv) {
                         runs[l][m][t].push_back(x);
                         std::fprintf(stderr,
                                      "bench_elements %zu tets, %s %s, %d thread(s), round %d: step %.2f, element "
-                                     "%.2f, integrate %.2f ns/tet; load %.2f, others %.2f cores%s\n",
+                                     "%.2f, integrate %.2f ns/tet; load %.2f (own %.2f), others %.2f cores%s\n",
                                      tets, shortName(o.laws[l]), o.viscous[m] ? "viscous" : "elastic", o.threads[t],
-                                     r, x.stepNs, x.elementNs, x.integrateNs, x.load1, x.others,
+                                     r, x.stepNs, x.elementNs, x.integrateNs, x.load1, x.ownLoad, x.others,
                                      x.busy ? " BUSY (excluded)" : "");
                     }
         std::printf("%s{\"cubes_per_axis\": %d, \"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"cases\": [",
@@ -223,9 +223,9 @@ int main(int argc, char** argv) {
                         char b[256];
                         std::snprintf(b, sizeof b,
                                       "%s{\"step\": %.3f, \"element\": %.3f, \"integrate\": %.3f, \"load1\": %.2f, "
-                                      "\"other_cores\": %.2f, \"busy\": %s}",
+                                      "\"own_load\": %.2f, \"other_cores\": %.2f, \"busy\": %s}",
                                       list.empty() ? "" : ", ", x.stepNs, x.elementNs, x.integrateNs, x.load1,
-                                      x.others, x.busy ? "true" : "false");
+                                      x.ownLoad, x.others, x.busy ? "true" : "false");
                         list += b;
                         stepAll.v.push_back(x.stepNs);
                         elIntAll.v.push_back(x.elementNs + x.integrateNs);

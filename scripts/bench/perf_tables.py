@@ -2,7 +2,7 @@
 JSON, so that the doc is refreshed by pasting, never by retyping figures.
 
     /usr/bin/python3.11 scripts/bench/perf_tables.py elements  bench/logs/elements_2026-11-24.json
-    /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json]
+    /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json KERNEL_OPS.json]
     /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27   bench/logs/cubes27_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py shogi     bench/logs/shogi_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-24.json
@@ -41,43 +41,44 @@ def elements(d):
                 fig(cl["element_integrate"], al["element_integrate"]), fig(cl["element"], al["element"])))
 
 
-def roofline(d, elementsJson=None):
+def roofline(d, elementsJson=None, opsJson=None):
     print("Roofline program (`scripts/bench/roofline.cpp`, %s, %s): median (min–max) of the quiet runs, "
-          "quiet/all.\n" % (d["isa"], d["date"]))
-    print("| measure | threads | value |")
-    print("| --- | --- | --- |")
+          "quiet/all.  \"On CPU\": the same runs' work over the CPU time their threads held (what a core "
+          "delivers while it runs the loop; time-sharing with other processes removed).\n" % (d["isa"], d["date"]))
+    print("| measure | threads | wall clock | on CPU |")
+    print("| --- | --- | --- | --- |")
     for r in d["results"]:
-        print("| %s | %d | %s %s |" % (r["name"], r["threads"], fig(r["clean"], r["all"]), r["unit"]))
-    if elementsJson:
-        distance(d, json.load(open(elementsJson)))
+        print("| %s | %d | %s %s | %s %s |" % (r["name"], r["threads"], fig(r["clean"], r["all"]), r["unit"],
+                                            fig(r["on_cpu"]["clean"], r["on_cpu"]["all"]), r["unit"]))
+    if elementsJson and opsJson:
+        distance(d, json.load(open(elementsJson)), json.load(open(opsJson)))
 
 
-def best(d, name, threads):
+def ceiling(d, name, threads):
+    """The best rate measured (max over quiet runs, else over all, on CPU)."""
     for r in d["results"]:
         if r["name"] == name and r["threads"] == threads:
-            return (r["clean"] or r["all"])["max"] if r["unit"] != "ns" else (r["clean"] or r["all"])["min"]
+            return (r["on_cpu"]["clean"] or r["on_cpu"]["all"])["max"]
     return None
 
 
-def distance(roof, el):
-    """Element phase against its floor: flops / peak and bytes / bandwidth per tet."""
-    k = roof["kernel_counts"]
-    print("\nElement phase against the machine (floors from the counts in `kernel_counts`):\n")
-    print("| mesh | law, mode | threads | measured element+integration (min) | flop floor | byte floor | "
-          "measured / max(floor) |")
+def distance(roof, el, ops):
+    """Element phase against its floors: flops / peak and bytes / bandwidth per tet."""
+    print("\nElement phase against the machine (flops and bytes per tet from `%s`; ceilings: the best "
+          "on-CPU rates above; measured: the minimum, quiet runs if any):\n" % ops["source"])
+    print("| tets | law, mode | threads | measured element+integration [ns/tet] | flop floor | byte floor | "
+          "measured / larger floor |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for mesh in el["meshes"]:
         inL3 = mesh["tets"] < 500000
         for c in mesh["cases"]:
             s = c["clean"]["element_integrate"] or c["all"]["element_integrate"]
-            key = ("svk" if c["law"] == "saintVenantKirchhoff" else "snh") + "_" + c["mode"]
-            if key not in k:
+            key = "%s %s" % (c["law"], c["mode"])
+            if key not in ops["per_tet"]:
                 continue
             th = c["threads"]
-            peak = best(roof, "fma_peak", th)                      # GFLOP/s
-            bw = best(roof, "triad_l3" if inL3 else "triad_dram", th)  # GB/s
-            flopNs = k[key]["flops_per_tet"] / peak
-            byteNs = k["bytes_per_tet"] / bw
+            flopNs = ops["per_tet"][key]["flops"] / ceiling(roof, "fma_peak", th)
+            byteNs = ops["per_tet"][key]["bytes"] / ceiling(roof, "triad_l3" if inL3 else "triad_dram", th)
             print("| %d | %s %s | %d | %.1f | %.2f | %.2f | %.1f× |" % (
                 mesh["tets"], LAW.get(c["law"], c["law"]), c["mode"], th, s["min"], flopNs, byteNs,
                 s["min"] / max(flopNs, byteNs)))
@@ -128,7 +129,7 @@ def main():
     kind, path = sys.argv[1], sys.argv[2]
     d = json.load(open(path))
     if kind == "roofline":
-        roofline(d, sys.argv[3] if len(sys.argv) > 3 else None)
+        roofline(d, *sys.argv[3:5])
     else:
         {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects}[kind](d)
 

@@ -6,6 +6,10 @@ cd "$(dirname "$0")/../.."
 mkdir -p out/bench
 BUILD=${BUILD:-build}
 
+echo "bench: the machine's ceilings (FMA peak, triad bandwidth from DRAM and from L3), 1 and 2 threads"
+OMP_WAIT_POLICY=passive "$BUILD"/roofline > out/bench/roofline.json 2> out/bench/roofline.log
+/usr/bin/python3.11 scripts/bench/perf_tables.py roofline out/bench/roofline.json
+
 echo "bench: QDEM element + integration and whole step, 165,888 and 1,327,104 tets (Hilbert-ordered as addPiece)"
 OMP_WAIT_POLICY=passive "$BUILD"/bench_elements --steps "${QDEM_BENCH_STEPS:-200}" --cubes 3,6 \
   > out/bench/elements_qdem.json 2> out/bench/elements_qdem.log
