@@ -27,11 +27,15 @@ echo "bench: 27 cubes thrown (seed Figure 6 scene moving): ours amortised over i
 OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-600}" --out out/bench
 /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27 out/bench/cubes27.json
 
-echo "bench: shogi scenes (seed Figures 7-10), Table 1 material and time step"
-/usr/bin/python3.11 scripts/bench/bench_shogi.py --steps "${QDEM_BENCH_SHOGI_STEPS:-200}" --out out/bench
+echo "bench: shogi scenes (seed Figures 7-10) through their first hits, QdemEngine in a YADE script"
+OMP_WAIT_POLICY=passive yade -n -j 2 -x scripts/bench/bench_shogi.py --rounds "${QDEM_BENCH_SHOGI_ROUNDS:-5}" \
+  --out out/bench > out/bench/shogi.log 2>&1 || echo "bench: shogi run failed, see out/bench/shogi.log"
+/usr/bin/python3.11 scripts/bench/perf_tables.py shogi out/bench/shogi.json || true
 
 echo "bench: cost of each effect on, off and zero-valued"
-(cd scripts/bench && /usr/bin/python3.11 bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-20}" --out ../../out/bench)
+OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-60}" \
+  --rounds "${QDEM_BENCH_EFFECT_ROUNDS:-5}" --out out/bench > out/bench/effects.log
+/usr/bin/python3.11 scripts/bench/perf_tables.py effects out/bench/effects.json
 
 echo "bench: 20,000 YADE spheres around one QDEM block: coupling cost, near and far"
 yade -j 2 -n -x scripts/bench/bench_spheres.py --steps "${QDEM_BENCH_SPHERE_STEPS:-500}" --out out/bench \
