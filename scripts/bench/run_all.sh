@@ -8,12 +8,15 @@ BUILD=${BUILD:-build}
 
 echo "bench: the machine's ceilings (FMA peak, triad bandwidth from DRAM and from L3), 1 and 2 threads"
 OMP_WAIT_POLICY=passive "$BUILD"/roofline > out/bench/roofline.json 2> out/bench/roofline.log
+/usr/bin/python3.11 scripts/bench/kernel_ops.py --build "$BUILD" > out/bench/kernel_ops.json
 /usr/bin/python3.11 scripts/bench/perf_tables.py roofline out/bench/roofline.json
 
 echo "bench: QDEM element + integration and whole step, 165,888 and 1,327,104 tets (Hilbert-ordered as addPiece)"
 OMP_WAIT_POLICY=passive "$BUILD"/bench_elements --steps "${QDEM_BENCH_STEPS:-200}" --cubes 3,6 \
   > out/bench/elements_qdem.json 2> out/bench/elements_qdem.log
 /usr/bin/python3.11 scripts/bench/perf_tables.py elements out/bench/elements_qdem.json
+/usr/bin/python3.11 scripts/bench/perf_tables.py roofline out/bench/roofline.json out/bench/elements_qdem.json \
+  out/bench/kernel_ops.json | tail -n 20
 
 echo "bench: YADE's own tetrahedral FEM on the same mesh (2 threads)"
 yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 27 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
