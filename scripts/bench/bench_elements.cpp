@@ -149,7 +149,7 @@ std::unique_ptr<World> makeScene(int cubesPerAxis, MaterialLaw law) {
 }
 
 struct Run {
-    double stepNs, elementNs, integrateNs, load1, ownLoad, others;
+    double stepNs, elementNs, integrateNs, load1, ownLoad, others, cpuStepNs;
     bool busy;
 };
 
@@ -169,8 +169,12 @@ Run run(World& w, int threads, int steps, bool viscous, const bench::BusyRule& r
     }
     const double wall = omp_get_wtime() - t0;
     const double others = probe.othersCores(wall);
+    // The step on CPU: this process's CPU time over the threads (waiting
+    // threads sleep: OMP_WAIT_POLICY=passive), what the step costs while its
+    // threads hold cores; on a time-shared machine the wall time is longer.
+    const double cpu = (bench::ownCpuSeconds() - probe.own0) / threads;
     const double perTetStep = 1e9 / (double(steps) * double(w.nTets()));
-    return {wall * perTetStep, el * perTetStep, in * perTetStep, probe.load1, probe.own, others,
+    return {wall * perTetStep, el * perTetStep, in * perTetStep, probe.load1, probe.own, others, cpu * perTetStep,
             rule.busy(probe, others)};
 }
 
@@ -205,9 +209,9 @@ int main(int argc, char** argv) {
                         runs[l][m][t].push_back(x);
                         std::fprintf(stderr,
                                      "bench_elements %zu tets, %s %s, %d thread(s), round %d: step %.2f, element "
-                                     "%.2f, integrate %.2f ns/tet; load %.2f (own %.2f), others %.2f cores%s\n",
+                                     "%.2f, integrate %.2f ns/tet (step on CPU %.2f); load %.2f (own %.2f), others %.2f cores%s\n",
                                      tets, shortName(o.laws[l]), o.viscous[m] ? "viscous" : "elastic", o.threads[t],
-                                     r, x.stepNs, x.elementNs, x.integrateNs, x.load1, x.ownLoad, x.others,
+                                     r, x.stepNs, x.elementNs, x.integrateNs, x.cpuStepNs, x.load1, x.ownLoad, x.others,
                                      x.busy ? " BUSY (excluded)" : "");
                     }
         std::printf("%s{\"cubes_per_axis\": %d, \"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"cases\": [",
@@ -217,31 +221,36 @@ int main(int argc, char** argv) {
             for (std::size_t m = 0; m < nm; ++m)
                 for (std::size_t t = 0; t < nt; ++t) {
                     const std::vector<Run>& rs = runs[l][m][t];
-                    Stats step, elInt, el, stepAll, elIntAll, elAll;
+                    Stats step, elInt, el, stepAll, elIntAll, elAll, cpu, cpuAll;
                     std::string list;
                     for (const Run& x : rs) {
                         char b[256];
                         std::snprintf(b, sizeof b,
-                                      "%s{\"step\": %.3f, \"element\": %.3f, \"integrate\": %.3f, \"load1\": %.2f, "
+                                      "%s{\"step\": %.3f, \"step_on_cpu\": %.3f, \"element\": %.3f, \"integrate\": %.3f, \"load1\": %.2f, "
                                       "\"own_load\": %.2f, \"other_cores\": %.2f, \"busy\": %s}",
-                                      list.empty() ? "" : ", ", x.stepNs, x.elementNs, x.integrateNs, x.load1,
+                                      list.empty() ? "" : ", ", x.stepNs, x.cpuStepNs, x.elementNs, x.integrateNs, x.load1,
                                       x.ownLoad, x.others, x.busy ? "true" : "false");
                         list += b;
                         stepAll.v.push_back(x.stepNs);
                         elIntAll.v.push_back(x.elementNs + x.integrateNs);
                         elAll.v.push_back(x.elementNs);
+                        cpuAll.v.push_back(x.cpuStepNs);
                         if (x.busy) continue;
+                        cpu.v.push_back(x.cpuStepNs);
                         step.v.push_back(x.stepNs);
                         elInt.v.push_back(x.elementNs + x.integrateNs);
                         el.v.push_back(x.elementNs);
                     }
                     std::printf("%s{\"law\": \"%s\", \"mode\": \"%s\", \"threads\": %d, "
-                                "\"clean\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s}, "
-                                "\"all\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s}, "
+                                "\"clean\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s, "
+                                "\"whole_step_on_cpu\": %s}, "
+                                "\"all\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s, "
+                                "\"whole_step_on_cpu\": %s}, "
                                 "\"runs\": [%s]}",
                                 first ? "" : ", ", lawName(o.laws[l]), o.viscous[m] ? "viscous" : "elastic",
-                                o.threads[t], step.json().c_str(), elInt.json().c_str(), el.json().c_str(),
-                                stepAll.json().c_str(), elIntAll.json().c_str(), elAll.json().c_str(), list.c_str());
+                                o.threads[t], step.json().c_str(), elInt.json().c_str(), el.json().c_str(), cpu.json().c_str(),
+                                stepAll.json().c_str(), elIntAll.json().c_str(), elAll.json().c_str(),
+                                cpuAll.json().c_str(), list.c_str());
                     first = false;
                 }
         std::printf("]}");

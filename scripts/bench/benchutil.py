@@ -82,7 +82,7 @@ class LoadProbe:
         others = max(0.0, (_busySeconds() - self.busy0) - (_ownCpu() - self.own0)) / wall if wall > 0 else 0.0
         othersLoad = max(0.0, self.load1 - self.own)
         return {"load1": round(self.load1, 2), "own_load": round(self.own, 2), "other_cores": round(others, 2),
-                "busy": othersLoad > MAX_LOAD - 1 or others > MAX_OTHERS}
+                "own_cpu_s": _ownCpu() - self.own0, "busy": othersLoad > MAX_LOAD - 1 or others > MAX_OTHERS}
 
 
 def stats(values):

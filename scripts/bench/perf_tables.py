@@ -32,13 +32,14 @@ def elements(d):
     for mesh in d["meshes"]:
         print("\n%d tets (%d cubes of 6,144), %d nodes, %d steps per run:\n"
               % (mesh["tets"], mesh["cubes_per_axis"] ** 3, mesh["nodes"], mesh["steps"]))
-        print("| law | mode | threads | whole step | element + integration | element only |")
-        print("| --- | --- | --- | --- | --- | --- |")
+        print("| law | mode | threads | whole step | element + integration | element only | whole step on CPU |")
+        print("| --- | --- | --- | --- | --- | --- | --- |")
         for c in mesh["cases"]:
             cl, al = c["clean"], c["all"]
-            print("| %s | %s | %d | %s | %s | %s |" % (
+            print("| %s | %s | %d | %s | %s | %s | %s |" % (
                 LAW.get(c["law"], c["law"]), c["mode"], c["threads"], fig(cl["whole_step"], al["whole_step"]),
-                fig(cl["element_integrate"], al["element_integrate"]), fig(cl["element"], al["element"])))
+                fig(cl["element_integrate"], al["element_integrate"]), fig(cl["element"], al["element"]),
+                fig(cl.get("whole_step_on_cpu"), al.get("whole_step_on_cpu"))))
 
 
 def roofline(d, elementsJson=None, opsJson=None):
@@ -85,18 +86,20 @@ def distance(roof, el, ops):
 
 
 def cubes27(d):
-    print("27 cubes, %d tets, moving scene (%s), %d threads list; ms per step, median (min–max) of quiet "
-          "rounds, quiet/all.\n" % (d["tets"], d["scene"], len(d["threads"])))
-    print("| threads | case | amortised step | ordinary step | rebuild step | rebuilds | contacts | ns/tet (amortised) |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("%d tets: %s; %s; ms per step, median (min–max) of the quiet rounds, quiet/all rounds; ours amortised "
+          "over its Verlet rebuilds, A/B/C fill their cell lists every step.\n" % (d["tets"], d["scene"], d["date"]))
+    print("| threads | case | amortised step | ordinary step | rebuild step | rebuilds | contacts | ns/tet (amortised) "
+          "| ns/tet on CPU |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for th, cases in sorted(d["threads"].items()):
         for name, c in cases.items():
-            print("| %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            print("| %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 th, name, fig(c["clean"]["step_ms"], c["all"]["step_ms"], 2),
                 fig(c["clean"]["ordinary_step_ms"], c["all"]["ordinary_step_ms"], 2),
                 fig(c["clean"]["rebuild_step_ms"], c["all"]["rebuild_step_ms"], 2),
                 c["rebuilds_per_round"], fig(c["clean"]["contact_ms"], c["all"]["contact_ms"], 2),
-                fig(c["clean"]["ns_per_tet_step"], c["all"]["ns_per_tet_step"], 1)))
+                fig(c["clean"]["ns_per_tet_step"], c["all"]["ns_per_tet_step"], 1),
+                fig(c["clean"].get("ns_per_tet_step_on_cpu"), c["all"].get("ns_per_tet_step_on_cpu"), 1)))
     print("\nTargets (issue 16 target 2, 2 threads):")
     for k, v in d["targets"].items():
         print("- %s: target %s, measured %s" % (k, v["target"], "not measured" if v["measured"] is None
