@@ -6,6 +6,7 @@ JSON, so that the doc is refreshed by pasting, never by retyping figures.
     /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27   bench/logs/cubes27_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py shogi     bench/logs/shogi_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
@@ -85,6 +86,17 @@ def distance(roof, el, ops):
                 s["min"] / max(flopNs, byteNs)))
 
 
+def ops(d):
+    print("| law, mode | FMA | MUL | ADD/SUB | other | elementBatch flops | + scatter, integration | bytes |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for key, k in d["kernel"].items():
+        law, mode = key.split()
+        p, t = k["per_tet"], d["per_tet"][key]
+        print("| %s %s | %.1f | %.1f | %.1f | %.1f | %.0f | %.0f | %.0f |" % (
+            LAW.get(law, law), mode, p["fma"], p["mul"], p["add_sub"], p["other"], k["flops_per_tet"],
+            t["flops"], t["bytes"]))
+
+
 def cubes27(d):
     print("%d tets: %s; %s; ms per step, median (min–max) of the quiet rounds, quiet/all rounds; ours amortised "
           "over its Verlet rebuilds, A/B/C fill their cell lists every step.\n" % (d["tets"], d["scene"], d["date"]))
@@ -108,11 +120,13 @@ def cubes27(d):
 
 def shogi(d):
     print("Shogi scenes through `QdemEngine` (%s); ms per step, median (min–max) of quiet rounds.\n" % d["date"])
-    print("| scene | pieces | tets | threads | steps | first hit at step | ms per step | s wall per simulated s |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | pieces | tets | threads | steps | first hits at step | most asleep | ms per step | "
+          "s wall per simulated s |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for name, s in d["scenes"].items():
-        print("| %s | %d | %d | %d | %d | %s | %s | %s |" % (
-            name, s["pieces"], s["tets"], s["threads"], s["steps"], s["first_hit_step"],
+        print("| %s | %d | %d | %d | %d | %s | %s | %s | %s |" % (
+            name, s["pieces"], s["tets"], s["threads"], s["steps"], ", ".join(map(str, s["first_hit_step"])),
+            max(r.get("most_asleep", 0) for r in s["runs"]),
             fig(s["clean"]["ms_per_step"], s["all"]["ms_per_step"], 2),
             fig(s["clean"]["wall_s_per_simulated_s"], s["all"]["wall_s_per_simulated_s"], 0)))
 
@@ -134,7 +148,7 @@ def main():
     if kind == "roofline":
         roofline(d, *sys.argv[3:5])
     else:
-        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects}[kind](d)
+        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops}[kind](d)
 
 
 if __name__ == "__main__":
