@@ -124,6 +124,7 @@ def main():
                 steps, hits, wall, asleep = throughHits(pieces, H, awaited, a.max_steps)
                 rec = probe.finish(wall)
                 rec.update(steps=steps, hit_steps=hits, wall_s=wall, ms_per_step=1e3 * wall / steps,
+                           ms_per_step_on_cpu=1e3 * rec["own_cpu_s"] / t / steps,
                            wall_s_per_simulated_s=wall / (steps * O.dt), most_asleep=asleep,
                            complete=all(h is not None for h in hits))
                 runs[(label, t)].append(rec)
@@ -139,7 +140,8 @@ def main():
     for (label, t), rs in runs.items():
         s = dict(info[label], threads=t, material=a.material, steps=rs[0]["steps"],
                  first_hit_step=rs[0]["hit_steps"], runs=rs)
-        s.update(summarise([x for x in rs if x["complete"]], ["ms_per_step", "wall_s", "wall_s_per_simulated_s"]))
+        s.update(summarise([x for x in rs if x["complete"]],
+                           ["ms_per_step", "ms_per_step_on_cpu", "wall_s", "wall_s_per_simulated_s"]))
         scenes["%s_%dthreads" % (label, t)] = s
     out = {"benchmark": "bench_shogi", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "material": a.material, "rounds": a.rounds, "busy_rule": BUSY_RULE,

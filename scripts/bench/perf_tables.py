@@ -127,18 +127,22 @@ def shogi(d):
         print("| %s | %d | %d | %d | %d | %s | %s | %s | %s |" % (
             name, s["pieces"], s["tets"], s["threads"], s["steps"], ", ".join(map(str, s["first_hit_step"])),
             max(r.get("most_asleep", 0) for r in s["runs"]),
-            fig(s["clean"]["ms_per_step"], s["all"]["ms_per_step"], 2),
+            fig(s["clean"]["ms_per_step"], s["all"]["ms_per_step"], 2) + " (on CPU %s)"
+            % fig(s["clean"].get("ms_per_step_on_cpu"), s["all"].get("ms_per_step_on_cpu"), 2),
             fig(s["clean"]["wall_s_per_simulated_s"], s["all"]["wall_s_per_simulated_s"], 0)))
 
 
 def effects(d):
     print("Effects on the 27-cube scene, %d threads, %d steps per variant, %d rounds interleaved (%s); ms per "
           "step, median (min–max) of quiet rounds.\n" % (d["threads"], d["steps"], d["rounds"], d["date"]))
-    print("| effect | on | off | zero-valued |")
-    print("| --- | --- | --- | --- |")
+    print("| effect | on | off | zero-valued | on, on CPU | off, on CPU | zero-valued, on CPU |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     for name, e in d["effects"].items():
         cells = [fig(e["clean"].get(v), e["all"].get(v), 2) if e["all"].get(v) else "—"
                  for v in ("on", "off", "zero")]
+        c = e.get("on_cpu", {"clean": {}, "all": {}})
+        cells += [fig(c["clean"].get(v), c["all"].get(v), 2) if c["all"].get(v) else "—"
+                  for v in ("on", "off", "zero")]
         print("| %s | %s |" % (name, " | ".join(cells)))
 
 
