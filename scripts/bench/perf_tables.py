@@ -66,24 +66,28 @@ def ceiling(d, name, threads):
 
 def distance(roof, el, ops):
     """Element phase against its floors: flops / peak and bytes / bandwidth per tet."""
-    print("\nElement phase against the machine (flops and bytes per tet from `%s`; ceilings: the best "
-          "on-CPU rates above; measured: the minimum, quiet runs if any):\n" % ops["source"])
-    print("| tets | law, mode | threads | measured element+integration [ns/tet] | flop floor | byte floor | "
-          "measured / larger floor |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("\nElement + integration against the machine (flops and bytes per tet from `%s`; ceilings: the best "
+          "on-CPU rates above; measured: the minimum over the runs on wall clock (quiet runs if any), and the "
+          "median of the whole step on CPU, which bounds element + integration from above):\n" % ops["source"])
+    print("| tets | law, mode | threads | flop floor | byte floor | measured (wall, min) | ÷ floor | "
+          "whole step on CPU (median) | ÷ floor |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for mesh in el["meshes"]:
         inL3 = mesh["tets"] < 500000
         for c in mesh["cases"]:
             s = c["clean"]["element_integrate"] or c["all"]["element_integrate"]
+            cpu = c["clean"].get("whole_step_on_cpu") or c["all"].get("whole_step_on_cpu")
             key = "%s %s" % (c["law"], c["mode"])
             if key not in ops["per_tet"]:
                 continue
             th = c["threads"]
             flopNs = ops["per_tet"][key]["flops"] / ceiling(roof, "fma_peak", th)
             byteNs = ops["per_tet"][key]["bytes"] / ceiling(roof, "triad_l3" if inL3 else "triad_dram", th)
-            print("| %d | %s %s | %d | %.1f | %.2f | %.2f | %.1f× |" % (
-                mesh["tets"], LAW.get(c["law"], c["law"]), c["mode"], th, s["min"], flopNs, byteNs,
-                s["min"] / max(flopNs, byteNs)))
+            floor = max(flopNs, byteNs)
+            print("| %d | %s %s | %d | %.2f | %.2f | %.1f | %.1f× | %s | %s |" % (
+                mesh["tets"], LAW.get(c["law"], c["law"]), c["mode"], th, flopNs, byteNs, s["min"], s["min"] / floor,
+                "%.1f" % cpu["median"] if cpu else "not measured",
+                "%.1f×" % (cpu["median"] / floor) if cpu else "—"))
 
 
 def ops(d):
