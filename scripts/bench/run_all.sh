@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # make bench: every benchmark, figures as JSON under out/bench/ (not asserted:
-# the machines are shared and noisy, so compare ratios within one run).
+# the machines are shared and noisy).  Each benchmark interleaves its variants
+# over rounds, records the load with each run and flags busy runs, which stay
+# out of min / median / max (doc/performance.md, "How the figures are
+# measured"); perf_tables.py prints the doc's tables from the JSON.  About
+# 20-30 minutes on 2 idle cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 mkdir -p out/bench
