@@ -53,6 +53,15 @@ def figures(bench, r):
                     x = r["threads"][th][law][mode]
                     f["elements %s %s %sth element+integration ns/tet/step" % (short, mode, th)] = x["ns_per_tet_step_median"]
                     f["elements %s %s %sth element-only ns/tet/step" % (short, mode, th)] = x["element_ns_per_tet_step_median"]
+    elif bench == "cubes27" and r.get("benchmark") == "bench_cubes27":
+        # the moving scene (bench_cubes27.py since issue 16): medians of the process's rounds
+        for th, cases in r["threads"].items():
+            for case, c in cases.items():
+                f["cubes27 %s %sth step ms" % (case, th)] = c["all"]["step_ms"]["median"]
+            f["cubes27 ours %sth contact ms" % th] = cases["ours"]["all"]["contact_ms"]["median"]
+            f["cubes27 ours %sth elements ms" % th] = cases["ours"]["all"]["elements"]["median"]
+            if cases["ours"]["all"]["rebuild_step_ms"]:
+                f["cubes27 Verlet-rebuild step %sth ms" % th] = cases["ours"]["all"]["rebuild_step_ms"]["median"]
     elif bench == "cubes27":
         for th in ("1", "2"):
             for case in ("ours", "C", "B", "A"):
