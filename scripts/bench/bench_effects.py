@@ -1,101 +1,205 @@
 """Only the effects a scene calls for (issue 6, part 3): the cost of each effect
 switched on, switched off, and present with a zero value, on the 27-cube
-Figure 6 scene (165,888 tets, every face in contact), 2 threads.
+Figure 6 scene at rest (165,888 tets, every face in contact), 2 threads.
 
-    /usr/bin/python3.11 scripts/bench/bench_effects.py [--steps 20] [--out out/bench]
-"""
+The variants of all effects are timed round after round (`--rounds`), each
+over the same `--steps` steps from its world's saved state, the order of on / off / zero turning from round to
+round so that no variant always follows the same one; the load and other
+processes' CPU are recorded per run and busy runs left out of 'clean'.  A
+variant that does not exist (no zero-valued form of "point-polygon on", of
+energy tracking, ...) is null: not measured, never copied from another.
+
+    /usr/bin/python3.11 scripts/bench/bench_effects.py [--steps 60] [--rounds 5] [--out out/bench]
+
+Effects: viscosity, friction, edge-edge, point-polygon, energy sums, gravity
+(World switches of the same names, QdemEngine attributes), contacts (all
+contact phases on / off / the same cubes out of each other's reach), YADE
+spheres (2,025 on the stack's top / none / listed but 1 m above it), and the
+stress output (per recorder frame, not per step: 'on' only)."""
 import argparse
 import json
 import os
+import sys
 import time
+
+import numpy as np
 
 import qdem
 from qdem import _core
 
-import bench_cubes27
-from benchutil import msPerStep
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bench_cubes27  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, summarise  # noqa: E402
+
+VARIANTS = ("on", "off", "zero")
+DT = 6.4e-6
+
+
+def settled(**matArgs):
+    w = bench_cubes27.scene(mat=qdem.QdemMat(**matArgs) if matArgs else None)
+    w.core.step(DT, 20)                      # contacts formed
+    return w
+
+
+def timed(world, steps):
+    """(ms per step, load record) of `steps` steps after a 3-step warm-up;
+    the record has the step on CPU too (CPU time over the 2 threads)."""
+    world.core.step(DT, 3)
+    probe = LoadProbe()
+    t = time.perf_counter()
+    world.core.step(DT, steps)
+    wall = time.perf_counter() - t
+    rec = probe.finish(wall)
+    rec["ms_per_step_on_cpu"] = 1e3 * rec["own_cpu_s"] / 2 / steps
+    return 1e3 * wall / steps, rec
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--steps", type=int, default=20)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--steps", type=int, default=60)
+    ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--out", default="out/bench")
     a = ap.parse_args()
+    if a.steps < 1 or a.rounds < 1:
+        ap.error("--steps and --rounds must be at least 1")
     os.makedirs(a.out, exist_ok=True)
     _core.setThreads(2)
-    base = bench_cubes27.scene()
-    base.core.step(6.4e-6, 20)                      # contacts formed
-    n = a.steps
-    res = {}
-
-    def switch(name, attr, onValue, offValue, zeroWorld=None):
-        setattr(base.core, attr, onValue)
-        on = msPerStep(base, n)
-        setattr(base.core, attr, offValue)
-        off = msPerStep(base, n)
-        setattr(base.core, attr, onValue)
-        zero = msPerStep(zeroWorld, n) if zeroWorld is not None else off
-        res[name] = {"on_ms": on, "off_ms": off, "zero_valued_ms": zero}
-        print("effect %-12s on %.2f ms, off %.2f ms, zero-valued %.2f ms" % (name, on, off, zero), flush=True)
-
-    noVisc = bench_cubes27.scene(mat=qdem.QdemMat(viscosity=0.0))
-    noVisc.core.step(6.4e-6, 20)
-    switch("viscosity", "viscosityOn", True, False, noVisc)
-    noFric = bench_cubes27.scene(mat=qdem.QdemMat(frictionPiece=0.0, frictionWall=0.0))
-    noFric.core.step(6.4e-6, 20)
-    switch("friction", "frictionOn", True, False, noFric)
+    base = settled()
+    noVisc = settled(viscosity=0.0)
+    noFric = settled(frictionPiece=0.0, frictionWall=0.0)
     noEdges = bench_cubes27.scene()
-    noEdges.core.edgeFeatureAngle = 3.2                 # no edge is a feature edge: nothing to test
-    noEdges.core.step(6.4e-6, 20)
-    switch("edgeEdge", "edgeEdgeOn", True, False, noEdges)
-    switch("pointPolygon", "pointPolygonOn", True, False)
-    switch("energy", "trackEnergy", True, False)
+    noEdges.core.edgeFeatureAngle = 3.2       # no edge is a feature edge: nothing to test
+    noEdges.core.step(DT, 20)
     flat = bench_cubes27.scene()
     flat.core.gravity = (0, 0, 0)
-    flat.core.step(6.4e-6, 20)
-    switch("gravity", "gravity", (0, 0, -9.80665), (0, 0, 0), flat)
-    t = time.perf_counter()
-    for _ in range(5):
-        base.core.stress()
-    res["stressOutput"] = {"on_ms": 1e3 * (time.perf_counter() - t) / 5, "off_ms": 0.0, "zero_valued_ms": 0.0,
-                           "note": "computed only when a recorder asks (per frame, not per step)"}
-    print("stress output: %.2f ms per frame" % res["stressOutput"]["on_ms"])
-    # Pieces out of reach: the same cubes spread 1 m apart pay no contact work.
-    apart = qdem.World()
+    flat.core.step(DT, 20)
+    apart = qdem.World()                       # the same cubes out of each other's reach
     for i in range(27):
         apart.addPiece(qdem.boxMesh((4, 4, 4), (8, 8, 8), tetsPerCell=12), qdem.QdemMat(), pos=(5.0 * i, 0, 10))
-    res["contactsOutOfReach"] = {"on_ms": res["pointPolygon"]["on_ms"], "off_ms": res["pointPolygon"]["off_ms"],
-                                 "zero_valued_ms": msPerStep(apart, n),
-                                 "note": "zero_valued: same 27 cubes far apart (no piece can reach another)"}
-    print("27 cubes apart: %.2f ms" % res["contactsOutOfReach"]["zero_valued_ms"])
+
     # YADE spheres (what QdemEngine hands over from the scene): 2,025 spheres
-    # resting on the top of the stack, the same spheres listed but 1 m above it,
-    # and none at all (a scene without spheres: the phase returns at once).
-    import numpy as np
+    # resting on the top of the stack, the same spheres 1 m above it, or none.
     top = base.core.pos[:, 2].max()
     R = 0.05
     g = np.linspace(-5.5, 5.5, 45)
     xy = np.array([(x, y) for x in g for y in g])
-    k = len(xy)
-    npc = base.core.nPieces
+    k, npc = len(xy), base.core.nPieces
     props = [np.full(k, v) for v in (R, 1e8, 0.3, 0.5, -1.0, 1.0)]
     pairs = (np.arange(0, k * npc + 1, npc, dtype=np.int32), np.tile(np.arange(npc, dtype=np.int32), k))
 
-    def spheresAt(z):
-        base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *pairs)
-        pos = np.column_stack([xy, np.full(k, z)])
-        base.core.setSphereStates(pos, np.zeros((k, 3)), np.zeros((k, 3)))
-        return msPerStep(base, n)
+    def spheres(z):
+        if z is None:
+            base.core.setSpheres(np.zeros(0, np.int32), *[np.zeros(0)] * 6, np.zeros(1, np.int32),
+                                 np.zeros(0, np.int32))
+        else:
+            base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *pairs)
+            base.core.setSphereStates(np.column_stack([xy, np.full(k, z)]), np.zeros((k, 3)), np.zeros((k, 3)))
+        return base
 
-    on = spheresAt(top + 0.04 + R - 0.002)
-    zero = spheresAt(top + 1.0)
-    base.core.setSpheres(np.zeros(0, np.int32), *[np.zeros(0)] * 6, np.zeros(1, np.int32), np.zeros(0, np.int32))
-    off = msPerStep(base, n)
-    res["yadeSpheres"] = {"on_ms": on, "off_ms": off, "zero_valued_ms": zero,
-                          "note": "2,025 spheres on the stack's top / none / listed but 1 m above it"}
-    print("effect yadeSpheres   on %.2f ms, off %.2f ms, zero-valued %.2f ms" % (on, off, zero), flush=True)
-    json.dump({"tets": base.core.nTets, "threads": 2, "steps": n, "effects": res},
-              open(os.path.join(a.out, "effects.json"), "w"), indent=2)
+    def switch(attr, value, world=None):
+        def go():
+            setattr(base.core, attr, value)
+            return base
+        return go if world is None else (lambda: world)
+
+    def contacts(on):
+        def go():
+            base.core.pointPolygonOn = base.core.edgeEdgeOn = on
+            return base
+        return go
+
+    # effect -> {variant: set-up returning the world to step, or None (no such variant)};
+    # after each variant the base world is put back as it was (all on, no spheres).
+    G = (0, 0, -9.80665)
+    effects = {
+        "viscosity": {"on": switch("viscosityOn", True), "off": switch("viscosityOn", False),
+                      "zero": switch(None, None, noVisc)},
+        "friction": {"on": switch("frictionOn", True), "off": switch("frictionOn", False),
+                     "zero": switch(None, None, noFric)},
+        "edgeEdge": {"on": switch("edgeEdgeOn", True), "off": switch("edgeEdgeOn", False),
+                     "zero": switch(None, None, noEdges)},
+        "pointPolygon": {"on": switch("pointPolygonOn", True), "off": switch("pointPolygonOn", False), "zero": None},
+        "energy": {"on": switch("trackEnergy", True), "off": switch("trackEnergy", False), "zero": None},
+        "gravity": {"on": switch("gravity", G), "off": switch("gravity", (0, 0, 0)), "zero": switch(None, None, flat)},
+        "contacts": {"on": contacts(True), "off": contacts(False), "zero": switch(None, None, apart)},
+        "yadeSpheres": {"on": lambda: spheres(top + 0.04 + R - 0.002), "off": lambda: spheres(None),
+                        "zero": lambda: spheres(top + 1.0)},
+    }
+    notes = {
+        "pointPolygon": "zero: no zero-valued form (not measured)",
+        "energy": "zero: no zero-valued form (not measured)",
+        "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
+        "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
+                    "(no piece can reach another)",
+        "yadeSpheres": "on: 2,025 spheres resting on the stack's top; off: none; zero: the same spheres listed "
+                       "but 1 m above it",
+    }
+
+    def restore():
+        c = base.core
+        c.viscosityOn = c.frictionOn = c.edgeEdgeOn = c.pointPolygonOn = True
+        c.trackEnergy = False
+        c.gravity = G
+        spheres(None)
+
+    # Every variant starts from its world's state as settled: without this
+    # the base world, stepped by all its variants, drifts away from the
+    # zero-valued worlds, stepped only by theirs (the stack keeps settling:
+    # the first version of this script compared worlds hundreds of steps apart).
+    worlds = [base, noVisc, noFric, noEdges, flat, apart]
+    states = [w.core.saveState() for w in worlds]
+
+    def reload():
+        for w, st in zip(worlds, states):
+            w.core.loadState(st)
+
+    restore()
+    runs = {e: {v: [] for v in VARIANTS} for e in effects}
+    for r in range(a.rounds):
+        order = VARIANTS[r % 3:] + VARIANTS[:r % 3]
+        for name, variants in effects.items():
+            for v in order:
+                if variants[v] is None:
+                    continue
+                reload()
+                ms, rec = timed(variants[v](), a.steps)
+                restore()
+                rec["ms_per_step"] = ms
+                runs[name][v].append(rec)
+                print("round %d %-12s %-4s %.2f ms/step; load %.2f (own %.2f), others %.2f%s"
+                      % (r, name, v, ms, rec["load1"], rec["own_load"], rec["other_cores"],
+                         " BUSY" if rec["busy"] else ""), flush=True)
+    res = {}
+    for name, byVariant in runs.items():
+        e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "runs": byVariant}
+        for v, rs in byVariant.items():
+            s = summarise(rs, ["ms_per_step", "ms_per_step_on_cpu"])
+            e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
+            e["on_cpu"]["clean"][v], e["on_cpu"]["all"][v] = (s["clean"]["ms_per_step_on_cpu"],
+                                                              s["all"]["ms_per_step_on_cpu"])
+        if name in notes:
+            e["note"] = notes[name]
+        res[name] = e
+    # Stress output: computed only when a recorder asks (per frame, not per step).
+    frames = []
+    for _ in range(a.rounds):
+        probe = LoadProbe()
+        t = time.perf_counter()
+        base.core.stress()
+        wall = time.perf_counter() - t
+        rec = probe.finish(wall)
+        rec["ms_per_step"] = 1e3 * wall
+        frames.append(rec)
+    s = summarise(frames, ["ms_per_step"])
+    res["stressOutput"] = {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
+                           "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None},
+                           "runs": {"on": frames},
+                           "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
+    out = {"benchmark": "bench_effects", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+           "tets": base.core.nTets, "threads": 2, "steps": a.steps, "rounds": a.rounds, "busy_rule": BUSY_RULE,
+           "units": "ms per step, median / min / max over the rounds", "effects": res}
+    with open(os.path.join(a.out, "effects.json"), "w") as f:
+        json.dump(out, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -1,39 +1,140 @@
-// Element + integration cost on the seed paper's Figure 6 mesh: 27 cubes of
-// 8x8x8 cells, 12 tets per cell (165,888 tets, 33,507 nodes), at 1 and 2
-// threads, for each material law (Saint-Venant-Kirchhoff and Stable
-// Neo-Hookean, runs interleaved so that machine noise hits both alike).
-// Prints JSON (ns per tet per step: min and median over the repeats) to stdout.
+// Element + integration cost, and the whole step, on the seed paper's Figure 6
+// mesh (27 cubes of 8x8x8 cells, 12 tets per cell: 165,888 tets, 33,507
+// nodes) and on a larger stack of the same cubes (6x6x6 cubes: 1,327,104
+// tets, out of L3), built as users get them: each cube is Hilbert-reordered
+// before it is placed, exactly as qdem.addPiece does (py/qdem/world.py).
 //
-//   bench_elements [steps=200] [cubesPerAxis=3] [repeats=5]
+// For each mesh size, both material laws (Saint-Venant-Kirchhoff and the
+// default Stable Neo-Hookean), elastic only and viscous (Table 1), on 1 and
+// 2 threads; every combination is one run of `steps` steps, and the runs are
+// interleaved (round after round) so that machine noise hits all alike.  With
+// each run it records the 1-minute load average and the CPU other processes
+// used meanwhile (MachineLoad.hpp); busy runs are flagged and left out of
+// min / median / max ("clean"), which are printed beside those of all runs.
+//
+//   bench_elements [--steps 200] [--cubes 3,6] [--repeats 5] [--threads 1,2]
+//                  [--laws svk,snh] [--modes viscous,elastic]
+//                  [--max-load 1.5] [--max-others 0.2] [--label NAME]
+//   bench_elements [steps] [cubesPerAxis] [repeats]      (the older form)
+//
+// --steps is for the 27-cube mesh; larger meshes run fewer steps so that each
+// run does the same number of tet-steps (at least 10 steps).  JSON on stdout;
+// one line per run on stderr as it goes.
 #include <omp.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <memory>
+#include <sstream>
+#include <string>
 #include <vector>
 
-#include <memory>
-
-#include "mesh/BoxMesh.hpp"
-#include "world/World.hpp"
 #include "BenchStats.hpp"
+#include "MachineLoad.hpp"
+#include "mesh/BoxMesh.hpp"
+#include "mesh/Hilbert.hpp"
+#include "world/World.hpp"
 
 using namespace qdem;
 
 namespace {
 
-// (by pointer: a World is not copied or moved, its phases refer to it)
+struct Options {
+    int steps = 200, repeats = 5;
+    std::vector<int> cubes{3, 6}, threads{1, 2};
+    std::vector<MaterialLaw> laws{MaterialLaw::SaintVenantKirchhoff, MaterialLaw::StableNeoHookean};
+    std::vector<bool> viscous{true, false};
+    bench::BusyRule rule;
+    std::string label;
+};
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    for (std::string item; std::getline(ss, item, ',');)
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+[[noreturn]] void usage(const std::string& why) {
+    std::fprintf(stderr,
+                 "bench_elements: %s\nusage: bench_elements [--steps N] [--cubes 3,6] [--repeats N] [--threads 1,2] "
+                 "[--laws svk,snh] [--modes viscous,elastic] [--max-load L] [--max-others C] [--label NAME]\n",
+                 why.c_str());
+    std::exit(2);
+}
+
+int positive(const std::string& s, const char* what) {
+    char* end = nullptr;
+    const long v = std::strtol(s.c_str(), &end, 10);
+    if (end == s.c_str() || *end || v < 1 || v > 100000) usage(std::string(what) + " must be a positive integer, got '" + s + "'");
+    return int(v);
+}
+
+Options parse(int argc, char** argv) {
+    Options o;
+    int positional = 0;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a.rfind("--", 0) != 0) {  // the older positional form: steps cubes repeats
+            if (positional == 0) o.steps = positive(a, "steps");
+            else if (positional == 1) o.cubes = {positive(a, "cubesPerAxis")};
+            else if (positional == 2) o.repeats = positive(a, "repeats");
+            else usage("too many arguments");
+            ++positional;
+            continue;
+        }
+        if (i + 1 >= argc) usage(a + " needs a value");
+        const std::string v = argv[++i];
+        if (a == "--steps") o.steps = positive(v, "--steps");
+        else if (a == "--repeats") o.repeats = positive(v, "--repeats");
+        else if (a == "--cubes" || a == "--threads") {
+            std::vector<int> xs;
+            for (const auto& s : split(v)) xs.push_back(positive(s, a.c_str()));
+            if (xs.empty()) usage(a + " needs at least one value");
+            (a == "--cubes" ? o.cubes : o.threads) = xs;
+        } else if (a == "--laws") {
+            o.laws.clear();
+            for (const auto& s : split(v)) {
+                if (s == "svk") o.laws.push_back(MaterialLaw::SaintVenantKirchhoff);
+                else if (s == "snh") o.laws.push_back(MaterialLaw::StableNeoHookean);
+                else usage("--laws: 'svk' or 'snh', got '" + s + "'");
+            }
+        } else if (a == "--modes") {
+            o.viscous.clear();
+            for (const auto& s : split(v)) {
+                if (s == "viscous" || s == "elastic") o.viscous.push_back(s == "viscous");
+                else usage("--modes: 'viscous' or 'elastic', got '" + s + "'");
+            }
+        } else if (a == "--max-load") o.rule.maxLoad = std::atof(v.c_str());
+        else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
+        else if (a == "--label") o.label = v;
+        else usage("unknown option " + a);
+    }
+    if (o.laws.empty() || o.viscous.empty()) usage("--laws and --modes need at least one value");
+    if (o.laws.size() > 2 || o.viscous.size() > 2 || o.threads.size() > 8) usage("at most 2 laws, 2 modes, 8 thread counts");
+    return o;
+}
+
+// As qdem.addPiece(boxMesh((1,1,1), (8,8,8), 12), mat, pos=...) places each
+// cube: the mesh is Hilbert-reordered in its own frame, then translated (all
+// cubes alike, so the reordering is done once).
 std::unique_ptr<World> makeScene(int cubesPerAxis, MaterialLaw law) {
-    auto wp = std::make_unique<World>();
+    auto wp = std::make_unique<World>();  // by pointer: a World is neither copied nor moved
     World& w = *wp;
     Material m;  // seed Table 1
     m.law = law;
     const int mat = w.addMaterial(m);
-    const double size = 1.0, gap = 0.1;
+    const double size = 1.0, gap = 0.1;  // 0.1 > 2 r: no contacts, the element phase alone
+    TetMesh cube = boxMesh(8, 8, 8, size, size, size, 12);
+    hilbertReorder(cube);
     for (int i = 0; i < cubesPerAxis; ++i)
         for (int j = 0; j < cubesPerAxis; ++j)
             for (int k = 0; k < cubesPerAxis; ++k) {
-                TetMesh c = boxMesh(8, 8, 8, size, size, size, 12);
+                TetMesh c = cube;
                 for (std::size_t n = 0; n < c.nNodes(); ++n) {
                     c.nodes[3 * n] += i * (size + gap);
                     c.nodes[3 * n + 1] += j * (size + gap);
@@ -47,16 +148,18 @@ std::unique_ptr<World> makeScene(int cubesPerAxis, MaterialLaw law) {
     return wp;
 }
 
-struct Figures {
-    double elementNs, integrateNs, stepNs;
+struct Run {
+    double stepNs, elementNs, integrateNs, load1, ownLoad, others, cpuStepNs;
+    bool busy;
 };
 
-Figures run(World& w, int threads, int steps, bool viscous) {
+Run run(World& w, int threads, int steps, bool viscous, const bench::BusyRule& rule) {
     omp_set_num_threads(threads);
     w.settings.viscosityOn = viscous;
     const double dt = 0.5 * w.stableDt().combined;
-    for (int i = 0; i < 5; ++i) w.step(dt);  // warm-up, builds the thread layout
+    for (int i = 0; i < 3; ++i) w.step(dt);  // warm-up: the thread layout, the caches
     double el = 0, in = 0;
+    const bench::LoadProbe probe;
     const double t0 = omp_get_wtime();
     for (int i = 0; i < steps; ++i) {
         w.step(dt);
@@ -64,55 +167,95 @@ Figures run(World& w, int threads, int steps, bool viscous) {
         el += r.second("elements");
         in += r.second("integrate");
     }
-    const double total = omp_get_wtime() - t0;
-    const double perTetStep = 1e9 / (double(steps) * w.nTets());
-    return {el * perTetStep, in * perTetStep, total * perTetStep};
+    const double wall = omp_get_wtime() - t0;
+    const double others = probe.othersCores(wall);
+    // The step on CPU: this process's CPU time over the threads (waiting
+    // threads sleep: OMP_WAIT_POLICY=passive), what the step costs while its
+    // threads hold cores; on a time-shared machine the wall time is longer.
+    const double cpu = (bench::ownCpuSeconds() - probe.own0) / threads;
+    const double perTetStep = 1e9 / (double(steps) * double(w.nTets()));
+    return {wall * perTetStep, el * perTetStep, in * perTetStep, probe.load1, probe.own, others, cpu * perTetStep,
+            rule.busy(probe, others)};
 }
 
+const char* shortName(MaterialLaw l) { return l == MaterialLaw::SaintVenantKirchhoff ? "svk" : "snh"; }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int steps = argc > 1 ? std::atoi(argv[1]) : 200;
-    const int cubes = argc > 2 ? std::atoi(argv[2]) : 3;
-    const int repeats = argc > 3 ? std::atoi(argv[3]) : 5;
-    const MaterialLaw laws[2] = {MaterialLaw::SaintVenantKirchhoff, MaterialLaw::StableNeoHookean};
-    const std::unique_ptr<World> owners[2] = {makeScene(cubes, laws[0]), makeScene(cubes, laws[1])};
-    World* worlds[2] = {owners[0].get(), owners[1].get()};
-    std::printf("{\"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"repeats\": %d, \"threads\": {", worlds[0]->nTets(),
-                worlds[0]->nNodes(), steps, repeats);
-    const int maxThreads = omp_get_num_procs();
-    for (int th = 1; th <= std::min(2, maxThreads); ++th) {
-        // [law][viscous]: element + integrate ns/tet/step; element only
-        Stats total[2][2], element[2][2];
-        for (int r = 0; r < repeats; ++r)
-            for (int l = 0; l < 2; ++l)
-                for (int v = 0; v < 2; ++v) {
-                    const Figures f = run(*worlds[l], th, steps, v == 1);
-                    total[l][v].v.push_back(f.elementNs + f.integrateNs);
-                    element[l][v].v.push_back(f.elementNs);
+    const Options o = parse(argc, argv);
+    char date[32];
+    const std::time_t now = std::time(nullptr);
+    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    std::printf("{\"benchmark\": \"bench_elements\", \"label\": \"%s\", \"date\": \"%s\", \"cpus\": %d, "
+                "\"repeats\": %d, \"busy_rule\": {\"max_load1_less_own_share\": %g, \"max_other_cores\": %g}, "
+                "\"units\": \"ns per tet per step\", \"meshes\": [",
+                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxLoad - 1, o.rule.maxOthers);
+    const std::size_t smallTets = 27 * 6144;
+    for (std::size_t mi = 0; mi < o.cubes.size(); ++mi) {
+        const int cubes = o.cubes[mi];
+        std::vector<std::unique_ptr<World>> worlds;
+        for (MaterialLaw l : o.laws) worlds.push_back(makeScene(cubes, l));
+        const std::size_t tets = worlds[0]->nTets();
+        const int steps = std::max(10, int(double(o.steps) * double(smallTets) / double(tets) + 0.5));
+        // cases[law][mode][thread]: one entry per run
+        const std::size_t nl = o.laws.size(), nm = o.viscous.size(), nt = o.threads.size();
+        std::vector<Run> runs[2][2][8];
+        for (int r = 0; r < o.repeats; ++r)
+            for (std::size_t t = 0; t < nt; ++t)
+                for (std::size_t l = 0; l < nl; ++l)
+                    for (std::size_t m = 0; m < nm; ++m) {
+                        const Run x = run(*worlds[l], o.threads[t], steps, o.viscous[m], o.rule);
+                        runs[l][m][t].push_back(x);
+                        std::fprintf(stderr,
+                                     "bench_elements %zu tets, %s %s, %d thread(s), round %d: step %.2f, element "
+                                     "%.2f, integrate %.2f ns/tet (step on CPU %.2f); load %.2f (own %.2f), others %.2f cores%s\n",
+                                     tets, shortName(o.laws[l]), o.viscous[m] ? "viscous" : "elastic", o.threads[t],
+                                     r, x.stepNs, x.elementNs, x.integrateNs, x.cpuStepNs, x.load1, x.ownLoad, x.others,
+                                     x.busy ? " BUSY (excluded)" : "");
+                    }
+        std::printf("%s{\"cubes_per_axis\": %d, \"tets\": %zu, \"nodes\": %zu, \"steps\": %d, \"cases\": [",
+                    mi ? ", " : "", cubes, tets, worlds[0]->nNodes(), steps);
+        bool first = true;
+        for (std::size_t l = 0; l < nl; ++l)
+            for (std::size_t m = 0; m < nm; ++m)
+                for (std::size_t t = 0; t < nt; ++t) {
+                    const std::vector<Run>& rs = runs[l][m][t];
+                    Stats step, elInt, el, stepAll, elIntAll, elAll, cpu, cpuAll;
+                    std::string list;
+                    for (const Run& x : rs) {
+                        char b[256];
+                        std::snprintf(b, sizeof b,
+                                      "%s{\"step\": %.3f, \"step_on_cpu\": %.3f, \"element\": %.3f, \"integrate\": %.3f, \"load1\": %.2f, "
+                                      "\"own_load\": %.2f, \"other_cores\": %.2f, \"busy\": %s}",
+                                      list.empty() ? "" : ", ", x.stepNs, x.cpuStepNs, x.elementNs, x.integrateNs, x.load1,
+                                      x.ownLoad, x.others, x.busy ? "true" : "false");
+                        list += b;
+                        stepAll.v.push_back(x.stepNs);
+                        elIntAll.v.push_back(x.elementNs + x.integrateNs);
+                        elAll.v.push_back(x.elementNs);
+                        cpuAll.v.push_back(x.cpuStepNs);
+                        if (x.busy) continue;
+                        cpu.v.push_back(x.cpuStepNs);
+                        step.v.push_back(x.stepNs);
+                        elInt.v.push_back(x.elementNs + x.integrateNs);
+                        el.v.push_back(x.elementNs);
+                    }
+                    std::printf("%s{\"law\": \"%s\", \"mode\": \"%s\", \"threads\": %d, "
+                                "\"clean\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s, "
+                                "\"whole_step_on_cpu\": %s}, "
+                                "\"all\": {\"whole_step\": %s, \"element_integrate\": %s, \"element\": %s, "
+                                "\"whole_step_on_cpu\": %s}, "
+                                "\"runs\": [%s]}",
+                                first ? "" : ", ", lawName(o.laws[l]), o.viscous[m] ? "viscous" : "elastic",
+                                o.threads[t], step.json().c_str(), elInt.json().c_str(), el.json().c_str(), cpu.json().c_str(),
+                                stepAll.json().c_str(), elIntAll.json().c_str(), elAll.json().c_str(),
+                                cpuAll.json().c_str(), list.c_str());
+                    first = false;
                 }
-        std::printf("%s\"%d\": {", th > 1 ? ", " : "", th);
-        for (int l = 0; l < 2; ++l) {
-            std::printf("%s\"%s\": {", l ? ", " : "", lawName(laws[l]));
-            for (int v = 1; v >= 0; --v)
-                std::printf("%s\"%s\": {\"ns_per_tet_step_min\": %.3f, \"ns_per_tet_step_median\": %.3f, "
-                            "\"element_ns_per_tet_step_min\": %.3f, \"element_ns_per_tet_step_median\": %.3f}",
-                            v == 1 ? "" : ", ", v ? "viscous" : "elastic", total[l][v].min(), total[l][v].median(),
-                            element[l][v].min(), element[l][v].median());
-            std::printf("}");
-        }
-        std::printf(", \"element_ratio_snh_over_svk_min\": {\"viscous\": %.3f, \"elastic\": %.3f}",
-                    element[1][1].min() / element[0][1].min(), element[1][0].min() / element[0][0].min());
-        std::printf(", \"element_ratio_snh_over_svk_median\": {\"viscous\": %.3f, \"elastic\": %.3f}",
-                    element[1][1].median() / element[0][1].median(), element[1][0].median() / element[0][0].median());
-        // The default law's figures under the keys merge_elements.py and
-        // doc/performance.md have always read (medians).
-        std::printf(", \"ns_per_tet_step\": %.3f, \"element_ns_per_tet_step\": %.3f, "
-                    "\"elastic_only_ns_per_tet_step\": %.3f}",
-                    total[1][1].median(), element[1][1].median(), total[1][0].median());
+        std::printf("]}");
         std::fflush(stdout);
     }
-    std::printf("}}\n");
+    std::printf("]}\n");
     return 0;
 }

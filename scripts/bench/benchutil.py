@@ -1,4 +1,10 @@
-"""Shared set-up of the Python benchmarks: a floor wall and step timing."""
+"""Shared set-up of the Python benchmarks: a floor wall, step timing, what else
+the machine was doing during each timed run (the same rule as
+scripts/bench/MachineLoad.hpp), and min / median / max of repeated runs."""
+import math
+import os
+import resource
+import statistics
 import time
 
 import numpy as np
@@ -21,3 +27,84 @@ def msPerStep(world, steps, dt=6.4e-6, warmup=3):
     t = time.perf_counter()
     world.core.step(dt, steps)
     return 1e3 * (time.perf_counter() - t) / steps
+
+
+# --- machine load ---------------------------------------------------------------------------------------------
+
+def _busySeconds():
+    """Busy seconds of all CPUs since boot (user, nice, system, irq, softirq, steal)."""
+    with open("/proc/stat") as f:
+        v = [int(x) for x in f.readline().split()[1:9]]
+    return (sum(v) - v[3] - v[4]) / os.sysconf("SC_CLK_TCK")
+
+
+def _ownCpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _load1():
+    with open("/proc/loadavg") as f:
+        return float(f.read().split()[0])
+
+
+class _OwnLoad:
+    """This process's share of the 1-minute load average: its CPU use (cores)
+    averaged with the kernel's 60 s time constant."""
+    ema, lastWall, lastCpu = 0.0, None, 0.0
+
+    @classmethod
+    def update(cls):
+        wall, cpu = time.monotonic(), _ownCpu()
+        if cls.lastWall is not None and wall > cls.lastWall:
+            w = math.exp(-(wall - cls.lastWall) / 60.0)
+            cls.ema = w * cls.ema + (1 - w) * (cpu - cls.lastCpu) / (wall - cls.lastWall)
+        cls.lastWall, cls.lastCpu = wall, cpu
+        return cls.ema
+
+
+MAX_LOAD, MAX_OTHERS = 1.5, 0.2
+BUSY_RULE = {"max_load1_less_own_share": MAX_LOAD - 1, "max_other_cores": MAX_OTHERS,
+             "note": "busy: the 1-minute load less this benchmark's own share above 0.5 (load > 1.5 for a "
+                     "one-thread run), or other processes using more than 0.2 cores during the run; busy runs "
+                     "are left out of 'clean'"}
+
+
+class LoadProbe:
+    """Start before a timed run; finish(wall) after it gives the run's load record."""
+
+    def __init__(self):
+        self.own = _OwnLoad.update()
+        self.load1 = _load1()
+        self.busy0, self.own0 = _busySeconds(), _ownCpu()
+
+    def finish(self, wall):
+        others = max(0.0, (_busySeconds() - self.busy0) - (_ownCpu() - self.own0)) / wall if wall > 0 else 0.0
+        othersLoad = max(0.0, self.load1 - self.own)
+        return {"load1": round(self.load1, 2), "own_load": round(self.own, 2), "other_cores": round(others, 2),
+                "own_cpu_s": _ownCpu() - self.own0, "busy": othersLoad > MAX_LOAD - 1 or others > MAX_OTHERS}
+
+
+def stats(values):
+    """{"n", "min", "median", "max"} of the values, or None without any
+    (nothing measured is written as null, never as a zero)."""
+    v = [x for x in values if x is not None]
+    if not v:
+        return None
+    return {"n": len(v), "min": min(v), "median": statistics.median(v), "max": max(v)}
+
+
+def summarise(runs, keys):
+    """clean / all statistics of each key over a list of run records (each
+    with a 'busy' flag): the figures every Python benchmark here reports."""
+    return {"clean": {k: stats([r.get(k) for r in runs if not r["busy"]]) for k in keys},
+            "all": {k: stats([r.get(k) for r in runs]) for k in keys}}
+
+
+def best(summary, key, stat="median"):
+    """(value, which runs) of a key: the quiet runs' figure, else all runs' (said so)."""
+    if summary["clean"].get(key):
+        return summary["clean"][key][stat], "quiet runs"
+    if summary["all"].get(key):
+        return summary["all"][key][stat], "all runs (every run busy)"
+    return None, "not measured"

@@ -19,7 +19,7 @@ tmp = "/tmp/archbench/runs"
 os.makedirs(tmp, exist_ok=True)
 
 ELEMENT_ARGS = ["50", "3", "1"]            # steps, cubes per axis (default size), repeats per process
-CUBES_STEPS = "20"                         # run_all.sh's default
+CUBES_STEPS = "600"                        # run_all.sh's default (one round per process: see below)
 SHOGI_STEPS = "200"                        # run_all.sh's default
 SPHERE_ARGS = ["--spheres", "5000", "--warm", "1000", "--steps", "200"]
 
@@ -28,7 +28,7 @@ def commands(build, tag, r):
     out = os.path.join(tmp, "%s_r%d" % (tag, r))
     return {
         "elements": ([os.path.join(build, "bench_elements")] + ELEMENT_ARGS, None),
-        "cubes27": (["/usr/bin/python3.11", "scripts/bench/bench_cubes27.py", "--steps", CUBES_STEPS,
+        "cubes27": (["/usr/bin/python3.11", "scripts/bench/bench_cubes27.py", "--steps", CUBES_STEPS, "--rounds", "1",
                      "--out", out + "_cubes"], os.path.join(out + "_cubes", "cubes27.json")),
         "shogi": (["/usr/bin/python3.11", "scripts/bench/arch/arch_shogi_cached.py", shogiCache, SHOGI_STEPS], None),
         "spheres": (["yade", "-j", "2", "-n", "-x", "scripts/bench/bench_spheres.py"] + SPHERE_ARGS

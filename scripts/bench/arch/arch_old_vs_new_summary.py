@@ -36,13 +36,32 @@ d = {"runs": runsAll}
 
 def figures(bench, r):
     f = {}
-    if bench == "elements":
+    if bench == "elements" and "meshes" in r:
+        # bench_elements' present form (Hilbert-ordered meshes, whole step
+        # reported): the 27-cube mesh; this harness flags whole processes, so
+        # the medians over all runs of the process are read.
+        for c in next(m for m in r["meshes"] if m["cubes_per_axis"] == 3)["cases"]:
+            short = {"saintVenantKirchhoff": "SVK", "stableNeoHookean": "SNH"}[c["law"]]
+            key = "elements %s %s %dth " % (short, c["mode"], c["threads"])
+            f[key + "element+integration ns/tet/step"] = c["all"]["element_integrate"]["median"]
+            f[key + "element-only ns/tet/step"] = c["all"]["element"]["median"]
+            f[key + "whole step ns/tet/step"] = c["all"]["whole_step"]["median"]
+    elif bench == "elements":
         for th in ("1", "2"):
             for law, short in (("saintVenantKirchhoff", "SVK"), ("stableNeoHookean", "SNH")):
                 for mode in ("viscous", "elastic"):
                     x = r["threads"][th][law][mode]
                     f["elements %s %s %sth element+integration ns/tet/step" % (short, mode, th)] = x["ns_per_tet_step_median"]
                     f["elements %s %s %sth element-only ns/tet/step" % (short, mode, th)] = x["element_ns_per_tet_step_median"]
+    elif bench == "cubes27" and r.get("benchmark") == "bench_cubes27":
+        # the moving scene (bench_cubes27.py since issue 16): medians of the process's rounds
+        for th, cases in r["threads"].items():
+            for case, c in cases.items():
+                f["cubes27 %s %sth step ms" % (case, th)] = c["all"]["step_ms"]["median"]
+            f["cubes27 ours %sth contact ms" % th] = cases["ours"]["all"]["contact_ms"]["median"]
+            f["cubes27 ours %sth elements ms" % th] = cases["ours"]["all"]["elements"]["median"]
+            if cases["ours"]["all"]["rebuild_step_ms"]:
+                f["cubes27 Verlet-rebuild step %sth ms" % th] = cases["ours"]["all"]["rebuild_step_ms"]["median"]
     elif bench == "cubes27":
         for th in ("1", "2"):
             for case in ("ours", "C", "B", "A"):

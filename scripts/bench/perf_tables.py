@@ -1,0 +1,163 @@
+"""The tables of doc/performance.md, printed (markdown) from the benchmarks'
+JSON, so that the doc is refreshed by pasting, never by retyping figures.
+
+    /usr/bin/python3.11 scripts/bench/perf_tables.py elements  bench/logs/elements_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json KERNEL_OPS.json]
+    /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27   bench/logs/cubes27_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py shogi     bench/logs/shogi_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
+
+A figure is "median (min-max)" over the runs taken on a quiet machine (no
+other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
+"n/N" the quiet runs out of all; when no run was quiet the figure is over all
+runs and marked "busy"."""
+import json
+import sys
+
+LAW = {"saintVenantKirchhoff": "SVK", "stableNeoHookean": "SNH (default)"}
+
+
+def fig(clean, all_, digits=1):
+    """'median (min-max) n/N' of the clean runs, or of all runs marked busy."""
+    if all_ is None:
+        return "not measured"
+    s, tag = (clean, "") if clean else (all_, " busy")
+    return "%.*f (%.*f–%.*f) %d/%d%s" % (digits, s["median"], digits, s["min"], digits, s["max"],
+                                        clean["n"] if clean else 0, all_["n"], tag)
+
+
+def elements(d):
+    print("Built as `qdem.addPiece` builds them (Hilbert order); label %r, %s; ns per tet per step, "
+          "median (min–max) of the quiet runs, quiet/all runs." % (d.get("label", ""), d["date"]))
+    for mesh in d["meshes"]:
+        print("\n%d tets (%d cubes of 6,144), %d nodes, %d steps per run:\n"
+              % (mesh["tets"], mesh["cubes_per_axis"] ** 3, mesh["nodes"], mesh["steps"]))
+        print("| law | mode | threads | whole step | element + integration | element only | whole step on CPU |")
+        print("| --- | --- | --- | --- | --- | --- | --- |")
+        for c in mesh["cases"]:
+            cl, al = c["clean"], c["all"]
+            print("| %s | %s | %d | %s | %s | %s | %s |" % (
+                LAW.get(c["law"], c["law"]), c["mode"], c["threads"], fig(cl["whole_step"], al["whole_step"]),
+                fig(cl["element_integrate"], al["element_integrate"]), fig(cl["element"], al["element"]),
+                fig(cl.get("whole_step_on_cpu"), al.get("whole_step_on_cpu"))))
+
+
+def roofline(d, elementsJson=None, opsJson=None):
+    print("Roofline program (`scripts/bench/roofline.cpp`, %s, %s): median (min–max) of the quiet runs, "
+          "quiet/all.  \"On CPU\": the same runs' work over the CPU time their threads held (what a core "
+          "delivers while it runs the loop; time-sharing with other processes removed).\n" % (d["isa"], d["date"]))
+    print("| measure | threads | wall clock | on CPU |")
+    print("| --- | --- | --- | --- |")
+    for r in d["results"]:
+        print("| %s | %d | %s %s | %s %s |" % (r["name"], r["threads"], fig(r["clean"], r["all"]), r["unit"],
+                                            fig(r["on_cpu"]["clean"], r["on_cpu"]["all"]), r["unit"]))
+    if elementsJson and opsJson:
+        distance(d, json.load(open(elementsJson)), json.load(open(opsJson)))
+
+
+def ceiling(d, name, threads):
+    """The best rate measured (max over quiet runs, else over all, on CPU)."""
+    for r in d["results"]:
+        if r["name"] == name and r["threads"] == threads:
+            return (r["on_cpu"]["clean"] or r["on_cpu"]["all"])["max"]
+    return None
+
+
+def distance(roof, el, ops):
+    """Element phase against its floors: flops / peak and bytes / bandwidth per tet."""
+    print("\nElement + integration against the machine (flops and bytes per tet from `%s`; ceilings: the best "
+          "on-CPU rates above; measured: the minimum over the runs on wall clock (quiet runs if any), and the "
+          "median of the whole step on CPU, which bounds element + integration from above):\n" % ops["source"])
+    print("| tets | law, mode | threads | flop floor | byte floor | measured (wall, min) | ÷ floor | "
+          "whole step on CPU (median) | ÷ floor |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for mesh in el["meshes"]:
+        inL3 = mesh["tets"] < 500000
+        for c in mesh["cases"]:
+            s = c["clean"]["element_integrate"] or c["all"]["element_integrate"]
+            cpu = c["clean"].get("whole_step_on_cpu") or c["all"].get("whole_step_on_cpu")
+            key = "%s %s" % (c["law"], c["mode"])
+            if key not in ops["per_tet"]:
+                continue
+            th = c["threads"]
+            flopNs = ops["per_tet"][key]["flops"] / ceiling(roof, "fma_peak", th)
+            byteNs = ops["per_tet"][key]["bytes"] / ceiling(roof, "triad_l3" if inL3 else "triad_dram", th)
+            floor = max(flopNs, byteNs)
+            print("| %d | %s %s | %d | %.2f | %.2f | %.1f | %.1f× | %s | %s |" % (
+                mesh["tets"], LAW.get(c["law"], c["law"]), c["mode"], th, flopNs, byteNs, s["min"], s["min"] / floor,
+                "%.1f" % cpu["median"] if cpu else "not measured",
+                "%.1f×" % (cpu["median"] / floor) if cpu else "—"))
+
+
+def ops(d):
+    print("| law, mode | FMA | MUL | ADD/SUB | other | elementBatch flops | + scatter, integration | bytes |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for key, k in d["kernel"].items():
+        law, mode = key.split()
+        p, t = k["per_tet"], d["per_tet"][key]
+        print("| %s %s | %.1f | %.1f | %.1f | %.1f | %.0f | %.0f | %.0f |" % (
+            LAW.get(law, law), mode, p["fma"], p["mul"], p["add_sub"], p["other"], k["flops_per_tet"],
+            t["flops"], t["bytes"]))
+
+
+def cubes27(d):
+    print("%d tets: %s; %s; ms per step, median (min–max) of the quiet rounds, quiet/all rounds; ours amortised "
+          "over its Verlet rebuilds, A/B/C fill their cell lists every step.\n" % (d["tets"], d["scene"], d["date"]))
+    print("| threads | case | amortised step | ordinary step | rebuild step | rebuilds | contacts | ns/tet (amortised) "
+          "| ns/tet on CPU |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for th, cases in sorted(d["threads"].items()):
+        for name, c in cases.items():
+            print("| %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                th, name, fig(c["clean"]["step_ms"], c["all"]["step_ms"], 2),
+                fig(c["clean"]["ordinary_step_ms"], c["all"]["ordinary_step_ms"], 2),
+                fig(c["clean"]["rebuild_step_ms"], c["all"]["rebuild_step_ms"], 2),
+                c["rebuilds_per_round"], fig(c["clean"]["contact_ms"], c["all"]["contact_ms"], 2),
+                fig(c["clean"]["ns_per_tet_step"], c["all"]["ns_per_tet_step"], 1),
+                fig(c["clean"].get("ns_per_tet_step_on_cpu"), c["all"].get("ns_per_tet_step_on_cpu"), 1)))
+    print("\nTargets (issue 16 target 2, 2 threads):")
+    for k, v in d["targets"].items():
+        print("- %s: target %s, measured %s" % (k, v["target"], "not measured" if v["measured"] is None
+                                                else "%.3g" % v["measured"]))
+
+
+def shogi(d):
+    print("Shogi scenes through `QdemEngine` (%s); ms per step, median (min–max) of quiet rounds.\n" % d["date"])
+    print("| scene | pieces | tets | threads | steps | first hits at step | most asleep | ms per step | "
+          "s wall per simulated s |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name, s in d["scenes"].items():
+        print("| %s | %d | %d | %d | %d | %s | %s | %s | %s |" % (
+            name, s["pieces"], s["tets"], s["threads"], s["steps"], ", ".join(map(str, s["first_hit_step"])),
+            max(r.get("most_asleep", 0) for r in s["runs"]),
+            fig(s["clean"]["ms_per_step"], s["all"]["ms_per_step"], 2) + " (on CPU %s)"
+            % fig(s["clean"].get("ms_per_step_on_cpu"), s["all"].get("ms_per_step_on_cpu"), 2),
+            fig(s["clean"]["wall_s_per_simulated_s"], s["all"]["wall_s_per_simulated_s"], 0)))
+
+
+def effects(d):
+    print("Effects on the 27-cube scene, %d threads, %d steps per variant, %d rounds interleaved (%s); ms per "
+          "step, median (min–max) of quiet rounds.\n" % (d["threads"], d["steps"], d["rounds"], d["date"]))
+    print("| effect | on | off | zero-valued | on, on CPU | off, on CPU | zero-valued, on CPU |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for name, e in d["effects"].items():
+        cells = [fig(e["clean"].get(v), e["all"].get(v), 2) if e["all"].get(v) else "—"
+                 for v in ("on", "off", "zero")]
+        c = e.get("on_cpu", {"clean": {}, "all": {}})
+        cells += [fig(c["clean"].get(v), c["all"].get(v), 2) if c["all"].get(v) else "—"
+                  for v in ("on", "off", "zero")]
+        print("| %s | %s |" % (name, " | ".join(cells)))
+
+
+def main():
+    kind, path = sys.argv[1], sys.argv[2]
+    d = json.load(open(path))
+    if kind == "roofline":
+        roofline(d, *sys.argv[3:5])
+    else:
+        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops}[kind](d)
+
+
+if __name__ == "__main__":
+    main()

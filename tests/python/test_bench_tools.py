@@ -1,0 +1,53 @@
+"""The benchmarks' bookkeeping (scripts/bench/benchutil.py, perf_tables.py):
+busy runs stay out of the figures, nothing measured is null (never a zero or
+a copy), and the doc's tables are printed from the committed JSON."""
+import glob
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+
+import benchutil  # noqa: E402
+
+PY = "/usr/bin/python3.11"   # the interpreter YADE runs (a child process, not YADE itself)
+
+
+def test_statistics_of_nothing_is_null_not_zero():
+    assert benchutil.stats([]) is None
+    assert benchutil.stats([None, None]) is None
+    assert benchutil.stats([3.0, 1.0, 2.0]) == {"n": 3, "min": 1.0, "median": 2.0, "max": 3.0}
+
+
+def test_busy_runs_are_left_out_of_the_clean_figures():
+    runs = [{"ms": 1.0, "busy": False}, {"ms": 2.0, "busy": False}, {"ms": 50.0, "busy": True}]
+    s = benchutil.summarise(runs, ["ms"])
+    assert s["clean"]["ms"] == {"n": 2, "min": 1.0, "median": 1.5, "max": 2.0}
+    assert s["all"]["ms"]["max"] == 50.0
+    assert benchutil.best(s, "ms") == (1.5, "quiet runs")
+    allBusy = benchutil.summarise([dict(r, busy=True) for r in runs], ["ms"])
+    assert allBusy["clean"]["ms"] is None
+    assert benchutil.best(allBusy, "ms") == (2.0, "all runs (every run busy)")
+
+
+def test_a_load_probe_sees_another_process_using_cpu():
+    """A run during which a child process spins is flagged busy."""
+    probe = benchutil.LoadProbe()
+    spinner = subprocess.Popen([PY, "-c", "import time\nt=time.time()\nwhile time.time()-t<1.0: pass"])
+    spinner.wait()
+    rec = probe.finish(1.0)
+    assert rec["other_cores"] > 0.5, rec
+    assert rec["busy"]
+
+
+@pytest.mark.parametrize("kind", ["elements", "roofline", "cubes27", "shogi", "effects", "ops"])
+def test_doc_tables_print_from_the_committed_json(kind):
+    name = {"ops": "kernel_ops"}.get(kind, kind)
+    files = sorted(glob.glob(os.path.join(ROOT, "bench", "logs", "%s_20??-??-??.json" % name)))
+    assert files, "no bench/logs/%s_<date>.json" % name
+    out = subprocess.run([PY, os.path.join(ROOT, "scripts", "bench", "perf_tables.py"), kind, files[-1]],
+                         capture_output=True, text=True, check=True).stdout
+    assert out.count("\n| ") >= 2, out
