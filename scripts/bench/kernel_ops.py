@@ -1,6 +1,6 @@
 """Flops and bytes per tet of the element + integration step, the first
-counted from the compiled code: the instructions of each elementBatch
-instance (pkg/element/ElementKernel.hpp, compiled in ElementPhase.cpp.o of
+counted from the compiled code: the instructions of each elementBlock
+(formerly elementBatch) instance (pkg/element/ElementKernel.hpp, compiled in ElementPhase.cpp.o of
 the build's libqdemcore.a) disassembled and counted by kind and vector width.
 
     /usr/bin/python3.11 scripts/bench/kernel_ops.py [--build build] [--tets 165888 --nodes 33507] > ops.json
@@ -25,7 +25,9 @@ touched once per step, every reuse from cache): tet data (4 int32 node ids,
 9 doubles of the inverse edge matrix, 1 reference volume = 96 B) plus per
 node: position read and written (48 B), velocity read and written (48 B),
 mass read (8 B), the force buffer written by the element phase and read by
-integration (48 B) = 152 B per node, times nodes per tet."""
+integration (64 B: the buffers hold 4 doubles per node, x y z and a pad that
+lets one aligned vector add do a node, NodeGather.hpp) = 168 B per node,
+times nodes per tet."""
 import argparse
 import json
 import os
@@ -40,7 +42,7 @@ K_LANES = 8
 SCATTER_FLOPS_PER_TET = 12
 INTEGRATE_FLOPS_PER_NODE = 20
 TET_BYTES = 4 * 4 + 9 * 8 + 8
-NODE_BYTES = 48 + 48 + 8 + 48
+NODE_BYTES = 48 + 48 + 8 + 64
 
 
 def disassemble(build):
@@ -57,7 +59,7 @@ def functions(asm):
     for line in asm.splitlines():
         m = re.match(r"^[0-9a-f]+ <(.*)>:$", line)
         if m:
-            cur = m.group(1) if "elementBatch<" in m.group(1) else None
+            cur = m.group(1) if re.search(r"element(Batch|Block)<", m.group(1)) else None
             if cur:
                 out[cur] = []
             continue
@@ -111,7 +113,7 @@ def main():
            "scatter_flops_per_tet": SCATTER_FLOPS_PER_TET, "integrate_flops_per_node": INTEGRATE_FLOPS_PER_NODE,
            "kernel": {}, "per_tet": {}}
     for sig, insns in functions(disassemble(a.build)).items():
-        m = re.search(r"elementBatch<qdem::(\w+), (true|false), (true|false)>", sig)
+        m = re.search(r"element(?:Batch|Block)<qdem::(\w+), (true|false), (true|false)>", sig)
         if not m:
             continue
         law = {"SaintVenantKirchhoff": "saintVenantKirchhoff", "StableNeoHookean": "stableNeoHookean"}.get(m.group(1))
