@@ -148,6 +148,10 @@ class MpyCoupling:
             x = np.array((p[0], p[1], p[2]))
             if len(boxes) and np.any(np.all((x - r <= boxes[:, 3:]) & (boxes[:, :3] <= x + r), axis=1)):
                 v, a = s.vel, s.angVel
+                if b.isClumpMember:  # the clump's motion at the member (YADE sets member velocities
+                    c = O.bodies[b.clumpId].state  # only in NewtonIntegrator: zero before its first step)
+                    a = c.angVel
+                    v = c.vel + a.cross(p - c.pos)
                 rows.append((bid,) + self.props[bid] + (p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2]))
         return obs, np.array(rows, dtype=float).reshape(-1, _ROW)
 

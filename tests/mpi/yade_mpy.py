@@ -7,7 +7,7 @@ from QDEM's split).  test_mpi.py compares the two.
 
 SCENE: 'drop' (twelve spheres falling on a block that rests on a floor) or
 'clump' (a three-sphere clump thrown along a slab on a floor), the scenes of
-tests/mpi/yade_spheres.py.  QDEM_THREADS: QDEM's threads (the serial
+tests/mpi/yade_spheres.py (the clump starting just out of contact).  QDEM_THREADS: QDEM's threads (the serial
 1-vs-2-thread licence).  Rank 0 writes the results as JSON to $QDEM_MPI_OUT
 (else prints 'RESULT {json}')."""
 import json
@@ -45,10 +45,11 @@ def build():
                        restitution=0.1, frictionPiece=0.6)
     piece = qdem.addPiece(qdem.boxMesh((0.3, 0.12, 0.03), (12, 5, 2)), mat, pos=(0, 0, 0.018))
     top = 0.033 + 0.003
-    parts = [utils.sphere((0.0 + dx, dz * 0.5, top + 0.0099 + dz), r, material=fm)
+    # (0.3 mm above the slab's reach: serially, spheres are listed by the collider from the second step on)
+    parts = [utils.sphere((0.0 + dx, dz * 0.5, top + 0.0103 + dz), r, material=fm)
              for dx, dz, r in ((0.0, 0.0, 0.01), (0.014, 0.004, 0.008), (-0.012, 0.006, 0.007))]
     clumpId, members = O.bodies.appendClumped(parts)
-    O.bodies[clumpId].state.vel = (1.5, 0.0, 0.0)
+    O.bodies[clumpId].state.vel = (1.5, 0.0, -0.3)
     O.bodies[clumpId].state.angVel = (0.0, 0.0, 2.0)
     return piece, [clumpId]
 
