@@ -170,8 +170,8 @@ void Domain::checkYadeAlike() const {
         throw InputError("QDEM under MPI: the ranks' YADE scenes differ (other walls, boxes, facets or spheres, or "
                          "the same ones in other states), so their forces cannot be shared. Under plain mpiexec every "
                          "rank must build and step the same YADE scene: seed random numbers alike on every rank, "
-                         "change bodies on every rank, and run QDEM on one process or under plain mpiexec, not "
-                         "under yade.mpy (which gives each rank other bodies: doc/parallel.md)");
+                         "and change bodies on every rank (under yade.mpy, step with mp.mpirun: QDEM then gathers "
+                         "the bodies from their owners itself, doc/parallel.md)");
 }
 
 void Domain::markCurrent() {

@@ -8,7 +8,8 @@ from QDEM's split).  test_mpi.py compares the two.
 SCENE: 'drop' (twelve spheres falling on a block that rests on a floor) or
 'clump' (a three-sphere clump thrown along a slab on a floor), the scenes of
 tests/mpi/yade_spheres.py (the clump starting just out of contact).  QDEM_THREADS: QDEM's threads (the serial
-1-vs-2-thread licence).  Rank 0 writes the results as JSON to $QDEM_MPI_OUT
+1-vs-2-thread licence).  QDEM_MPY_RUN_FIRST=1: an O.run
+before mp.mpirun (refused under mpy).  Rank 0 writes the results as JSON to $QDEM_MPI_OUT
 (else prints 'RESULT {json}')."""
 import json
 import os
@@ -61,6 +62,8 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall
                              [Ip2_FrictMat_FrictMat_FrictPhys()], [Law2_ScGeom_FrictPhys_CundallStrack()]),
              qdem.QdemEngine(label="qe", threads=THREADS), NewtonIntegrator(gravity=(0, 0, -9.81), damping=0.0)]
 O.dt = 0.5 * qe.stableTimeStep()  # noqa: F821 - YADE's label
+if os.environ.get("QDEM_MPY_RUN_FIRST") == "1":
+    O.run(1, True)  # refused under yade.mpy (test_mpi.py): QDEM steps with mp.mpirun there
 placed = qdem.parallel.assignSubdomains()  # spheres to the workers owning the surface near them ({} serially)
 core = qdem.defaultWorld().core
 x0 = np.array(core.pos, copy=True)
@@ -95,6 +98,8 @@ if ranks > 1:
     out["owners"] = [sorted(e) for e in every]
     out["sphereContactsPerRank"] = MPI.COMM_WORLD.allgather(mine)
     out["ownedNodes"] = MPI.COMM_WORLD.allgather(core.partitionStats.get("ownedNodes", 0))
+    # wall time of the mpy layer (gather, forces back; sphere-contact phase included) per step, per rank
+    out["layerSecondsPerStep"] = MPI.COMM_WORLD.allgather(qe.sphereCouplingTime() / max(core.iter, 1))  # noqa: F821
 out["spheres"] = [states[b] for b in movers]
 if qdem.parallel.isWriter():
     if os.environ.get("QDEM_MPI_OUT"):
