@@ -108,8 +108,9 @@ class MpyCoupling:
         self.rank = int(mp.rank)
         self.margin = margin
         self.comm = None            # QDEM's own duplicate of mpy's communicator
-        self._nBodies = -1
+        self._scanKey = None        # (bodies, collider runs) at the last scan
         self.obstacleIds = []       # the obstacles this rank owns (their ids, ascending)
+        self.myDescr = []           # their descriptions (_describe)
         self._sentDescr = False
         self.descr = {}             # rank -> its obstacles' descriptions
         self.coreObstacleIds = []   # every rank's, ascending: QDEM's obstacle order
@@ -130,7 +131,6 @@ class MpyCoupling:
         self.sphereBodies = [(b.id, b) for b in O.bodies if b is not None and not b.isSubdomain
                              and b.subdomain == self.rank and type(b.shape).__name__ == "Sphere"]
         self.props = {bid: sphereProperties(O, b) for bid, b in self.sphereBodies}
-        self._nBodies = len(O.bodies)
 
     def _myRows(self, O, boxes):
         """This rank's obstacle states (k, 14) and its spheres near a piece (n, 16)."""
@@ -161,8 +161,13 @@ class MpyCoupling:
         core = self.world.core
         if self.comm is None:
             self.comm = self.mp.comm.Dup()
-        if len(O.bodies) != self._nBodies:
+        # Bodies change hands (mpy's reallocation, copies of other ranks'
+        # bodies arriving or leaving) only when mpy runs the collider: scan
+        # what this rank owns again then, and when the body count changes.
+        key = (len(O.bodies), _colliderRuns(O))
+        if key != self._scanKey:
             self._scan(O)
+            self._scanKey = key
         b = np.array(core.pieceBounds()) if core.nPieces else np.zeros((0, 6))  # (collective under MPI)
         m = self.margin * np.max(b[:, 3:] - b[:, :3], axis=1, initial=0.0)[:, None] if len(b) else 0.0
         boxes = np.hstack([b[:, :3] - m, b[:, 3:] + m]) if len(b) else b
@@ -226,6 +231,13 @@ class MpyCoupling:
                 if bid in mine and np.any(f):
                     O.forces.addF(bid, Vector3(f[0], f[1], f[2]))
                     O.forces.addT(bid, Vector3(f[3], f[4], f[5]))
+
+
+def _colliderRuns(O):
+    for e in O.engines:
+        if type(e).__name__ == "InsertionSortCollider":
+            return e.numAction
+    return 0
 
 
 def _describe(b):

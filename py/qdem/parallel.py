@@ -10,7 +10,6 @@ copy of YADE moves alike.  After each step (QdemEngine.gatherPeriod)
 every rank learns every node's state again, so scripts read ``piece.pos`` as
 usual; rank 0 alone writes files."""
 import os
-import sys
 
 from . import _core
 
