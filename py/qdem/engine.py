@@ -225,6 +225,12 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         mp = mpyglue.module() if getattr(O, "splitted", False) else None  # (set by yade.mpy's split)
         if mp is not None and self._mpy is None:
             self._mpy = mpyglue.MpyCoupling(self.world, mp, float(self.sphereMargin))
+        elif mp is None and self._mpy is not None:
+            # mpy merged the scene (mergeScene, mpirun(withMerge=True)): a rank
+            # stepping alone would wait forever in QDEM's collectives.
+            raise RuntimeError("qdem: under yade.mpy QDEM steps only inside mp.mpirun, on every rank; this scene "
+                               "was merged (mp.mergeScene or withMerge=True): read it, or call mp.mpirun again "
+                               "(doc/parallel.md, 'Under yade.mpy')")
         g = yadeglue.findGravity(O)
         if not all(math.isfinite(x) for x in g):
             raise ValueError("QdemEngine: NewtonIntegrator.gravity = %s is not finite: set a finite gravity "
