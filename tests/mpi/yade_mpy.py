@@ -9,7 +9,8 @@ SCENE: 'drop' (twelve spheres falling on a block that rests on a floor) or
 'clump' (a three-sphere clump thrown along a slab on a floor), the scenes of
 tests/mpi/yade_spheres.py (the clump starting just out of contact).  QDEM_THREADS: QDEM's threads (the serial
 1-vs-2-thread licence).  QDEM_MPY_RUN_FIRST=1: an O.run
-before mp.mpirun (refused under mpy).  Rank 0 writes the results as JSON to $QDEM_MPI_OUT
+before mp.mpirun (refused under mpy); QDEM_MPY_MERGE=1: mp.mergeScene()
+at the end and a step on the master (refused).  Rank 0 writes the results as JSON to $QDEM_MPI_OUT
 (else prints 'RESULT {json}')."""
 import json
 import os
@@ -101,6 +102,13 @@ if ranks > 1:
     # wall time of the mpy layer (gather, forces back; sphere-contact phase included) per step, per rank
     out["layerSecondsPerStep"] = MPI.COMM_WORLD.allgather(qe.sphereCouplingTime() / max(core.iter, 1))  # noqa: F821
 out["spheres"] = [states[b] for b in movers]
+if os.environ.get("QDEM_MPY_MERGE") == "1" and ranks > 1:
+    mp.mergeScene()  # collective: the master gets the whole YADE scene back, for reading
+    if mp.rank == 0:
+        try:
+            O.run(1, True)  # refused: QDEM steps only inside mp.mpirun, on every rank
+        except RuntimeError as e:
+            out["mergedStep"] = str(e)
 if qdem.parallel.isWriter():
     if os.environ.get("QDEM_MPI_OUT"):
         with open(os.environ["QDEM_MPI_OUT"], "w") as f:

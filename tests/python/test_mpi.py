@@ -428,6 +428,9 @@ def test_yade_mpy_spheres_and_clump_as_serially(scene):
     if scene == "drop":  # spheres on both workers, pairs computed on both
         assert sum(len(o) > 0 for o in r["owners"]) == 2
         assert sum(n > 0 for n in r["sphereContactsPerRank"]) == 2
+        # After mp.mergeScene() a step on the master alone is refused, not left waiting.
+        merged = _yadeMpy(scene, P=3, QDEM_MPY_MERGE="1", QDEM_MPI_STEPS="50")
+        assert "QDEM steps only inside mp.mpirun" in merged["mergedStep"]
 
 
 def test_yade_mpy_stepping_outside_mpirun_is_refused_on_every_rank():
