@@ -13,37 +13,53 @@ namespace qdem {
 
 Domain::Domain(World& w, std::shared_ptr<Communicator> comm) : w_(w), comm_(std::move(comm)) {}
 
-void Domain::build(const PartitionOptions& optIn) {
-    PartitionOptions opt = optIn;
-    opt.nRanks = size();
-    std::vector<int32_t> pieceBegin(w_.pieces.size() + 1, 0);
-    for (std::size_t p = 0; p < w_.pieces.size(); ++p) pieceBegin[p + 1] = w_.pieces[p].nodeEnd;
+PartitionInput Domain::partitionInput(World& w, std::vector<int32_t>& pieceBegin, std::vector<double>& extra) {
+    pieceBegin.assign(w.pieces.size() + 1, 0);
+    for (std::size_t p = 0; p < w.pieces.size(); ++p) pieceBegin[p + 1] = w.pieces[p].nodeEnd;
     PartitionInput in;
-    in.nNodes = static_cast<int32_t>(w_.nNodes());
-    in.nTets = static_cast<int32_t>(w_.nTets());
-    in.pos = w_.pos.data();
-    in.tetNodes = w_.tetNodes.data();
-    in.nPieces = static_cast<int32_t>(w_.pieces.size());
+    in.nNodes = static_cast<int32_t>(w.nNodes());
+    in.nTets = static_cast<int32_t>(w.nTets());
+    in.pos = w.pos.data();
+    in.tetNodes = w.tetNodes.data();
+    in.nPieces = static_cast<int32_t>(w.pieces.size());
     in.pieceNodeBegin = pieceBegin.data();
     // The contact work of each surface node: its contacts of the last step,
     // read from the history columns (slots holding a contact are >= 0).
-    std::vector<double> extra;
-    if (w_.settings.contactWork > 0 && w_.iter > 0) {
-        extra.assign(w_.nNodes(), 0.0);
-        const std::size_t ns = w_.surfNodes.size();
-        for (const auto& c : w_.stateColumns().refs) {
+    extra.clear();
+    if (w.settings.contactWork > 0 && w.iter > 0) {
+        extra.assign(w.nNodes(), 0.0);
+        const std::size_t ns = w.surfNodes.size();
+        for (const auto& c : w.stateColumns().refs) {
             if ((c.name != "slotBody" && c.name != "ppKey") || ns == 0) continue;
             const auto* key = static_cast<const int32_t*>(c.data);
             const std::size_t k = c.count / ns;
             for (std::size_t i = 0; i < ns; ++i)
                 for (std::size_t j = 0; j < k; ++j)
-                    if (key[i * k + j] >= 0) extra[w_.surfNodes[i]] += w_.settings.contactWork;
+                    if (key[i * k + j] >= 0) extra[w.surfNodes[i]] += w.settings.contactWork;
         }
         in.nodeExtraWeight = extra.data();
     }
+    return in;
+}
+
+Partition splitWorld(const PartitionInput& in, PartitionOptions opt, int nRanks) {
+    if (opt.firstRank < 0 || opt.firstRank >= nRanks)
+        throw InputError("QDEM under MPI: the first rank given a share (" + std::to_string(opt.firstRank) +
+                         ") must lie in [0, " + std::to_string(nRanks - 1) + "]: there are " + std::to_string(nRanks) +
+                         " ranks");
+    opt.nRanks = nRanks - opt.firstRank;
+    Partition p = partitionHilbert(in, opt);
+    shiftRanks(p, opt.firstRank);
+    return p;
+}
+
+void Domain::build(const PartitionOptions& opt) {
+    std::vector<int32_t> pieceBegin;
+    std::vector<double> extra;
+    const PartitionInput in = partitionInput(w_, pieceBegin, extra);
     // Every rank holds the same positions here (the same script built them,
     // or gatherAll made them so): every rank computes the same split.
-    part_ = partitionHilbert(in, opt);
+    part_ = splitWorld(in, opt, size());
     checkSameEverywhere(in);
     halo_ = elementHalo(part_, in, rank());
     ghostForce_.assign(3 * w_.nNodes(), 0.0);
@@ -154,8 +170,8 @@ void Domain::checkYadeAlike() const {
         throw InputError("QDEM under MPI: the ranks' YADE scenes differ (other walls, boxes, facets or spheres, or "
                          "the same ones in other states), so their forces cannot be shared. Under plain mpiexec every "
                          "rank must build and step the same YADE scene: seed random numbers alike on every rank, "
-                         "change bodies on every rank, and run QDEM on one process or under plain mpiexec, not "
-                         "under yade.mpy (which gives each rank other bodies: doc/parallel.md)");
+                         "and change bodies on every rank (under yade.mpy, step with mp.mpirun: QDEM then gathers "
+                         "the bodies from their owners itself, doc/parallel.md)");
 }
 
 void Domain::markCurrent() {
@@ -439,7 +455,7 @@ void Domain::finishStep(const std::string& error) {
     v.push_back(v[nv - 1]);
     comm_->treeReduce(v.data(), static_cast<int>(nv), 1);
     const double sumLoad = v[nv - 1], maxLoad = v[nv];
-    loadImbalance = sumLoad > 0 ? maxLoad * size() / sumLoad : 1.0;
+    loadImbalance = sumLoad > 0 ? maxLoad * (size() - part_.firstRank) / sumLoad : 1.0;  // over the ranks with a share
     seconds += omp_get_wtime() - t0;
     if (v[0] > 0) {
         const std::string msg = agree(error);

@@ -27,6 +27,9 @@ namespace qdem {
 
 class World;
 
+// The split over nRanks ranks, those below opt.firstRank owning nothing.
+Partition splitWorld(const PartitionInput& in, PartitionOptions opt, int nRanks);
+
 class Domain {
 public:
     Domain(World& w, std::shared_ptr<Communicator> comm);
@@ -34,6 +37,9 @@ public:
     int size() const { return comm_->size(); }
     Communicator& comm() { return *comm_; }
 
+    // The partitioner's input for the world as it stands: current positions,
+    // and the contact work of the last step (pieceBegin and extra hold storage).
+    static PartitionInput partitionInput(World& w, std::vector<int32_t>& pieceBegin, std::vector<double>& extra);
     // Splits the world as it stands (all pieces added) and builds the halo.
     void build(const PartitionOptions& opt);
     bool built() const { return built_; }

@@ -204,9 +204,20 @@ Partition partitionByKey(const PartitionInput& in, const PartitionOptions& opt, 
 
 double Partition::imbalance() const {
     double sum = 0, mx = 0;
-    for (double w : rankWeight) sum += w, mx = std::max(mx, w);
-    if (sum <= 0 || rankWeight.empty()) return 1.0;
-    return mx / (sum / rankWeight.size());
+    const std::size_t from = std::min(rankWeight.size(), static_cast<std::size_t>(std::max(0, firstRank)));
+    for (std::size_t r = from; r < rankWeight.size(); ++r) sum += rankWeight[r], mx = std::max(mx, rankWeight[r]);
+    if (sum <= 0 || rankWeight.size() == from) return 1.0;
+    return mx / (sum / static_cast<double>(rankWeight.size() - from));
+}
+
+void shiftRanks(Partition& p, int first) {
+    if (first <= 0) return;
+    for (int32_t& o : p.nodeOwner) o += first;
+    for (int32_t& o : p.tetOwner) o += first;
+    p.rankWeight.insert(p.rankWeight.begin(), static_cast<std::size_t>(first), 0.0);
+    p.keyStart.insert(p.keyStart.begin(), static_cast<std::size_t>(first), uint64_t(0));  // empty ranges [0, 0)
+    p.nRanks += first;
+    p.firstRank += first;
 }
 
 Partition partitionHilbert(const PartitionInput& in, const PartitionOptions& opt) {

@@ -33,6 +33,10 @@ struct PartitionOptions {
     // whole piece.
     double wholePieceFraction = 0.5;
     double tolerance = 0.05;
+    // Ranks below this one own nothing: the split is made over the others
+    // (shiftRanks).  Under yade.mpy its master, rank 0, holds the walls and
+    // no spheres, so QDEM's nodes go to the workers only (doc/parallel.md).
+    int firstRank = 0;
 };
 
 struct Partition {
@@ -41,9 +45,14 @@ struct Partition {
     std::vector<int32_t> tetOwner;   // per tet: the rank computing it (the lowest owner of its nodes)
     std::vector<double> rankWeight;  // per rank: tets + extra weight it owns
     std::vector<uint64_t> keyStart;  // per rank + 1: the key range [keyStart[r], keyStart[r+1]) (diagnostics)
+    int firstRank = 0;               // ranks below own nothing (PartitionOptions::firstRank)
 
-    double imbalance() const;  // max / mean of rankWeight (1 = perfect)
+    double imbalance() const;  // max / mean of rankWeight over the ranks from firstRank (1 = perfect)
 };
+
+// Renumbers a split made over nRanks ranks as ranks first .. first+nRanks-1,
+// ranks 0 .. first-1 owning nothing (PartitionOptions::firstRank).
+void shiftRanks(Partition& p, int first);
 
 // The weighted Hilbert split.  Deterministic: the same input gives the same
 // split on every rank (ties broken by node id).  O(N log N) (one sort).

@@ -27,7 +27,8 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
 #endif
     world.def(
         "setCommunicator",
-        [](World& w, py::object comm) {
+        [](World& w, py::object comm, int firstRank) {
+            w.partitionOptions.firstRank = 0;
             if (comm.is_none()) return w.setCommunicator(nullptr);
 #ifdef QDEM_HAVE_MPI
             static bool imported = false;
@@ -37,15 +38,49 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
             }
             MPI_Comm* c = PyMPIComm_Get(comm.ptr());
             if (!c) throw py::error_already_set();
+            int size = 1;
+            MPI_Comm_size(*c, &size);
+            if (firstRank < 0 || (size > 1 && firstRank >= size))
+                throw InputError("setCommunicator: firstRank = " + std::to_string(firstRank) + " must lie in [0, " +
+                                 std::to_string(size - 1) + "] (the ranks below it own no QDEM node)");
+            w.partitionOptions.firstRank = firstRank;
             w.setCommunicator(std::make_shared<MpiCommunicator>(*c));
 #else
             throw InputError("this build of qdem has no MPI (Open MPI or mpi4py were missing when it was built): "
                              "install libopenmpi-dev openmpi-bin python3-mpi4py and build again");
 #endif
         },
-        py::arg("comm"),
+        py::arg("comm"), py::arg("firstRank") = 0,
         "Splits the world across the ranks of an mpi4py communicator (duplicated inside) from the next step on; "
-        "None: back to one process.  Every rank must have built the same scene.");
+        "None: back to one process.  Every rank must have built the same scene.  Ranks below firstRank own no "
+        "node (yade.mpy's master: doc/parallel.md).");
+    world.def(
+        "splitPreview",
+        [](World& w, int nRanks, int firstRank) {
+            // The split the next step would make over nRanks ranks, computed
+            // here without MPI (before yade.mpy places its bodies).
+            if (nRanks < 1) throw InputError("splitPreview: nRanks must be >= 1");
+            std::vector<int32_t> pieceBegin;
+            std::vector<double> extra;
+            PartitionOptions opt = w.partitionOptions;
+            opt.firstRank = firstRank;
+            const Partition p = nRanks == 1 ? Partition{} : splitWorld(Domain::partitionInput(w, pieceBegin, extra), opt, nRanks);
+            py::array_t<int32_t> a(static_cast<py::ssize_t>(w.nNodes()));
+            int32_t* o = a.mutable_data();
+            for (std::size_t i = 0; i < w.nNodes(); ++i) o[i] = nRanks == 1 ? 0 : p.nodeOwner[i];
+            return a;
+        },
+        py::arg("nRanks"), py::arg("firstRank") = 0,
+        "Per node, the rank that would own it if the world were split now over nRanks ranks, those below "
+        "firstRank owning nothing (the split the first step makes; no MPI needed).");
+    world.def_property_readonly(
+        "surfaceNodeIds",
+        [](const World& w) {
+            py::array_t<int32_t> a(static_cast<py::ssize_t>(w.surfNodes.size()));
+            for (std::size_t i = 0; i < w.surfNodes.size(); ++i) a.mutable_data()[i] = w.surfNodes[i];
+            return a;
+        },
+        "Global ids of the surface nodes (every piece), ascending.");
     world.def(
         "gatherAll",
         [](World& w) {

@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, lifecycle, parallel, setupcheck, yadeglue
+from . import _core, lifecycle, mpyglue, parallel, setupcheck, yadeglue
 from .spheres import SphereCoupling
 from .attrs import Attr, AttrObject, WorldSetting, documented, worldSettings
 from .yadeclass import EngineMeta
@@ -114,6 +114,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         self._lastCheckTime = None
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
+        self._mpy = None      # MpyCoupling under yade.mpy (mpyglue.py)
 
     def __repr__(self):
         return "<QdemEngine%s at %#x>" % (" %r" % self.label if self.label else "", id(self))
@@ -128,9 +129,10 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         current YADE obstacles included.  combinedExplicit and combinedImplicit are the
         combined limit with the viscous force integrated explicitly and implicitly
         (viscousIntegration); combined is the one in force."""
-        self._syncObstacles()
-        if self._spheres is not None and self.spheres:
-            self._spheres.listAll(O)  # any sphere may come near: bound them all
+        if self._mpy is None:  # (under yade.mpy the step's allgather set them, alike on every rank)
+            self._syncObstacles()
+            if self._spheres is not None and self.spheres:
+                self._spheres.listAll(O)  # any sphere may come near: bound them all
         return self.world.core.stableDt()
 
     def stableTimeStep(self):
@@ -176,7 +178,8 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
     def sphereCouplingTime(self):
         """Wall time [s] spent so far on coupling with YADE spheres: lists, states,
         sphere-surface contacts, forces back to O.forces (for benchmarks)."""
-        return self._spheres.seconds if self._spheres is not None else 0.0
+        return (self._spheres.seconds if self._spheres is not None else 0.0) + \
+            (self._mpy.seconds if self._mpy is not None else 0.0)
 
     def stepOnce(self):
         """One QDEM step at O.dt without YADE's loop (for tests and debugging)."""
@@ -219,27 +222,45 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             self._runStart = (O.iter, stop, core.iter, time.time())
         if self.threads:
             _core.setThreads(int(self.threads))
-        self._syncObstacles()
+        mp = mpyglue.module() if getattr(O, "splitted", False) else None  # (set by yade.mpy's split)
+        if mp is not None and self._mpy is None:
+            self._mpy = mpyglue.MpyCoupling(self.world, mp, float(self.sphereMargin))
+        elif mp is None and self._mpy is not None:
+            # mpy merged the scene (mergeScene, mpirun(withMerge=True)): a rank
+            # stepping alone would wait forever in QDEM's collectives.
+            raise RuntimeError("qdem: under yade.mpy QDEM steps only inside mp.mpirun, on every rank; this scene "
+                               "was merged (mp.mergeScene or withMerge=True): read it, or call mp.mpirun again "
+                               "(doc/parallel.md, 'Under yade.mpy')")
         g = yadeglue.findGravity(O)
         if not all(math.isfinite(x) for x in g):
             raise ValueError("QdemEngine: NewtonIntegrator.gravity = %s is not finite: set a finite gravity "
                              "vector" % (tuple(g),))
         core.gravity = g
         core.trackEnergy = bool(O.trackEnergy)
-        coupling = self._spheres if self.spheres and core.nPieces else None
+        coupling = None
+        if self._mpy is not None:
+            # yade.mpy: obstacles and spheres gathered from their owners (mpyglue.py)
+            t0 = time.perf_counter()
+            self._mpy.margin = float(self.sphereMargin)
+            self._mpy.beforeStep(O)
+            self._mpy.seconds += time.perf_counter() - t0
+        else:
+            self._syncObstacles()
+            coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
             t0 = time.perf_counter()
             coupling.margin = float(self.sphereMargin)
             coupling.beforeStep(O)
             coupling.seconds += time.perf_counter() - t0
-        elif core.nSpheres:
+        elif core.nSpheres and self._mpy is None:
             core.setSpheres(*_NO_SPHERES)
         dt = O.dt
-        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, coupling.version if coupling else None)
+        spheresVersion = coupling.version if coupling else (self._mpy.version if self._mpy else None)
+        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, spheresVersion)
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
-        if parallel.launchedSize() > 1 and core.mpiSize == 1:
+        if core.mpiSize == 1 and (parallel.launchedSize() > 1 or self._mpy is not None):
             parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
         if core.iter == 0 and core.time == 0.0:
             # A world's first step: its clock starts at YADE's (the engine may
@@ -249,7 +270,11 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             from .recorder import initialFrames
             initialFrames(self.world)
         core.step(dt)
-        if self._ids:
+        if self._mpy is not None:
+            t0 = time.perf_counter()
+            self._mpy.afterStep(O)
+            self._mpy.seconds += time.perf_counter() - t0 + core.sphereSeconds
+        elif self._ids:
             yadeglue.applyReactions(O, self._ids, core.obstacleReactions())
         if coupling is not None:
             t0 = time.perf_counter()

@@ -87,11 +87,7 @@ def sceneBlob(world, O):
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def restoreWorld(blob):
-    """A new default world built from a sceneBlob string; returns (world, engine states)."""
-    from . import world as worldModule
-    from .material import QdemMat
-    from .piece import Piece
+def _readBlob(blob):
     try:
         data = np.load(io.BytesIO(base64.b64decode(blob)))
         meta = json.loads(data["meta"].tobytes().decode())
@@ -100,6 +96,34 @@ def restoreWorld(blob):
     if meta.get("format") != FORMAT:
         raise ValueError("O.load: the scene's QDEM state has format %r, this qdem reads %d"
                          % (meta.get("format"), FORMAT))
+    return data, meta
+
+
+def _sameWorld(w, blob):
+    """Does world `w` hold the pieces (meshes, materials) the blob holds?"""
+    data, meta = _readBlob(blob)
+    if len(w.pieces) != len(meta["pieces"]):
+        return False
+    for i, p in enumerate(w.pieces):
+        if not (np.array_equal(np.asarray(p.refPos), data["refPos%d" % i])
+                and np.array_equal(np.asarray(p.tets, dtype=np.int32), data["tets%d" % i])):
+            return False
+    return True
+
+
+def restoreWorld(blob, into=None):
+    """A new default world built from a sceneBlob string; returns (world, engine
+    states).  With `into`, a world holding the same pieces (_sameWorld): only
+    its state and settings are loaded."""
+    from . import world as worldModule
+    from .material import QdemMat
+    from .piece import Piece
+    data, meta = _readBlob(blob)
+    if into is not None:
+        for k, v in meta["settings"].items():
+            setattr(into.core, k, v)
+        into.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
+        return into, meta["engines"]
     worldModule.reset()
     w = worldModule.defaultWorld()
     mats = [QdemMat(**m) for m in meta["materials"]]
@@ -173,7 +197,13 @@ def afterLoad(O):
                                "with 'import qdem' at its top, or rebuild the pieces and use qdem.loadState "
                                "with a file written by qdem.saveState.")
         return
-    _, states = restoreWorld(blob)
+    if parallel._mpyInUse() and _sameWorld(worldModule.defaultWorld(), blob):
+        # yade.mpy's split: a worker receives the master's scene, whose QDEM
+        # world its own script built alike.  Its state goes into that world,
+        # so the script's Piece objects stay live on the worker.
+        states = restoreWorld(blob, into=worldModule.defaultWorld())[1]
+    else:
+        _, states = restoreWorld(blob)
     O.tags[TAG] = ""  # the live scene keeps no stale copy (YADE's tags cannot be deleted)
     _rebind(O, states)
 
@@ -208,9 +238,11 @@ def engineFor(qid):
             return obj
     from . import parallel
     if parallel._mpyInUse():
-        # A yade.mpy worker: mpy replaced its scene by the master's, whose
-        # QdemEngine arrives as a plain PyRunner naming the master's engine.
-        raise RuntimeError(parallel.MPY_REFUSAL)
+        # A yade.mpy worker whose scene mpy replaced by the master's without
+        # QDEM's state (O.sceneToString not wrapped: qdem imported too late).
+        raise RuntimeError("qdem: a yade.mpy worker received a scene whose QdemEngine has no QDEM state: "
+                           "'import qdem' at the top of the script, before building the scene and calling "
+                           "mp.mpirun, on every rank (doc/parallel.md, 'Under yade.mpy')")
     raise RuntimeError("qdem: no engine for command id %s: this scene was saved without its QDEM state. "
                        "Re-run the script that built it with 'import qdem' before O.save." % qid)
 

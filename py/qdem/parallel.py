@@ -10,7 +10,6 @@ copy of YADE moves alike.  After each step (QdemEngine.gatherPeriod)
 every rank learns every node's state again, so scripts read ``piece.pos`` as
 usual; rank 0 alone writes files."""
 import os
-import sys
 
 from . import _core
 
@@ -45,34 +44,37 @@ def isWriter():
     return rank() == 0
 
 
-MPY_REFUSAL = (
-    "qdem: the scene runs under yade.mpy (mp.mpirun), which QDEM cannot join: mpy sends each worker the master's "
-    "scene (the QdemEngine arrives as a plain PyRunner, without QDEM's world) and gives each rank other bodies "
-    "(walls on rank 0 only, each worker its own spheres), while QDEM's split needs every rank to see the same "
-    "walls and spheres (doc/parallel.md, 'YADE's MPI mode'). Run the same script without mpy: "
-    "`mpiexec -n P yade -n -x script.py` splits the QDEM pieces over P ranks with YADE spheres, clumps, walls, "
-    "boxes and facets on every rank.")
+MPY_UNSPLIT = (
+    "qdem: the script imported yade.mpy and runs on %d ranks, but steps QDEM outside mp.mpirun (O.run, O.step): "
+    "under yade.mpy step with mp.mpirun(n) only (QDEM then joins mpy's split: doc/parallel.md, 'Under "
+    "yade.mpy'), or do not import yade.mpy and run the script under plain `mpiexec -n P yade -n -x script.py`.")
 
 
 def _mpyInUse():
-    mp = sys.modules.get("yade.mpy")
-    return mp is not None and getattr(mp, "comm", None) is not None and (getattr(mp, "numThreads", 1) or 1) > 1
+    from . import mpyglue
+    return mpyglue.module() is not None
 
 
 def attach(world):
     """Splits `world` across the ranks mpiexec started (a no-op serially, and
     when it is already split).  Called by QdemEngine at its first step."""
-    size = launchedSize()
+    from . import mpyglue
+    mp = mpyglue.module()
+    size = mp.numThreads if mp is not None else launchedSize()
     core = world.core
     if size <= 1 or core.mpiSize > 1:
         return
-    if _mpyInUse():
-        raise RuntimeError(MPY_REFUSAL)
     if not _core.hasMPI:
         raise RuntimeError(
             "qdem: started by mpiexec with %d ranks, but this build of qdem has no MPI (Open MPI or mpi4py were "
             "missing when it was built): apt-get install libopenmpi-dev openmpi-bin python3-mpi4py, then make "
             "build again (or run without mpiexec)" % size)
+    if mp is not None:
+        from yade import O
+        if not getattr(O, "splitted", False):
+            raise RuntimeError(MPY_UNSPLIT % size)
+        mpyglue.attach(world)  # over mpy's communicator, its master owning no node
+        return
     from mpi4py import MPI
     core.setCommunicator(MPI.COMM_WORLD)
 
@@ -87,3 +89,13 @@ def summedCounts(core):
     keys = sorted(c)
     every = MPI.COMM_WORLD.allgather([c[k] for k in keys])
     return {k: sum(r[i] for r in every) for i, k in enumerate(keys)}
+
+
+def assignSubdomains(world=None):
+    """Under yade.mpy, before ``mp.mpirun``: sets each YADE sphere's and
+    clump's ``Body.subdomain`` from QDEM's own split, so that it lives on the
+    worker owning the piece surface nearest to it (mpyglue.assignSubdomains;
+    doc/parallel.md, 'Under yade.mpy').  A no-op serially and under plain
+    mpiexec; returns {rank: bodies placed}."""
+    from . import mpyglue
+    return mpyglue.assignSubdomains(world)

@@ -420,3 +420,24 @@ TEST(Partition, HalosOfSomeRanksEqualTheirsAmongAll) {
     for (int r = 0; r < 9; ++r) contactGhosts += all[r].nGhosts(), elementGhosts += noContact[r].nGhosts();
     EXPECT_GT(contactGhosts, elementGhosts);
 }
+
+// yade.mpy's master owns no node (PartitionOptions::firstRank): the split over
+// P ranks from rank 1 is the split over P - 1 ranks, renumbered; rank 0 has
+// no weight, no tet, no ghost, and the imbalance counts only the others.
+TEST(Partition, RanksBelowFirstRankOwnNothing) {
+    auto s = cubes(3, 3);
+    const PartitionInput in = s->input();
+    for (int P : {2, 3, 4}) {
+        const Partition ref = partitionHilbert(in, ranks(P - 1));
+        Partition p = partitionHilbert(in, ranks(P - 1));
+        shiftRanks(p, 1);
+        checkOwnership(p, in, P);
+        for (std::size_t n = 0; n < p.nodeOwner.size(); ++n) ASSERT_EQ(p.nodeOwner[n], ref.nodeOwner[n] + 1);
+        for (std::size_t t = 0; t < p.tetOwner.size(); ++t) ASSERT_EQ(p.tetOwner[t], ref.tetOwner[t] + 1);
+        EXPECT_EQ(p.rankWeight[0], 0.0);
+        EXPECT_EQ(p.imbalance(), ref.imbalance()) << P;
+        const std::vector<Halo> hs = s->halos(p, in, 0.5);
+        checkHalos(p, in, hs);
+        EXPECT_TRUE(hs[0].ownedNodes.empty() && hs[0].ownedTets.empty() && hs[0].nGhosts() == 0u);
+    }
+}

@@ -364,14 +364,94 @@ def test_yade_spheres_rebalance_and_save_load_keep_histories(tmp_path):
     assert rl["dSphere"] <= max(10 * dsThreads, 1e-13) * scale
 
 
-def test_yade_mpy_is_refused_on_every_rank_without_a_hang():
-    # YADE's own MPI mode gives each rank other bodies (doc/parallel.md, "YADE's
-    # MPI mode"): refused on the master at the first step and on the workers,
-    # whose scene mpy replaced by the master's, with the same reasons and fix.
+def _yadeMpy(scene, P=1, threads=1, **envExtra):
+    """Runs tests/mpi/yade_mpy.py SCENE serially (P = 1: mp.mpirun falls back
+    to O.run) or on P ranks under yade.mpy; its JSON."""
+    import json
+    import os
+    import subprocess
+    import tempfile
+    from mpi_launch import ROOT, env
+    fd, out = tempfile.mkstemp(suffix=".json")
+    os.close(fd)
+    args = ["yade", "-n", "-x", "tests/mpi/yade_mpy.py", scene]
+    extra = dict(envExtra, QDEM_THREADS=str(threads), QDEM_MPI_OUT=out)
+    try:
+        if P == 1:
+            e = env()
+            e.update(extra, OMP_NUM_THREADS=str(threads))
+            p = subprocess.run(["timeout", "300"] + args, cwd=ROOT, env=e, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True)
+            rc, log = p.returncode, p.stdout
+        else:
+            saved = dict(os.environ)
+            os.environ.update(extra)
+            try:
+                rc, log = mpirun(P, args, timeout=300)
+            finally:
+                os.environ.clear()
+                os.environ.update(saved)
+        assert rc == 0, log[-4000:]
+        with open(out) as f:
+            return json.load(f)
+    finally:
+        os.remove(out)
+
+
+_serialMpy = {}
+
+
+@pytest.mark.parametrize("scene,P", [("drop", 3), ("drop", 4), ("clump", 3)])
+def test_yade_mpy_spheres_and_clump_as_serially(scene, P):
+    # The same script serially and under yade.mpy on P ranks (doc/parallel.md,
+    # "Under yade.mpy"): mpy's master keeps the floor, the workers the spheres
+    # (placed by qdem.parallel.assignSubdomains), QDEM's nodes go to the
+    # workers; obstacles and spheres near pieces are gathered every step.
     requireMpi()
-    rc, out = mpirun(3, ["yade", "-n", "-x", "scripts/mpi/mpy_probe.py", "refused"], timeout=240)
-    assert rc != 124, "mpiexec timed out: a hang\n" + out[-3000:]
-    for who in ("Master", "Worker1", "Worker2"):  # (scripts/mpi/mpy_probe.py prints one line per rank)
-        assert any(who + ": RuntimeError: qdem: the scene runs under yade.mpy (mp.mpirun), which QDEM cannot join"
-                   in ln for ln in out.splitlines()), who + ":\n" + out[-3000:]
-    assert "without mpy" in out and "mpiexec -n P yade -n -x script.py" in out
+    if scene not in _serialMpy:  # the serial run with 1 and 2 QDEM threads (their difference is the licence)
+        _serialMpy[scene] = (_yadeMpy(scene, threads=1), _yadeMpy(scene, threads=2))
+    s, s2 = _serialMpy[scene]
+    r = _yadeMpy(scene, P=P)
+    assert r["ranks"] == P and r["qdemRanks"] == P and s["ranks"] == 1
+    # QDEM's split leaves mpy's master empty; every sphere lives on a worker.
+    assert r["ownedNodes"][0] == 0 and min(r["ownedNodes"][1:]) > 0
+    assert r["owners"][0] == [] and sum(len(o) for o in r["owners"]) == len(s["spheres"])
+    # Each sphere contact computed once: the counts summed over the ranks are
+    # the serial ones, every 25 steps; the scene has contacts.
+    ser, mine = np.array(s["series"]), np.array(r["series"])
+    assert np.array_equal(mine[:, 0], ser[:, 0]) and ser[:, 0].sum() >= 5
+    # Summation order is the only licence: as far as 1 vs 2 threads serially.
+    d = s["disp"]
+    dxThreads, dsThreads = _sphereDiffs(s, s2)
+    dx, ds = _sphereDiffs(s, r)
+    assert dx <= 1e-10 * d and dx <= max(10 * dxThreads, 1e-13 * d)
+    assert ds <= max(10 * dsThreads, 1e-13)
+    # The floor force (QDEM's reaction, added once on the master) and the energy as serial.
+    fmax = np.abs(ser[:, 1:4]).max()
+    assert fmax > 1.0 and np.abs(mine[:, 1:4] - ser[:, 1:4]).max() <= 1e-9 * fmax
+    assert np.abs(mine[:, 4] - ser[:, 4]).max() <= 1e-9 * np.abs(ser[:, 4]).max()
+    if scene == "drop":  # spheres on two workers, pairs computed on every worker
+        assert sum(len(o) > 0 for o in r["owners"]) == 2
+        assert sum(n > 0 for n in r["sphereContactsPerRank"]) == P - 1
+    if scene == "drop" and P == 3:
+        # After mp.mergeScene() a step on the master alone is refused, not left waiting.
+        merged = _yadeMpy(scene, P=3, QDEM_MPY_MERGE="1", QDEM_MPI_STEPS="50")
+        assert "QDEM steps only inside mp.mpirun" in merged["mergedStep"]
+
+
+def test_yade_mpy_stepping_outside_mpirun_is_refused_on_every_rank():
+    # Under yade.mpy, O.run before mp.mpirun would split QDEM as under plain
+    # mpiexec, and mpy's scene transfer would then wait on the master alone:
+    # refused on every rank at the first step, with the fix, and no hang.
+    requireMpi()
+    import os
+    saved = dict(os.environ)
+    os.environ["QDEM_MPY_RUN_FIRST"] = "1"
+    try:
+        rc, out = mpirun(3, ["yade", "-n", "-x", "tests/mpi/yade_mpy.py", "drop"], timeout=240)
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+    assert rc != 0 and rc != 124, "mpiexec timed out: a hang\n" + out[-3000:]
+    assert out.count("steps QDEM outside mp.mpirun") >= 3, out[-3000:]
+    assert "mpiexec -n P yade -n -x script.py" in out
