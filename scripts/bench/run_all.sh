@@ -23,6 +23,8 @@ echo "bench: 27 cubes, seed Figure 6 cases A/B/C and ours, by phase"
 
 echo "bench: shogi scenes (seed Figures 7-10), Table 1 material and time step"
 /usr/bin/python3.11 scripts/bench/bench_shogi.py --steps "${QDEM_BENCH_SHOGI_STEPS:-200}" --out out/bench
+echo "bench: the two rooks at 766, 100, 10 and 1x real size, explicit and implicit viscosity (key scales of shogi.json)"
+OMP_NUM_THREADS=1 /usr/bin/python3.11 scripts/shogi/scales.py --steps "${QDEM_BENCH_SCALES_STEPS:-30}" --out out/bench
 
 echo "bench: cost of each effect on, off and zero-valued"
 (cd scripts/bench && /usr/bin/python3.11 bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-20}" --out ../../out/bench)

@@ -102,6 +102,20 @@ def timing(scale, stable, steps, rounds):
     return out
 
 
+def progress(log):
+    """(step, simulated time) of the last progress line in a domino.py log
+    ('qdem: step N  t=T s ...'), the wall time since the log was started, and
+    the scene's line: how far a run that has not written its first frame got."""
+    last, head = None, None
+    for line in open(log):
+        if line.startswith("qdem: step "):
+            f = line.split()
+            last = (int(f[2]), float(f[3][2:]))
+        elif line.startswith("shogi: two_rooks"):
+            head = line.strip()
+    return last, head
+
+
 def runs(stable):
     """The scales.table runs found under out/shogi (domino.py's hits.json)."""
     found = []
@@ -120,6 +134,33 @@ def runs(stable):
     return found
 
 
+def hms(seconds):
+    return "%.0f s" % seconds if seconds < 600 else ("%.1f h" % (seconds / 3600) if seconds < 2 * 86400
+                                                     else "%.1f days" % (seconds / 86400))
+
+
+def markdown(res):
+    """The tables of doc/shogi.md, "Toward real size"."""
+    print("\n| scale | second rook hit at | explicit: CPU to the hit | implicit: CPU to the hit |")
+    print("| --- | --- | --- | --- |")
+    for key, r in res["scales"].items():
+        if "first_hit_s" in r:
+            print("| %s | %.4g s | %s | %s |" % (key, r["first_hit_s"], hms(r["explicit"]["cpu_s_to_first_hit"]),
+                                               hms(r["implicit"]["cpu_s_to_first_hit"])))
+    print("\n| scale | viscosity | friction | dt | simulated (at 766x) | second rook hit (at 766x) | "
+          "first rook fallen (at 766x) | second rook fallen (at 766x) | CG iterations per step | wall s per simulated s |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+
+    def t(v, v766):
+        return "-" if v is None else ("%.4g s (%.4g s)" % (v, v766) if v != v766 else "%.4g s" % v)
+    for r in sorted(res["runs"], key=lambda r: (-r["scale"], r["viscous"], r["frictionPiece"])):
+        print("| %g | %s | %g | %.3g s | %s | %s | %s | %s | %s | %.3g |" % (
+            r["scale"], r["viscous"], r["frictionPiece"], r["dt"], t(r["simulated_s"], r["simulated_s_at_766x"]),
+            t(r["firstHit_s"][1], r["firstHit_s_at_766x"][1]), t(r["fallen_s"][0], r["fallen_s_at_766x"][0]),
+            t(r["fallen_s"][1], r["fallen_s_at_766x"][1]),
+            "%.0f" % r["cg_iterations_per_step"] if r["viscous"] == "implicit" else "-", r["wall_s_per_simulated_s"]))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--steps", type=int, default=40)
@@ -127,13 +168,20 @@ def main():
     ap.add_argument("--out", default="out/bench")
     ap.add_argument("--log", default=None, help="also write the result here (bench/logs/...)")
     ap.add_argument("--scales", default=",".join(map(str, SCALES)))
+    ap.add_argument("--progress", action="append", default=[], metavar="RUN=LOG",
+                    help="a run with no frame written yet: its last progress line in domino.py's log LOG")
+    ap.add_argument("--runs-only", action="store_true",
+                    help="keep the damping ratios and timings of --log (an earlier run) and gather the runs again")
     a = ap.parse_args()
     _core.setThreads(1)
     stable = table1Scale()
-    rook = shogi.mesh("rook")
-    res = {"scene": "two_rooks", "threads": 1, "table1_scale": stable, "dt_factor": DT_FACTOR,
-           "steps": a.steps, "rounds": a.rounds, "scales": {}}
-    for s in (float(x) for x in a.scales.split(",")):
+    if a.runs_only:
+        res = json.load(open(a.log))
+    else:
+        res = {"scene": "two_rooks", "threads": 1, "table1_scale": stable, "dt_factor": DT_FACTOR,
+               "steps": a.steps, "rounds": a.rounds, "scales": {}}
+    rook = None if a.runs_only else shogi.mesh("rook")
+    for s in ([] if a.runs_only else (float(x) for x in a.scales.split(","))):
         mat = material(s, stable)
         xi = modes.dampingRatio(rook.scaled(s), mat)
         omega = modes.naturalFrequencies(rook.scaled(s), mat, count=1)[0]
@@ -148,9 +196,28 @@ def main():
                   r["implicit"]["dt"], r["implicit"]["cpu_ms_per_step"], r["implicit"]["cg_iterations_per_step"],
                   r["implicit"]["cpu_s_per_simulated_s"], r["explicit_over_implicit"]), flush=True)
     res["runs"] = runs(stable)
+    for item in a.progress:
+        run, _, log = item.partition("=")
+        (step, t), head = progress(log)
+        res.setdefault("progress", {})[run] = {"log": log, "step": step, "simulated_s": t, "start": head,
+                                               "simulated_s_at_766x": t * math.sqrt(stable / float(
+                                                   run.split("_x")[1].split("_")[0]))}
+        print("progress %s: step %d, t = %.4g s" % (run, step, t))
+    # The cost of reaching the first hit at every scale: the 766x explicit
+    # run's first hit of the second rook, brought to each scale by Froude
+    # scaling, times each integration's cost per simulated second.
+    ref = [r for r in res["runs"] if r["scale"] == stable and r["viscous"] == "explicit" and r["firstHit_s"][1]]
+    if ref:
+        tHit = ref[0]["firstHit_s"][1]
+        for key, r in res["scales"].items():
+            t = tHit * math.sqrt(float(key) / stable)
+            r["first_hit_s"] = t
+            for name in ("explicit", "implicit"):
+                r[name]["cpu_s_to_first_hit"] = t * r[name]["cpu_s_per_simulated_s"]
     for r in res["runs"]:
         print("run %s: %.4g s simulated (%.4g s at 766x), first hits %s, fallen %s" % (
             r["run"], r["simulated_s"], r["simulated_s_at_766x"], r["firstHit_s_at_766x"], r["fallen_s_at_766x"]))
+    markdown(res)
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, "shogi.json")
     bench = json.load(open(path)) if os.path.exists(path) else {}
