@@ -74,7 +74,7 @@ def test_implicit_viscosity_on_ranks_as_serially(P):
     # over the owned tets with the ghosts' partial sums sent back, dot
     # products summed in rank order, the serial stopping rule.
     requireMpi()
-    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py"), timeout=200)
+    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py"), timeout=400)
     assert rc == 0, out[-4000:]
     r = result(out)
     lim = r["limits"]
