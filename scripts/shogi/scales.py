@@ -148,7 +148,8 @@ def markdown(res):
             print("| %s | %.4g s | %s | %s |" % (key, r["first_hit_s"], hms(r["explicit"]["cpu_s_to_first_hit"]),
                                                hms(r["implicit"]["cpu_s_to_first_hit"])))
     print("\n| scale | viscosity | friction | dt | simulated (at 766x) | second rook hit (at 766x) | "
-          "first rook fallen (at 766x) | second rook fallen (at 766x) | CG iterations per step | wall s per simulated s |")
+          "first rook fallen (at 766x) | second rook fallen (at 766x) | CG iterations per step | "
+          "wall s per simulated s |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 
     def t(v, v766):
