@@ -408,6 +408,54 @@ void Domain::sendStates() {
     }
 }
 
+void Domain::forwardField(double* field) {
+    const std::size_t nb = halo_.neighbours.size();
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& mine = halo_.send[i];
+        std::vector<double>& b = sendBuf_[i];
+        b.resize(3 * mine.size());
+        for (std::size_t j = 0; j < mine.size(); ++j)
+            for (int d = 0; d < 3; ++d) b[3 * j + d] = field[3 * mine[j] + d];
+        recvBuf_[i].resize(3 * halo_.recv[i].size());
+    }
+    exchange(sendBuf_, recvBuf_);
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& ghosts = halo_.recv[i];
+        for (std::size_t j = 0; j < ghosts.size(); ++j)
+            for (int d = 0; d < 3; ++d) field[3 * ghosts[j] + d] = recvBuf_[i][3 * j + d];
+    }
+}
+
+void Domain::returnPartials(const ThreadLayout& layout, double* field) {
+    const std::size_t nb = halo_.neighbours.size();
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& ghosts = halo_.recv[i];
+        std::vector<double>& b = sendBuf_[i];
+        b.resize(3 * ghosts.size());
+        for (std::size_t j = 0; j < ghosts.size(); ++j) layout.sumNode(ghosts[j], &b[3 * j]);
+        recvBuf_[i].resize(3 * halo_.send[i].size());
+    }
+    exchange(sendBuf_, recvBuf_);
+    for (std::size_t i = 0; i < nb; ++i) {
+        const std::vector<int32_t>& mine = halo_.send[i];
+        for (std::size_t j = 0; j < mine.size(); ++j)
+            for (int d = 0; d < 3; ++d) field[3 * mine[j] + d] += recvBuf_[i][3 * j + d];
+    }
+}
+
+void Domain::sumInRankOrder(double* v, int n) {
+    const double t0 = omp_get_wtime();
+    const int P = size();
+    gathered_.resize(static_cast<std::size_t>(P) * n);
+    comm_->allgather(v, n, gathered_.data());
+    for (int k = 0; k < n; ++k) {
+        double s = 0;
+        for (int r = 0; r < P; ++r) s += gathered_[static_cast<std::size_t>(r) * n + k];
+        v[k] = s;
+    }
+    seconds += omp_get_wtime() - t0;
+}
+
 std::string Domain::agree(const std::string& error) {
     double failed = error.empty() ? 0.0 : 1.0;
     comm_->allreduceMax(&failed, 1);

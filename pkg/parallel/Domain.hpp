@@ -61,6 +61,19 @@ public:
     const double* ghostForce() const { return ghostForce_.data(); }
     // Owned positions and velocities forward to the ghosts that read them.
     void sendStates();
+    // ---- the implicit viscous solve's exchanges (ViscousSolve.cpp) -----------
+    // A nodal field (3 per node) forward from the owned nodes to the element
+    // ghosts that read it: the search direction C is applied to.
+    void forwardField(double* field);
+    // The partial sums `layout`'s thread buffers hold for element ghosts go
+    // to their owners, which add them to `field` on their nodes in neighbour
+    // (= rank) order, after their own tets' sum: C p on the owned nodes.
+    void returnPartials(const ThreadLayout& layout, double* field);
+    // v[0..n) summed over the ranks in rank order (every rank's partial sums
+    // gathered, then added 0..P-1 on every rank): the same bits everywhere,
+    // whatever a reduction tree would do, so every rank takes the same
+    // decisions (the conjugate gradients' iteration count).  Collective.
+    void sumInRankOrder(double* v, int n);
     // The contact halo (when pieces may touch): every rank's box of owned
     // surface nodes is gathered; to each rank whose box, grown by the contact
     // halo width, reaches this rank's, go the owned surface nodes within that
@@ -148,6 +161,7 @@ private:
     std::vector<double> ghostForce_;
     std::vector<int32_t> ghostTouched_;  // nodes ghostForce_ holds values for
     std::vector<std::vector<double>> sendBuf_, recvBuf_;
+    std::vector<double> gathered_;  // sumInRankOrder's P x n values
 };
 
 }  // namespace qdem

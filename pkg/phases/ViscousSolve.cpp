@@ -12,6 +12,7 @@
 #include "../core/Format.hpp"
 #include "../element/ElementKernel.hpp"
 #include "../element/ViscousOperator.hpp"
+#include "../parallel/Domain.hpp"
 #include "SleepPhase.hpp"
 
 namespace qdem {
@@ -28,20 +29,17 @@ bool viscous(const Settings& s, const Material& m) { return s.viscosityOn && m.v
 }  // namespace
 
 bool ViscousSolve::active() const {
-    if (w_.settings.viscousIntegration != ViscousIntegration::Implicit) return false;
-    if (w_.domain.any())  // every rank has the same settings: all refuse at the same step
-        throw InputError(
-            "QDEM: viscousIntegration='implicit' is not available under MPI yet (its conjugate gradients are not "
-            "distributed): set QdemEngine(viscousIntegration='explicit') with O.dt below "
-            "stableDt()['combinedExplicit'], or run on one process.");
-    if (!w_.settings.viscosityOn) return false;
-    for (const TetSegment& sg : w_.sleeping.awakeTets())
-        if (w_.materials[w_.pieces[sg.piece].material].viscosity > 0) return true;
+    if (w_.settings.viscousIntegration != ViscousIntegration::Implicit || !w_.settings.viscosityOn) return false;
+    // From the pieces, not this rank's tets: under MPI a rank may own none of
+    // a viscous piece's tets, and every rank must take part in the solve's
+    // reductions (the sleep decisions are the same on every rank).
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p)
+        if (!w_.sleeping.asleep(p) && w_.materials[w_.pieces[p].material].viscosity > 0) return true;
     return false;
 }
 
 template <class Fn>
-void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
+void ViscousSolve::nodeLoop(Sum scope, int nSums, double* sums, Fn&& fn) {
     constexpr int kSums = 4;
     const int nth = layout_.nThreads;
     partial_.assign(static_cast<std::size_t>(kSums) * nth, 0.0);
@@ -58,6 +56,7 @@ void ViscousSolve::nodeLoop(int nSums, double* sums, Fn&& fn) {
         sums[k] = 0;
         for (int t = 0; t < nth; ++t) sums[k] += partial_[kSums * t + k];  // thread order: deterministic
     }
+    if (Domain* dom = w_.domain.built(); dom && scope == Sum::Global && nSums > 0) dom->sumInRankOrder(sums, nSums);
 }
 
 ViscousSolve::AwakeNodes ViscousSolve::awakeNodes() const {
@@ -66,7 +65,9 @@ ViscousSolve::AwakeNodes ViscousSolve::awakeNodes() const {
     return {all ? nullptr : ids.data(), static_cast<int32_t>(all ? w_.mass.size() : ids.size())};
 }
 
-void ViscousSolve::apply(const double* p, double* y) {
+void ViscousSolve::apply(double* p, double* y) {
+    Domain* dom = w_.domain.built();
+    if (dom) dom->forwardField(p);  // the ghosts' p, read by this rank's tets
     const int32_t* conn = w_.tetNodes.data();
     const ViscousStressOnly law;
     const AwakeNodes awake = awakeNodes();
@@ -104,6 +105,7 @@ void ViscousSolve::apply(const double* p, double* y) {
             layout_.sumNode(n, y + 3 * n);
         }
     }
+    if (dom) dom->returnPartials(layout_, y);  // the other ranks' tets on this rank's nodes
 }
 
 void ViscousSolve::diagonal(double* diag) {
@@ -138,6 +140,7 @@ void ViscousSolve::diagonal(double* diag) {
             layout_.sumNode(n, diag + 3 * n);
         }
     }
+    if (Domain* dom = w_.domain.built()) dom->returnPartials(layout_, diag);
 }
 
 const double* ViscousSolve::solve(double dt, const double* f) {
@@ -164,7 +167,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
     // Warm start D = 0, i.e. v = v_{n-1/2} (the last step's solution to
     // within its residual): the residual is dt f, no operator application.
     double s[4];
-    nodeLoop(2, s, [&](int32_t n, double* acc) {
+    nodeLoop(Sum::Global, 2, s, [&](int32_t n, double* acc) {
         for (int d = 0; d < 3; ++d) {
             const int32_t k = 3 * n + d;
             D[k] = M[n] + dt * D[k];
@@ -193,7 +196,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
                                      "): raise QdemEngine.viscousTolerance, lower O.dt, or use "
                                      "viscousIntegration='explicit'."));
         apply(P, CP);
-        nodeLoop(1, s, [&](int32_t n, double* acc) {
+        nodeLoop(Sum::Global, 1, s, [&](int32_t n, double* acc) {
             for (int d = 0; d < 3; ++d) {
                 const int32_t k = 3 * n + d;
                 if (!((blk[n] >> d) & 1u)) acc[0] += P[k] * (M[n] * P[k] + dt * CP[k]);
@@ -204,7 +207,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
             throw StabilityError(cat("QDEM: the implicit viscous solve broke down at step ", w_.iter,
                                      " (p.Ap = ", pAp, "): positions or velocities are not finite; lower O.dt."));
         const double alpha = rz / pAp;
-        nodeLoop(3, s, [&](int32_t n, double* acc) {
+        nodeLoop(Sum::Global, 3, s, [&](int32_t n, double* acc) {
             for (int d = 0; d < 3; ++d) {
                 const int32_t k = 3 * n + d;
                 Q[k] += alpha * CP[k];  // every DOF: the viscous force on blocked ones too
@@ -222,7 +225,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
         if (rMr <= tol2 * s[2]) break;
         const double beta = s[0] / rz;
         rz = s[0];
-        nodeLoop(0, s, [&](int32_t n, double*) {
+        nodeLoop(Sum::Global, 0, s, [&](int32_t n, double*) {
             for (int d = 0; d < 3; ++d) {
                 const int32_t k = 3 * n + d;
                 if (!((blk[n] >> d) & 1u)) P[k] = Z[k] + beta * P[k];
@@ -247,7 +250,8 @@ double ViscousSolve::dissipation(double dt, const double* vNew) {
     const double* Q = q_.data();
     const double* Dl = delta_.data();
     double s[4];
-    nodeLoop(1, s, [&](int32_t n, double* acc) {
+    // This rank's share: the ledger is summed over the ranks at the step's end.
+    nodeLoop(Sum::Local, 1, s, [&](int32_t n, double* acc) {
         for (int d = 0; d < 3; ++d) {
             const int32_t k = 3 * n + d;
             acc[0] += (vNew[k] - Dl[k]) * CD[k] + Q[k] * vNew[k];

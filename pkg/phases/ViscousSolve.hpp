@@ -12,7 +12,10 @@
 // free DOFs of the awake nodes (blocked DOFs keep their velocity: D = 0
 // there) return q = C D; the integrator then applies the force f - q, so
 // the viscous forces applied are element forces, each summing to zero:
-// momentum is conserved whatever the tolerance.
+// momentum is conserved whatever the tolerance.  Under MPI each rank
+// iterates on its owned nodes, C p is one pass over its owned tets with the
+// ghosts' partial sums sent back to their owners (Domain.hpp), and the dot
+// products are summed in rank order: every rank stops at the same count.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -43,11 +46,11 @@ public:
         const Settings& settings;
         const long& iter;                 // named in its errors
         const SleepPhase& sleeping;       // the awake tets and nodes
-        DomainRef domain;                 // refused under MPI
+        DomainRef domain;                 // under MPI: ghosts, partial sums, reductions
     };
     explicit ViscousSolve(const Data& data) : w_(data) {}
-    // Implicit viscosity asked for, viscosity on, and an awake piece viscous.
-    // Throws InputError under MPI (not distributed yet), naming the fix.
+    // Implicit viscosity asked for, viscosity on, and an awake piece viscous
+    // (the same answer on every MPI rank).
     bool active() const;
     // Solves for the step's viscous correction from the explicit forces f
     // (3 per node, read on the awake nodes); returns q = C D (3 per node,
@@ -73,12 +76,17 @@ private:
     };
     AwakeNodes awakeNodes() const;
     // y = C p over the awake tets (3 per node, written on the awake nodes).
-    void apply(const double* p, double* y);
+    // Under MPI p is first sent to the ghosts (its entries there are
+    // overwritten) and the ghosts' partial sums come back to their owners.
+    void apply(double* p, double* y);
     void diagonal(double* d);
     // Sums of a*b (and more) over the free DOFs of the awake nodes, per thread
-    // then in thread order: the same bits for a given thread count.
+    // then in thread order: the same bits for a given thread count.  Global:
+    // under MPI then over the ranks in rank order (Domain::sumInRankOrder),
+    // so every rank stops the iterations at the same count.
+    enum class Sum { Local, Global };
     template <class Fn>
-    void nodeLoop(int nSums, double* sums, Fn&& fn);
+    void nodeLoop(Sum scope, int nSums, double* sums, Fn&& fn);
 
     Data w_;
     ThreadLayout layout_;

@@ -56,7 +56,7 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
       "How the Kelvin-Voigt viscous force is integrated: 'explicit' (default: with the velocity of the last half "  \
       "step, as every other force; the stable step shrinks as h^2 with viscosity) or 'implicit' (each step solves " \
       "(M + dt C) v = M v_old + dt f for the new velocities by conjugate gradients: viscosity no longer limits "    \
-      "O.dt, elasticity and contacts stay explicit; one process only).  doc/formulation.md, section 2.1.")          \
+      "O.dt, elasticity and contacts stay explicit; under MPI too).  doc/formulation.md, section 2.1.")            \
     X(double, viscousTolerance, "viscousTolerance", 1e-3, within(1e-14, 0.5),                                        \
       "viscousIntegration='implicit': the conjugate gradients stop when the error of the step's velocity change "    \
       "is at most this fraction of that change (kinetic-energy norm; a bound, doc/formulation.md 2.1).")           \

@@ -38,6 +38,8 @@ echo "bench: shogi scenes (seed Figures 7-10) through their first hits, QdemEngi
 OMP_WAIT_POLICY=passive yade -n -j 2 -x scripts/bench/bench_shogi.py --rounds "${QDEM_BENCH_SHOGI_ROUNDS:-5}" \
   --out out/bench > out/bench/shogi.log 2>&1 || echo "bench: shogi run failed, see out/bench/shogi.log"
 /usr/bin/python3.11 scripts/bench/perf_tables.py shogi out/bench/shogi.json || true
+echo "bench: the two rooks at 766, 100, 10 and 1x real size, explicit and implicit viscosity (key scales of shogi.json)"
+OMP_NUM_THREADS=1 /usr/bin/python3.11 scripts/shogi/scales.py --steps "${QDEM_BENCH_SCALES_STEPS:-30}" --out out/bench
 
 echo "bench: cost of each effect on, off and zero-valued"
 OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-60}" \

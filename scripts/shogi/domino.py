@@ -21,6 +21,13 @@
 #                 behind the front creeps on for seconds and would otherwise keep
 #                 every fallen piece awake; doc/shogi.md checks that K = 3 leaves
 #                 the front as it is.  0 = never
+#   scale         material table1 only: pieces `scale` times real size, the particle
+#                 radius scaled alike (0 = the smallest scale at which Table 1's
+#                 6.4e-6 s is stable with explicit viscosity: 766; doc/shogi.md)
+#   viscous       'explicit' | 'implicit': QdemEngine.viscousIntegration.  Table 1
+#                 runs at dt = 6.4e-6 s with explicit viscosity at the default
+#                 scale, otherwise at dtFactor x stableDt()['combined']
+#   dtFactor      the fraction of the stable step used when it is not 6.4e-6 s
 #   restart       1: a state is saved with every frame (checkpoint.npz,
 #                 qdem.saveState) and a run started again goes on from the last
 #                 one; 0: always from the start
@@ -42,20 +49,42 @@ from yade import O, ForceResetter, FrictMat, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 
 readParamsFromTable(scene="two_rooks", frictionPiece=0.1, material="soft", duration=0.4, frames=6, count=0,
-                    settle=0.0, sleep=0.0, retire=0, restart=1, noTableOk=True)
+                    settle=0.0, sleep=0.0, retire=0, restart=1, scale=0, viscous="explicit",
+                    dtFactor=0.8, noTableOk=True)
 from yade.params import table as P  # noqa: E402
 
+
+
+def table1Scale(mat):
+    """shogi.stableScale(mat) rounded up (doc/shogi.md: 766).  It meshes the
+    eight kinds (minutes on a busy machine): kept in out/shogi/table1_scale.json
+    for the material it was found for."""
+    path, key = "out/shogi/table1_scale.json", json.dumps(mat.dict(), sort_keys=True)
+    known = json.load(open(path)) if os.path.exists(path) else {}
+    if key not in known:
+        known[key] = math.ceil(shogi.stableScale(mat))
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path + ".tmp%d" % os.getpid(), "w") as f:
+            json.dump(known, f, indent=1)
+        os.replace(path + ".tmp%d" % os.getpid(), path)
+    return known[key]
+
+
 if P.material == "table1":
-    mat = qdem.QdemMat(frictionPiece=P.frictionPiece)             # seed Table 1
-    scale = math.ceil(shogi.stableScale(mat))                      # see doc/shogi.md
-    dt = 6.4e-6
+    stable = table1Scale(qdem.QdemMat(frictionPiece=P.frictionPiece))  # seed Table 1; see doc/shogi.md
+    scale = P.scale or stable
+    # The same geometry at every scale: the particle radius (0.04 m at 766x) scaled too.
+    mat = qdem.QdemMat(frictionPiece=P.frictionPiece, radius=qdem.QdemMat().radius * scale / stable)
+    dt = 6.4e-6 if (scale == stable and P.viscous == "explicit") else None
 else:
     mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4,
                        frictionPiece=P.frictionPiece, frictionWall=0.5)
     scale, dt = 1.0, None
 
-out = "out/shogi/%s%s_mu%g_%s%s%s" % (P.scene, "_n%d" % P.count if P.count else "", P.frictionPiece, P.material,
-                                    "_sleep%g" % P.sleep if P.sleep else "", "_retire%d" % P.retire if P.retire else "")
+out = "out/shogi/%s%s_mu%g_%s%s%s%s%s" % (
+    P.scene, "_n%d" % P.count if P.count else "", P.frictionPiece, P.material, "_x%g" % P.scale if P.scale else "",
+    "_implicit" if P.viscous == "implicit" else "", "_sleep%g" % P.sleep if P.sleep else "",
+    "_retire%d" % P.retire if P.retire else "")
 os.makedirs(out, exist_ok=True)
 H = max(shogi.KINDS[k][0] for k in shogi.SCENES[P.scene]["kinds"]) * scale * 1e-3
 push = math.sqrt(9.81 / H)                      # as shogi.scene: ~2.6x the angular velocity that just tips it
@@ -73,9 +102,13 @@ frames = []
 
 
 tPush = None                                    # simulated time of the push (after settling)
+cgIterations = [0, 0]                           # viscousIntegration='implicit': sum and count of sampled steps
 
 
 def watch():
+    if P.viscous == "implicit":
+        cgIterations[0] += core.counts.get("viscousIterations", 0)
+        cgIterations[1] += 1
     if tPush is None:
         return
     for i, p in enumerate(pieces):
@@ -105,13 +138,13 @@ def frame():
 
 
 core = qdem.defaultWorld().core
-engine = qdem.QdemEngine(progressPeriod=20000, sleepVelocity=P.sleep * math.sqrt(9.81 * H),
-                         sleepTime=0.1 * math.sqrt(H / 9.81))
+engine = qdem.QdemEngine(progressPeriod=20000, viscousIntegration=P.viscous,
+                         sleepVelocity=P.sleep * math.sqrt(9.81 * H), sleepTime=0.1 * math.sqrt(H / 9.81))
 recorder = qdem.VtkRecorder(fileBase=out + "/shogi-", dead=True)  # frames written by frame()
 O.engines = [ForceResetter(), engine, PyRunner(command="watch()", iterPeriod=50), recorder,
              NewtonIntegrator(gravity=(0, 0, -9.80665))]
 limit = engine.stableDt()
-O.dt = dt if dt else 0.8 * limit["combined"]
+O.dt = dt if dt else P.dtFactor * limit["combined"]
 nSteps = int(P.duration / O.dt)
 print("shogi: %s, %d pieces, %d tets, scale %g, dt %.3g s (stable %.3g, %s), %d steps"
       % (P.scene, len(pieces), qdem.defaultWorld().core.nTets, scale, O.dt, limit["combined"], limit["limitedBy"],
@@ -159,6 +192,8 @@ def results():
     is stopped early keeps what it found)."""
     wall = wallBefore + time.time() - start
     result = {"scene": P.scene, "frictionPiece": P.frictionPiece, "material": P.material, "scale": scale,
+              "viscous": P.viscous, "steps": O.iter,
+              "cg_iterations_per_step": cgIterations[0] / max(cgIterations[1], 1),
               "dt": O.dt, "pieces": len(pieces), "tets": qdem.defaultWorld().core.nTets,
               "simulated_s": core.time - tPush, "settle_s": tPush, "sleep": P.sleep, "retire": P.retire,
               "asleep_now": qdem.defaultWorld().core.nAsleep, "wall_s": wall,

@@ -66,10 +66,38 @@ def test_error_on_one_rank_stops_every_rank(P):
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
-    # (e) implicit viscosity under MPI: refused on every rank, naming the fix.
-    for c in caught:
-        assert c["e"][0] == "ValueError" and "viscousIntegration='implicit' is not available under MPI" in c["e"][1]
-        assert "viscousIntegration='explicit'" in c["e"][1]
+
+
+@pytest.mark.parametrize("P", [2, 3])
+def test_implicit_viscosity_on_ranks_as_serially(P):
+    # The distributed conjugate gradients (doc/parallel.md): C p by one pass
+    # over the owned tets with the ghosts' partial sums sent back, dot
+    # products summed in rank order, the serial stopping rule.
+    requireMpi()
+    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py"), timeout=400)
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    lim = r["limits"]
+    assert lim["combinedImplicit"] > 20 * lim["combinedExplicit"]  # viscosity would limit an explicit step
+    assert all(t > 0 for t in r["ownedTets"])
+    # Every rank took the same number of iterations at every step, and the
+    # solve did iterate.
+    its = r["iterations"]
+    assert len(its) == P and all(i == its[0] for i in its)
+    assert min(its[0]) >= 3
+    # Trajectories as serial, within what separates 1 and 2 threads serially
+    # (the order of the partial sums is the only difference).
+    d = r["maxDisplacement"]
+    assert d > 1e-3
+    assert r["dx"] <= max(10 * r["dxThreads"], 1e-13 * d)
+    assert r["dv"] <= max(10 * r["dvThreads"], 1e-10 * r["vmax"])
+    # Floor reaction, energy ledger (total, viscous dissipation, kinetic) as serial.
+    s, ss = np.array(r["series"]), np.array(r["serialSeries"])
+    assert ss[-1, 4] > 1e-3 * ss[-1, 3], "viscosity must dissipate a visible share"
+    assert np.abs(s[:, :3] - ss[:, :3]).max() <= 1e-9 * np.abs(ss[:, :3]).max()
+    assert np.abs(s[:, 3:] - ss[:, 3:]).max() <= 1e-10 * np.abs(ss[:, 3:]).max()
+    pm, ps = np.array(r["momentum"]), np.array(r["serialMomentum"])
+    assert np.abs(pm - ps).max() <= 1e-10 * np.abs(ps).max()
 
 
 def test_yade_floor_force_under_mpiexec_equals_serial():
