@@ -44,6 +44,12 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const int32_t* listCount = st_.listCount.data();
     const int32_t* tri = S.tri.data();
     const double* normal = st_.triNormal.data();
+    const PieceContactState::TriRecord* rec = st_.triRecord.data();
+    // The largest particle radius of an active piece (the prefilter's reach).
+    double radiusMax = 0;
+    for (std::size_t p = 0; p < w_.pieces.size(); ++p)
+        if (active[p]) radiusMax = std::max(radiusMax, radius[p]);
+    long prefilterIn = 0, prefilterOut = 0;
     const double* X = w_.pos.data();
     // (locals, not w_'s references: the loop stores through narrow pointers
     // that may alias anything, which would reload them)
@@ -55,7 +61,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         double depth = 0, speed = 0, mass = 0, kn = 0;
     } tunnel;
 
-#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
+#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, prefilterIn, prefilterOut) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -110,20 +116,49 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions);
             };
             if (useList) {
+                // Prefilter: of the listed triangles (their records, one
+                // streaming load each), those that can make a candidate.  The
+                // node is at height h over the plane; its projection on the
+                // plane lies sqrt(lat2) from the triangle's centre.  A
+                // candidate has its closest point within the reach (then
+                // the projection is within sqrt(reach^2 - h^2) of the face,
+                // so within radius + that of the centre), or straight behind
+                // the face (straightBehind's 1e-9 lets the projection lie at
+                // most 4.5e-5 |h| off the face: the 1e-4 |h| term).  Dropped:
+                // the node more than a reach in front of the plane, or its
+                // projection beyond that bound.  Margins (1e-9, 1e-6) over
+                // rounding: a triangle dropped here is one the exact test
+                // below drops too, so the candidates (and their order) are
+                // the same as without the prefilter.
+                const int32_t* Lall = listFlat + listStart[s];
+                const int32_t nAll = listCount[s];
+                const double reachMax = ma.radius + radiusMax;
+                const double hMax = reachMax * (1 + 1e-9), reach2 = reachMax * reachMax * (1 + 1e-9);
+                int32_t L[PieceContactState::kList];
+                int32_t n = 0;
+                for (int32_t k = 0; k < nAll; ++k) {
+                    const int32_t t = Lall[k];
+                    const PieceContactState::TriRecord& r = rec[t];
+                    const double dx = A[0] - r.centre[0], dy = A[1] - r.centre[1], dz = A[2] - r.centre[2];
+                    const double h = dx * r.n[0] + dy * r.n[1] + dz * r.n[2];
+                    const double lim =
+                        r.radius * (1 + 1e-9) + std::sqrt(std::max(0.0, reach2 - h * h)) + 1e-4 * std::abs(h);
+                    const double lat2 = dx * dx + dy * dy + dz * dz - h * h;
+                    L[n] = t;
+                    n += !(h > hMax || lat2 > lim * lim * (1 + 1e-6));
+                }
+                prefilterIn += nAll, prefilterOut += n;
                 // The same tests as consider(), the closest points of
                 // kTriLanes listed triangles at a time (SIMD lane code).
-                const int32_t* L = listFlat + listStart[s];
-                const int32_t n = listCount[s];
                 for (int32_t k0 = 0; k0 < n; k0 += kTriLanes) {
                     const int cnt = std::min<int32_t>(kTriLanes, n - k0);
                     for (int l = 0; l < kTriLanes; ++l) {
-                        const int32_t t = L[k0 + (l < cnt ? l : cnt - 1)];
-                        const int32_t* c = tri + 3 * t;
+                        const PieceContactState::TriRecord& r = rec[L[k0 + (l < cnt ? l : cnt - 1)]];
                         for (int d = 0; d < 3; ++d) {
-                            lanes.a[d][l] = X[3 * c[0] + d];
-                            lanes.b[d][l] = X[3 * c[1] + d];
-                            lanes.c[d][l] = X[3 * c[2] + d];
-                            lanes.n[d][l] = normal[3 * t + d];
+                            lanes.a[d][l] = r.a[d];
+                            lanes.b[d][l] = r.b[d];
+                            lanes.c[d][l] = r.c[d];
+                            lanes.n[d][l] = r.n[d];
                         }
                     }
                     closestOnTriangles(A.data(), lanes, near);
@@ -347,6 +382,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             }
         }
     }
+    listedTriangles_ = prefilterIn, prefilteredTriangles_ = prefilterOut;
     interiorFaceTests_ = interiorTests;
     interiorFaceNear_ = interiorNear;
     if (tunnel.node >= 0) {
