@@ -314,10 +314,7 @@ void PieceContactPhase::run(double dt) {
             const Vector3d a = at(X, c[0]), b = at(X, c[1]), cc = at(X, c[2]);
             const Vector3d n = (b - a).cross(cc - a).normalized();
             for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
-            const Vector3d m = (a + b + cc) / 3;
-            PieceContactState::TriRecord& r = st_.triRecord[t];
-            for (int d = 0; d < 3; ++d) r.a[d] = a[d], r.b[d] = b[d], r.c[d] = cc[d], r.n[d] = n[d], r.centre[d] = m[d];
-            r.radius = std::sqrt(std::max({(a - m).squaredNorm(), (b - m).squaredNorm(), (cc - m).squaredNorm()}));
+            fillTriRecord(a, b, cc, n, st_.triRecord[t]);
         }
     }
     }

@@ -9,6 +9,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/CellGrid.hpp"
 #include "../contact/SurfaceIndex.hpp"
+#include "../contact/TriangleRecord.hpp"
 #include "../world/Settings.hpp"
 
 namespace qdem {
@@ -28,17 +29,8 @@ struct PieceContactState {
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
     std::vector<double> triNormal;
     // Per step, per triangle of an active piece, refreshed with the normals:
-    // what the point-polygon loop reads of a listed triangle, in one record
-    // (one streaming load instead of triangle -> corner ids -> positions,
-    // two dependent lookups).  128 bytes, aligned: the prefilter (normal,
-    // centre, radius) reads only the second cache line of a record; the
-    // triangles that pass it read the first (corners) too.
-    struct alignas(64) TriRecord {
-        double a[3], b[3], c[3];  // corners (copies of the positions: the same bits)
-        double n[3];              // unit outward normal (= triNormal)
-        double centre[3], radius; // centroid and largest corner distance from it
-    };
-    static_assert(sizeof(TriRecord) == 128);
+    // the record the point-polygon loop reads (contact/TriangleRecord.hpp).
+    using TriRecord = contact_detail::TriRecord;
     std::vector<TriRecord> triRecord;
     std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
 

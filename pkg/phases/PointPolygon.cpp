@@ -12,6 +12,7 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
+#include "../contact/TriangleRecord.hpp"
 #include "../parallel/Domain.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -116,36 +117,17 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions);
             };
             if (useList) {
-                // Prefilter: of the listed triangles (their records, one
-                // streaming load each), those that can make a candidate.  The
-                // node is at height h over the plane; its projection on the
-                // plane lies sqrt(lat2) from the triangle's centre.  A
-                // candidate has its closest point within the reach (then
-                // the projection is within sqrt(reach^2 - h^2) of the face,
-                // so within radius + that of the centre), or straight behind
-                // the face (straightBehind's 1e-9 lets the projection lie at
-                // most 4.5e-5 |h| off the face: the 1e-4 |h| term).  Dropped:
-                // the node more than a reach in front of the plane, or its
-                // projection beyond that bound.  Margins (1e-9, 1e-6) over
-                // rounding: a triangle dropped here is one the exact test
-                // below drops too, so the candidates (and their order) are
-                // the same as without the prefilter.
+                // Prefilter (mayBeCandidate, TriangleRecord.hpp): of the
+                // listed triangles, those the exact test below may keep;
+                // the others it would drop too (same candidates, same order).
                 const int32_t* Lall = listFlat + listStart[s];
                 const int32_t nAll = listCount[s];
                 const double reachMax = ma.radius + radiusMax;
-                const double hMax = reachMax * (1 + 1e-9), reach2 = reachMax * reachMax * (1 + 1e-9);
                 int32_t L[PieceContactState::kList];
                 int32_t n = 0;
                 for (int32_t k = 0; k < nAll; ++k) {
-                    const int32_t t = Lall[k];
-                    const PieceContactState::TriRecord& r = rec[t];
-                    const double dx = A[0] - r.centre[0], dy = A[1] - r.centre[1], dz = A[2] - r.centre[2];
-                    const double h = dx * r.n[0] + dy * r.n[1] + dz * r.n[2];
-                    const double lim =
-                        r.radius * (1 + 1e-9) + std::sqrt(std::max(0.0, reach2 - h * h)) + 1e-4 * std::abs(h);
-                    const double lat2 = dx * dx + dy * dy + dz * dz - h * h;
-                    L[n] = t;
-                    n += !(h > hMax || lat2 > lim * lim * (1 + 1e-6));
+                    L[n] = Lall[k];
+                    n += mayBeCandidate(A.data(), rec[Lall[k]], reachMax);
                 }
                 prefilterIn += nAll, prefilterOut += n;
                 // The same tests as consider(), the closest points of
