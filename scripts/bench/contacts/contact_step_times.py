@@ -13,7 +13,11 @@ OMP_WAIT_POLICY=passive); within a round the builds run back to back, so a
 burst of load on the shared machine hits old and new alike.  Per process:
 `--warm` steps untimed, then `--steps` steps one at a time, each timed
 (perf_counter around core.step(dt, 1)) with the phases' own timings and
-whether it rebuilt the Verlet lists.  Reported per build and thread count,
+whether it rebuilt the Verlet lists.  The scene rebuilds its lists on its
+own only every few hundred steps, so every `--force-every` (5) steps a
+rebuild is forced by setting verletSkin to the next double above its value
+(or back): the lists are rebuilt whenever the skin changes, and come out
+the same.  Reported per build and thread count,
 min and median over the rounds of each process's median:
   step_ns_per_tet   all steps (rebuilds included: the amortised cost)
   ordinary_ms       steps without a rebuild
@@ -25,6 +29,7 @@ busy and left out of the min/median; it stays in the JSON).
 """
 import argparse
 import json
+import math
 import os
 import statistics as st
 import subprocess
@@ -50,7 +55,12 @@ def inner(a):
     core = w.core
     core.step(dt, a.warm)
     steps = []
-    for _ in range(a.steps):
+    skin = core.verletSkin
+    for k in range(a.steps):
+        if a.force_every and k % a.force_every == a.force_every - 1:
+            # the lists are rebuilt whenever the skin changes: alternate
+            # between the skin and the next double above it
+            core.verletSkin = math.nextafter(skin, 1.0) if core.verletSkin == skin else skin
         r0 = core.verletRebuilds
         t0 = time.perf_counter()
         core.step(dt, 1)
@@ -85,6 +95,8 @@ def main():
     ap.add_argument("--cells", type=int, default=8)
     ap.add_argument("--warm", type=int, default=10)
     ap.add_argument("--steps", type=int, default=60)
+    ap.add_argument("--force-every", type=int, default=5,
+                    help="force a Verlet rebuild every this many steps (0: only the scene's own)")
     ap.add_argument("--busy", type=float, default=2.5, help="1-minute load above which a run is flagged")
     ap.add_argument("--out", default=None)
     ap.add_argument("--inner", action="store_true")
@@ -100,7 +112,8 @@ def main():
                            OMP_WAIT_POLICY="passive")
                 l0 = loadavg()
                 p = subprocess.run([sys.executable, os.path.abspath(__file__), "--inner", "--threads", str(th),
-                                    "--cells", str(a.cells), "--warm", str(a.warm), "--steps", str(a.steps)],
+                                    "--cells", str(a.cells), "--warm", str(a.warm), "--steps", str(a.steps),
+                                    "--force-every", str(a.force_every)],
                                    env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                 if p.returncode != 0:
                     raise SystemExit(p.stderr[-3000:])
@@ -140,7 +153,7 @@ def main():
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
         with open(a.out, "w") as f:
             json.dump(dict(scene="cubes27 moving (scripts/arch/scenes.py cubes27World)", cells=a.cells, warm=a.warm,
-                           steps=a.steps, table=table, runs=runs), f, indent=1)
+                           steps=a.steps, force_every=a.force_every, table=table, runs=runs), f, indent=1)
 
 
 if __name__ == "__main__":
