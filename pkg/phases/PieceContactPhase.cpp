@@ -299,24 +299,24 @@ void PieceContactPhase::run(double dt) {
     // fork and join less.
 #pragma omp parallel num_threads(nth)
     {
-    for (int th = omp_get_thread_num(); th < nth; th += omp_get_num_threads()) {
-        std::vector<double>& b = st_.threadForce[th];
-        if (all) std::fill(b.begin(), b.end(), 0.0);
-        else
-            for (std::size_t ip = 0; ip < np; ++ip)
-                if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
-    }
-    for (std::size_t ip = 0; ip < np; ++ip) {
-        if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
-#pragma omp for schedule(static) nowait
-        for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
-            const int32_t* c = &S.tri[3 * t];
-            const Vector3d a = at(X, c[0]), b = at(X, c[1]), cc = at(X, c[2]);
-            const Vector3d n = (b - a).cross(cc - a).normalized();
-            for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
-            fillTriRecord(a, b, cc, n, st_.triRecord[t]);
+        for (int th = omp_get_thread_num(); th < nth; th += omp_get_num_threads()) {
+            std::vector<double>& b = st_.threadForce[th];
+            if (all) std::fill(b.begin(), b.end(), 0.0);
+            else
+                for (std::size_t ip = 0; ip < np; ++ip)
+                    if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
         }
-    }
+        for (std::size_t ip = 0; ip < np; ++ip) {
+            if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
+#pragma omp for schedule(static) nowait
+            for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
+                const int32_t* c = &S.tri[3 * t];
+                const Vector3d a = at(X, c[0]), b = at(X, c[1]), cc = at(X, c[2]);
+                const Vector3d n = (b - a).cross(cc - a).normalized();
+                for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+                fillTriRecord(a, b, cc, n, st_.triRecord[t]);
+            }
+        }
     }
     for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
     if (verlet && rebuild && triLists) {
