@@ -51,7 +51,6 @@ void PieceContactPhase::report(PhaseReport& r) const {
     r.counts.push_back({"interiorFaceTests", interiorFaceTests_});
     r.counts.push_back({"interiorFaceNear", interiorFaceNear_});
     r.counts.push_back({"listedTriangles", listedTriangles_});
-    r.counts.push_back({"listedTrianglesTested", prefilteredTriangles_});
 }
 
 void PieceContactPhase::run(double dt) {
@@ -59,7 +58,7 @@ void PieceContactPhase::run(double dt) {
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = 0;
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
-    listedTriangles_ = prefilteredTriangles_ = 0;
+    listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) return;
@@ -184,7 +183,6 @@ void PieceContactPhase::run(double dt) {
         st_.edgeStart.assign(np + 1, 0);
     }
     st_.triNormal.resize(3 * S.nTris());
-    st_.triRecord.resize(S.nTris());
     st_.itemGrid.resize(np), st_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
     // Registers item id (its n nodes) of piece `piece` at slot k if it is
@@ -293,7 +291,7 @@ void PieceContactPhase::run(double dt) {
     if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     const bool all = w_.sleeping.everything();
-    // Unit normals and records of the surface triangles of active pieces;
+    // Unit normals of the surface triangles of active pieces (quick plane test);
     // a sleeping piece's once after it stopped.  The same region zeroes the
     // thread buffers (only awake pieces' nodes are read, and so zeroed): one
     // fork and join less.
@@ -311,10 +309,8 @@ void PieceContactPhase::run(double dt) {
 #pragma omp for schedule(static) nowait
             for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
                 const int32_t* c = &S.tri[3 * t];
-                const Vector3d a = at(X, c[0]), b = at(X, c[1]), cc = at(X, c[2]);
-                const Vector3d n = (b - a).cross(cc - a).normalized();
+                const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
                 for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
-                fillTriRecord(a, b, cc, n, st_.triRecord[t]);
             }
         }
     }

@@ -9,7 +9,6 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/CellGrid.hpp"
 #include "../contact/SurfaceIndex.hpp"
-#include "../contact/TriangleRecord.hpp"
 #include "../world/Settings.hpp"
 
 namespace qdem {
@@ -28,10 +27,6 @@ struct PieceContactState {
     double itemReach = 0;                       // largest bounding radius + contact reach
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
     std::vector<double> triNormal;
-    // Per step, per triangle of an active piece, refreshed with the normals:
-    // the record the point-polygon loop reads (contact/TriangleRecord.hpp).
-    using TriRecord = contact_detail::TriRecord;
-    std::vector<TriRecord> triRecord;
     std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
 
     // Verlet lists (default broad phase): per surface node, the triangles of

@@ -12,7 +12,6 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
-#include "../contact/TriangleRecord.hpp"
 #include "../parallel/Domain.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -33,7 +32,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const bool interiorFacesToo = w_.settings.broadPhase == BroadPhase::AllTets || w_.settings.broadPhase == BroadPhase::SurfaceTets;
     constexpr int K = PieceContactState::kPP;
     const long stamp = w_.iter;
-    long interiorTests = 0, interiorNear = 0;
+    long interiorTests = 0, interiorNear = 0, listed = 0;
     const bool regions = w_.settings.pointPolygonRegions;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
@@ -45,12 +44,6 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const int32_t* listCount = st_.listCount.data();
     const int32_t* tri = S.tri.data();
     const double* normal = st_.triNormal.data();
-    const PieceContactState::TriRecord* rec = st_.triRecord.data();
-    // The largest particle radius of an active piece (the prefilter's reach).
-    double radiusMax = 0;
-    for (std::size_t p = 0; p < w_.pieces.size(); ++p)
-        if (active[p]) radiusMax = std::max(radiusMax, radius[p]);
-    long prefilterIn = 0, prefilterOut = 0;
     const double* X = w_.pos.data();
     // (locals, not w_'s references: the loop stores through narrow pointers
     // that may alias anything, which would reload them)
@@ -62,7 +55,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         double depth = 0, speed = 0, mass = 0, kn = 0;
     } tunnel;
 
-#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, prefilterIn, prefilterOut) reduction(max : maxOv)
+#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, listed) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -117,30 +110,21 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                             Eigen::Map<const Vector3d>(&st_.triNormal[3 * t]), reach, regions);
             };
             if (useList) {
-                // Prefilter (mayBeCandidate, TriangleRecord.hpp): of the
-                // listed triangles, those the exact test below may keep;
-                // the others it would drop too (same candidates, same order).
-                const int32_t* Lall = listFlat + listStart[s];
-                const int32_t nAll = listCount[s];
-                const double reachMax = ma.radius + radiusMax;
-                int32_t L[PieceContactState::kList];
-                int32_t n = 0;
-                for (int32_t k = 0; k < nAll; ++k) {
-                    L[n] = Lall[k];
-                    n += mayBeCandidate(A.data(), rec[Lall[k]], reachMax);
-                }
-                prefilterIn += nAll, prefilterOut += n;
                 // The same tests as consider(), the closest points of
                 // kTriLanes listed triangles at a time (SIMD lane code).
+                const int32_t* L = listFlat + listStart[s];
+                const int32_t n = listCount[s];
+                listed += n;
                 for (int32_t k0 = 0; k0 < n; k0 += kTriLanes) {
                     const int cnt = std::min<int32_t>(kTriLanes, n - k0);
                     for (int l = 0; l < kTriLanes; ++l) {
-                        const PieceContactState::TriRecord& r = rec[L[k0 + (l < cnt ? l : cnt - 1)]];
+                        const int32_t t = L[k0 + (l < cnt ? l : cnt - 1)];
+                        const int32_t* c = tri + 3 * t;
                         for (int d = 0; d < 3; ++d) {
-                            lanes.a[d][l] = r.a[d];
-                            lanes.b[d][l] = r.b[d];
-                            lanes.c[d][l] = r.c[d];
-                            lanes.n[d][l] = r.n[d];
+                            lanes.a[d][l] = X[3 * c[0] + d];
+                            lanes.b[d][l] = X[3 * c[1] + d];
+                            lanes.c[d][l] = X[3 * c[2] + d];
+                            lanes.n[d][l] = normal[3 * t + d];
                         }
                     }
                     closestOnTriangles(A.data(), lanes, near);
@@ -364,7 +348,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             }
         }
     }
-    listedTriangles_ = prefilterIn, prefilteredTriangles_ = prefilterOut;
+    listedTriangles_ = listed;
     interiorFaceTests_ = interiorTests;
     interiorFaceNear_ = interiorNear;
     if (tunnel.node >= 0) {

@@ -37,7 +37,7 @@ def main():
         for _ in range(a.steps // a.chunk):
             w.core.step(dt, a.chunk)
             c = w.core.contactCounts
-            listed.append(c["listedTriangles"]), tested.append(c["listedTrianglesTested"])
+            listed.append(c["listedTriangles"]), tested.append(c.get("listedTrianglesTested", 0))
             contacts.append(c["pointPolygon"])
         row = dict(skin=skin, rebuilds=int(w.core.verletRebuilds - r0), steps=a.steps,
                    listedPerStep=sum(listed) / len(listed), testedPerStep=sum(tested) / len(tested),
