@@ -3,7 +3,10 @@ a larger skin rebuilds the lists less often but lists more triangles per node,
 which every ordinary step pays for in point-polygon.  Counted, not timed (the
 counts do not depend on the machine's load): Verlet rebuilds over the run and
 the listed triangles per step (contactCounts listedTriangles, mean over the
-run's samples), at one thread.
+run's samples), at one thread.  testedPerStep: those passing the exact
+prefilter (contactCounts listedTrianglesTested) of commit 241797d, which
+doc/performance.md "Contact phase" quotes; the prefilter was taken out
+again after it, and later builds report 0 there.
 
     PYTHONPATH=build/python /usr/bin/python3.11 scripts/bench/contacts/skin_tradeoff.py \
         [--cells 4] [--steps 1000] [--skins 0.25 0.5 1 2] [--out bench/logs/contacts_skin_2026-11-24.json]
