@@ -165,8 +165,9 @@ void PieceContactPhase::run(double dt) {
     // order, as one pass piece after piece.
     const bool edgeRebuild = rebuild || !verlet;  // edge lists follow the same rebuilds
     const bool allTets = w_.settings.broadPhase == BroadPhase::AllTets;
-    // Piece ip's candidate items are the ids slot(ip, 0 .. n) (its triangles
-    // or tets), stored from capacity offset cap(ip).
+    // Piece ip's candidate items: a range of ids (its triangles; its tets or
+    // surface tets in the seed's cases A/B/C); the ones registered are
+    // written from the start of that range, then packed.
     auto itemRange = [&](std::size_t ip) -> std::pair<int32_t, int32_t> {
         if (!tetItems) return {S.pieceTriStart[ip], S.pieceTriStart[ip + 1]};
         if (allTets) return {w_.pieces[ip].tetBegin, w_.pieces[ip].tetEnd};
