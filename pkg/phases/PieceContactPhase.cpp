@@ -50,6 +50,7 @@ void PieceContactPhase::report(PhaseReport& r) const {
     // Cases A/B: interior faces tested for nothing, and of them those within reach.
     r.counts.push_back({"interiorFaceTests", interiorFaceTests_});
     r.counts.push_back({"interiorFaceNear", interiorFaceNear_});
+    r.counts.push_back({"listedTriangles", listedTriangles_});
 }
 
 void PieceContactPhase::run(double dt) {
@@ -57,6 +58,7 @@ void PieceContactPhase::run(double dt) {
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = 0;
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
+    listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) return;
@@ -157,56 +159,78 @@ void PieceContactPhase::run(double dt) {
     // Register, piece by piece, the surface elements that lie near another
     // piece's box (the others cannot be touched this step), in cells sized by
     // the seed's eq. 6: element bounding radius (eq. 7) plus contact reach.
-    if (rebuild) {
-        st_.itemStart.assign(np + 1, 0);
-        st_.items.clear(), st_.itemPoint.clear(), st_.itemRadius.clear();
-    }
+    // The pieces are registered in parallel, each into its own stretch of
+    // the arrays (its triangles, tets or edges' id range), then the
+    // stretches are packed in piece order: the same items, in the same
+    // order, as one pass piece after piece.
     const bool edgeRebuild = rebuild || !verlet;  // edge lists follow the same rebuilds
+    const bool allTets = w_.settings.broadPhase == BroadPhase::AllTets;
+    // Piece ip's candidate items: a range of ids (its triangles; its tets or
+    // surface tets in the seed's cases A/B/C); the ones registered are
+    // written from the start of that range, then packed.
+    auto itemRange = [&](std::size_t ip) -> std::pair<int32_t, int32_t> {
+        if (!tetItems) return {S.pieceTriStart[ip], S.pieceTriStart[ip + 1]};
+        if (allTets) return {w_.pieces[ip].tetBegin, w_.pieces[ip].tetEnd};
+        return {S.pieceSurfTetStart[ip], S.pieceSurfTetStart[ip + 1]};
+    };
+    const std::size_t itemCap = !tetItems ? S.nTris() : allTets ? static_cast<std::size_t>(w_.tetNodes.size() / 4)
+                                                                 : S.surfTets.size();
+    if (rebuild) {
+        st_.items.resize(itemCap), st_.itemPoint.resize(3 * itemCap), st_.itemRadius.resize(itemCap);
+        st_.itemStart.assign(np + 1, 0);
+    }
     if (edgeRebuild) {
+        st_.edgeItems.resize(S.nEdges()), st_.edgeLo.resize(3 * S.nEdges()), st_.edgeHi.resize(3 * S.nEdges());
         st_.edgeStart.assign(np + 1, 0);
-        st_.edgeItems.clear(), st_.edgeLo.clear(), st_.edgeHi.clear();
     }
     st_.triNormal.resize(3 * S.nTris());
     st_.itemGrid.resize(np), st_.edgeGrid.resize(np);
     double itemR = 0, edgeR = 0;
-    auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece) {
+    // Registers item id (its n nodes) of piece `piece` at slot k if it is
+    // near another piece; returns whether it did.
+    auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece, std::size_t k,
+                       double& rLargest) {
         if (cur)
-            for (int k = 0; k < n; ++k)
-                if (!cur[nodes[k]]) return;
+            for (int j = 0; j < n; ++j)
+                if (!cur[nodes[j]]) return false;
         Vector3d c = Vector3d::Zero(), lo = Vector3d::Constant(1e300), hi = -lo;
-        for (int k = 0; k < n; ++k) {
-            const Vector3d x = at(X, nodes[k]);
+        for (int j = 0; j < n; ++j) {
+            const Vector3d x = at(X, nodes[j]);
             c += x, lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         }
         c /= n;
         lo.array() -= r + grow, hi.array() += r + grow;
         // Ours filters out elements far from other pieces; the seed's cases
         // A/B/C register everything of their kind, as the paper measured.
-        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) return;
+        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data()))
+            return false;
         double R = 0;
-        for (int k = 0; k < n; ++k) R = std::max(R, (at(X, nodes[k]) - c).squaredNorm());
+        for (int j = 0; j < n; ++j) R = std::max(R, (at(X, nodes[j]) - c).squaredNorm());
         R = std::sqrt(R);
-        itemR = std::max(itemR, R);
-        st_.items.push_back(id);
-        st_.itemPoint.insert(st_.itemPoint.end(), {c[0], c[1], c[2]});
-        st_.itemRadius.push_back(R);
+        rLargest = std::max(rLargest, R);
+        st_.items[k] = id;
+        for (int d = 0; d < 3; ++d) st_.itemPoint[3 * k + d] = c[d];
+        st_.itemRadius[k] = R;
+        return true;
     };
-    for (std::size_t ip = 0; ip < np; ++ip) {
+    const auto npi = static_cast<int32_t>(np);
+#pragma omp parallel for schedule(dynamic, 1) reduction(max : itemR, edgeR) if (edgeRebuild)
+    for (int32_t ip = 0; ip < (edgeRebuild ? npi : 0); ++ip) {
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
         if (st_.pieceActive[ip] && triLists && rebuild) {
-            if (!tetItems) {
-                for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t)
-                    addItem(t, &S.tri[3 * t], 3, r, ip);
-            } else if (w_.settings.broadPhase == BroadPhase::AllTets) {
-                for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) addItem(e, &w_.tetNodes[4 * e], 4, r, ip);
-            } else {
-                for (int32_t q = S.pieceSurfTetStart[ip]; q < S.pieceSurfTetStart[ip + 1]; ++q)
-                    addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip);
+            const auto [b, e] = itemRange(ip);
+            const std::size_t k0 = !tetItems ? S.pieceTriStart[ip] : allTets ? p.tetBegin : S.pieceSurfTetStart[ip];
+            std::size_t k = k0;
+            for (int32_t q = b; q < e; ++q) {
+                if (!tetItems) k += addItem(q, &S.tri[3 * q], 3, r, ip, k, itemR);
+                else if (allTets) k += addItem(q, &w_.tetNodes[4 * q], 4, r, ip, k, itemR);
+                else k += addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip, k, itemR);
             }
+            st_.itemStart[ip + 1] = static_cast<int32_t>(k - k0);  // (a count until packed)
         }
-        if (rebuild) st_.itemStart[ip + 1] = static_cast<int32_t>(st_.items.size());
         if (st_.pieceActive[ip] && edgeLists && edgeRebuild) {
+            std::size_t k = S.pieceEdgeStart[ip];
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
@@ -217,15 +241,43 @@ void PieceContactPhase::run(double dt) {
                 const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
                 if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) continue;
                 edgeR = std::max(edgeR, (b - a).norm());
-                st_.edgeItems.push_back(e);
-                st_.edgeLo.insert(st_.edgeLo.end(), {lo[0], lo[1], lo[2]});
-                st_.edgeHi.insert(st_.edgeHi.end(), {hi[0], hi[1], hi[2]});
+                st_.edgeItems[k] = e;
+                for (int d = 0; d < 3; ++d) st_.edgeLo[3 * k + d] = lo[d], st_.edgeHi[3 * k + d] = hi[d];
+                ++k;
             }
+            st_.edgeStart[ip + 1] = static_cast<int32_t>(k - S.pieceEdgeStart[ip]);
         }
-        if (edgeRebuild) st_.edgeStart[ip + 1] = static_cast<int32_t>(st_.edgeItems.size());
+    }
+    // Pack the pieces' stretches (each moves down or stays: order kept).
+    if (rebuild) {
+        for (std::size_t ip = 0; ip < np; ++ip) {
+            const std::size_t from = !tetItems ? S.pieceTriStart[ip] : allTets ? w_.pieces[ip].tetBegin
+                                                                              : S.pieceSurfTetStart[ip];
+            const int32_t n = st_.itemStart[ip + 1], to = st_.itemStart[ip];
+            std::copy_n(&st_.items[from], n, &st_.items[to]);
+            std::copy_n(&st_.itemPoint[3 * from], 3 * n, &st_.itemPoint[3 * to]);
+            std::copy_n(&st_.itemRadius[from], n, &st_.itemRadius[to]);
+            st_.itemStart[ip + 1] = to + n;
+        }
+        const std::size_t n = st_.itemStart[np];
+        st_.items.resize(n), st_.itemPoint.resize(3 * n), st_.itemRadius.resize(n);
+    }
+    if (edgeRebuild) {
+        for (std::size_t ip = 0; ip < np; ++ip) {
+            const std::size_t from = S.pieceEdgeStart[ip];
+            const int32_t n = st_.edgeStart[ip + 1], to = st_.edgeStart[ip];
+            std::copy_n(&st_.edgeItems[from], n, &st_.edgeItems[to]);
+            std::copy_n(&st_.edgeLo[3 * from], 3 * n, &st_.edgeLo[3 * to]);
+            std::copy_n(&st_.edgeHi[3 * from], 3 * n, &st_.edgeHi[3 * to]);
+            st_.edgeStart[ip + 1] = to + n;
+        }
+        const std::size_t n = st_.edgeStart[np];
+        st_.edgeItems.resize(n), st_.edgeLo.resize(3 * n), st_.edgeHi.resize(3 * n);
     }
     if (rebuild) st_.itemReach = itemR + 2 * rMax + grow;
-    for (std::size_t ip = 0; ip < np; ++ip) {
+    // (each piece's grids are its own: built in parallel)
+#pragma omp parallel for schedule(dynamic, 1) if (edgeRebuild)
+    for (int32_t ip = 0; ip < (edgeRebuild ? npi : 0); ++ip) {
         const int32_t i0 = st_.itemStart[ip], i1 = st_.itemStart[ip + 1];
         // Cells twice the reach: a query box of +-reach then spans 2 cells per
         // axis (8 cells) instead of 3 (27), for a few more items per cell.
@@ -235,16 +287,32 @@ void PieceContactPhase::run(double dt) {
             st_.edgeGrid[ip].build(st_.edgeLo.data() + 3 * e0, st_.edgeHi.data() + 3 * e0, e1 - e0,
                                    edgeR + 2 * rMax + grow);
     }
-    // Unit normals of the surface triangles of active pieces (quick plane
-    // test); a sleeping piece's once after it stopped.
-#pragma omp parallel
-    for (std::size_t ip = 0; ip < np; ++ip) {
-        if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
+    // Thread force buffers, one per thread, 3 per surface node.
+    const int nth = omp_get_max_threads();
+    if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
+    for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
+    const bool all = w_.sleeping.everything();
+    // Unit normals of the surface triangles of active pieces (quick plane test);
+    // a sleeping piece's once after it stopped.  The same region zeroes the
+    // thread buffers (only awake pieces' nodes are read, and so zeroed): one
+    // fork and join less.
+#pragma omp parallel num_threads(nth)
+    {
+        for (int th = omp_get_thread_num(); th < nth; th += omp_get_num_threads()) {
+            std::vector<double>& b = st_.threadForce[th];
+            if (all) std::fill(b.begin(), b.end(), 0.0);
+            else
+                for (std::size_t ip = 0; ip < np; ++ip)
+                    if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+        }
+        for (std::size_t ip = 0; ip < np; ++ip) {
+            if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
 #pragma omp for schedule(static) nowait
-        for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
-            const int32_t* c = &S.tri[3 * t];
-            const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
-            for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+            for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
+                const int32_t* c = &S.tri[3 * t];
+                const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
+                for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+            }
         }
     }
     for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
@@ -334,21 +402,8 @@ void PieceContactPhase::run(double dt) {
     }
     if (!verlet) st_.listValid = false;
 
-    const int nth = omp_get_max_threads();
-    if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
-    for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     broadSeconds_ = omp_get_wtime() - t0;
 
-    // Thread buffers: only awake pieces' nodes are read (and so zeroed).
-    const bool all = w_.sleeping.everything();
-#pragma omp parallel num_threads(nth)
-    {
-        auto& b = st_.threadForce[omp_get_thread_num()];
-        if (all) std::fill(b.begin(), b.end(), 0.0);
-        else
-            for (std::size_t ip = 0; ip < np; ++ip)
-                if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
-    }
     // The kinds of the table, in order (ContactKind.hpp).
     KindStep ks{dt, w_.settings.frictionOn, w_, *this, st_, st_.threadForce};
     for (Kind& k : kinds_) {

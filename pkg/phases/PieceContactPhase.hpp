@@ -77,6 +77,8 @@ private:
     PieceContactState st_;
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0;
     long interiorFaceTests_ = 0, interiorFaceNear_ = 0;
+    // Point-polygon from the Verlet lists: triangles listed for the nodes.
+    long listedTriangles_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
 };

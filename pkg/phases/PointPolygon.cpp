@@ -32,7 +32,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const bool interiorFacesToo = w_.settings.broadPhase == BroadPhase::AllTets || w_.settings.broadPhase == BroadPhase::SurfaceTets;
     constexpr int K = PieceContactState::kPP;
     const long stamp = w_.iter;
-    long interiorTests = 0, interiorNear = 0;
+    long interiorTests = 0, interiorNear = 0, listed = 0;
     const bool regions = w_.settings.pointPolygonRegions;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
@@ -55,7 +55,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         double depth = 0, speed = 0, mass = 0, kn = 0;
     } tunnel;
 
-#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear) reduction(max : maxOv)
+#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, listed) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -114,6 +114,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 // kTriLanes listed triangles at a time (SIMD lane code).
                 const int32_t* L = listFlat + listStart[s];
                 const int32_t n = listCount[s];
+                listed += n;
                 for (int32_t k0 = 0; k0 < n; k0 += kTriLanes) {
                     const int cnt = std::min<int32_t>(kTriLanes, n - k0);
                     for (int l = 0; l < kTriLanes; ++l) {
@@ -347,6 +348,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             }
         }
     }
+    listedTriangles_ = listed;
     interiorFaceTests_ = interiorTests;
     interiorFaceNear_ = interiorNear;
     if (tunnel.node >= 0) {
