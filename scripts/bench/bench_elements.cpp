@@ -14,7 +14,7 @@
 //
 //   bench_elements [--steps 200] [--cubes 3,6] [--repeats 5] [--threads 1,2]
 //                  [--laws svk,snh] [--modes viscous,elastic]
-//                  [--max-load 1.5] [--max-others 0.2] [--label NAME]
+//                  [--max-others 0.2] [--label NAME]
 //   bench_elements [steps] [cubesPerAxis] [repeats]      (the older form)
 //
 // --steps is for the 27-cube mesh; larger meshes run fewer steps so that each
@@ -62,7 +62,7 @@ std::vector<std::string> split(const std::string& s) {
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
                  "bench_elements: %s\nusage: bench_elements [--steps N] [--cubes 3,6] [--repeats N] [--threads 1,2] "
-                 "[--laws svk,snh] [--modes viscous,elastic] [--max-load L] [--max-others C] [--label NAME]\n",
+                 "[--laws svk,snh] [--modes viscous,elastic] [--max-others C] [--label NAME]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -109,7 +109,6 @@ Options parse(int argc, char** argv) {
                 if (s == "viscous" || s == "elastic") o.viscous.push_back(s == "viscous");
                 else usage("--modes: 'viscous' or 'elastic', got '" + s + "'");
             }
-        } else if (a == "--max-load") o.rule.maxLoad = std::atof(v.c_str());
         else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
         else if (a == "--label") o.label = v;
         else usage("unknown option " + a);
@@ -188,9 +187,9 @@ int main(int argc, char** argv) {
     const std::time_t now = std::time(nullptr);
     std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
     std::printf("{\"benchmark\": \"bench_elements\", \"label\": \"%s\", \"date\": \"%s\", \"cpus\": %d, "
-                "\"repeats\": %d, \"busy_rule\": {\"max_load1_less_own_share\": %g, \"max_other_cores\": %g}, "
+                "\"repeats\": %d, \"busy_rule\": {\"max_other_cores\": %g}, "
                 "\"units\": \"ns per tet per step\", \"meshes\": [",
-                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxLoad - 1, o.rule.maxOthers);
+                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxOthers);
     const std::size_t smallTets = 27 * 6144;
     for (std::size_t mi = 0; mi < o.cubes.size(); ++mi) {
         const int cubes = o.cubes[mi];

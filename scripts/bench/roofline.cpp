@@ -5,7 +5,7 @@
 // phase's floors in doc/performance.md are its flops over the first and its
 // bytes over the second.
 //
-//   roofline [--repeats 7] [--max-load 1.5] [--max-others 0.2] > roofline.json
+//   roofline [--repeats 7] [--max-others 0.2] > roofline.json
 //
 // Every measurement is repeated, interleaved, with the 1-minute load average
 // and the CPU other processes used recorded per run (MachineLoad.hpp); busy
@@ -169,16 +169,15 @@ int main(int argc, char** argv) {
     bench::BusyRule rule;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--repeats")) repeats = std::atoi(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--max-load")) rule.maxLoad = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--max-others")) rule.maxOthers = std::atof(argv[i + 1]);
         else {
-            std::fprintf(stderr, "roofline: unknown option %s\nusage: roofline [--repeats N] [--max-load L] "
+            std::fprintf(stderr, "roofline: unknown option %s\nusage: roofline [--repeats N] "
                                  "[--max-others C]\n", argv[i]);
             return 2;
         }
     }
     if (argc % 2 == 0 || repeats < 1) {
-        std::fprintf(stderr, "usage: roofline [--repeats N>=1] [--max-load L] [--max-others C]\n");
+        std::fprintf(stderr, "usage: roofline [--repeats N>=1] [--max-others C]\n");
         return 2;
     }
     // DRAM: 3 x 256 MB (24x the 32 MB L3); L3: 3 x 2 MB = 6 MB (fits the L3,
@@ -215,9 +214,9 @@ int main(int argc, char** argv) {
     std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
     std::printf("{\"benchmark\": \"roofline\", \"date\": \"%s\", \"isa\": \"%s\", \"cpus\": %d, \"fma_chains\": %d, "
                 "\"triad_bytes_per_element\": 24, \"dram_array_mb\": %.0f, \"l3_array_mb\": %.0f, "
-                "\"busy_rule\": {\"max_load1_less_own_share\": %g, \"max_other_cores\": %g}, \"results\": [",
+                "\"busy_rule\": {\"max_other_cores\": %g}, \"results\": [",
                 date, kIsa, omp_get_num_procs(), kChains, big.n * 8.0 / (1 << 20), small.n * 8.0 / (1 << 20),
-                rule.maxLoad - 1, rule.maxOthers);
+                rule.maxOthers);
     for (std::size_t i = 0; i < ms.size(); ++i) {
         Stats clean, all, cpuClean, cpuAll;
         std::string list;
