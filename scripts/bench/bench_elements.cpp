@@ -109,7 +109,7 @@ Options parse(int argc, char** argv) {
                 if (s == "viscous" || s == "elastic") o.viscous.push_back(s == "viscous");
                 else usage("--modes: 'viscous' or 'elastic', got '" + s + "'");
             }
-        else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
+        } else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
         else if (a == "--label") o.label = v;
         else usage("unknown option " + a);
     }
