@@ -24,7 +24,7 @@ void ElementPhase::elementRange(const Law& law, const TetBlock* blocks, const Bl
     BatchOut out;
     const TetBlock* b = blocks + sg.first;
     for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes, ++b) {
-        const int count = std::min<int32_t>(kLanes, sg.t1 - e0);
+        const int count = sg.count(e0);
         elementBlock<Law, Viscous, Energy>(law, *b, X, V, prm, out);
         scatterForces(out.f, b->node, count, buf, lo);
         if constexpr (Energy)
@@ -39,24 +39,7 @@ void ElementPhase::elementRange(const Law& law, const TetBlock* blocks, const Bl
 
 void ElementPhase::buildLayout(int threads) {
     layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), threads, w_.sleeping.version(), kForceStride);
-    blocks_.resize(layout_.nThreads);
-    const int32_t* conn = w_.tetNodes.data();
-    const double* Bs = w_.tetB.data();
-    const double* vol = w_.tetVol0.data();
-#pragma omp parallel for num_threads(layout_.nThreads) schedule(static, 1)
-    for (int t = 0; t < layout_.nThreads; ++t) {  // each thread fills its own blocks (first touch)
-        ThreadBlocks& tb = blocks_[t];
-        tb.segments.clear();
-        int32_t n = 0;
-        for (const TetSegment& sg : layout_.share[t]) {
-            tb.segments.push_back({sg.piece, n, sg.t0, sg.t1});
-            n += (sg.t1 - sg.t0 + kLanes - 1) / kLanes;
-        }
-        tb.blocks.resize(n);
-        for (const BlockSegment& s : tb.segments)
-            for (int32_t e0 = s.t0, i = s.first; e0 < s.t1; e0 += kLanes, ++i)
-                fillTetBlock(tb.blocks[i], e0, std::min<int32_t>(kLanes, s.t1 - e0), conn, Bs, vol);
-    }
+    buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), blocks_);
 }
 
 void ElementPhase::run(double dt) {

@@ -12,6 +12,7 @@
 #include "../world/Phase.hpp"
 #include "../world/PieceInfo.hpp"
 #include "../world/Settings.hpp"
+#include "../world/ThreadBlocks.hpp"
 #include "../world/ThreadLayout.hpp"
 
 namespace qdem {
@@ -45,15 +46,6 @@ public:
     void stress(double* out) const;
 
 private:
-    // A thread's share as tet blocks: segment s covers blocks
-    // [first, first + ceil((t1 - t0) / kLanes)), tets t0 .. t1-1 of one piece.
-    struct BlockSegment {
-        int32_t piece, first, t0, t1;
-    };
-    struct ThreadBlocks {
-        AlignedVector<TetBlock> blocks;
-        std::vector<BlockSegment> segments;
-    };
     // Rebuilds layout_ (force buffers padded to kForceStride doubles per
     // node) and blocks_ from it, when the awake set or thread count changed.
     void buildLayout(int threads);

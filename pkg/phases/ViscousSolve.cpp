@@ -68,7 +68,6 @@ ViscousSolve::AwakeNodes ViscousSolve::awakeNodes() const {
 void ViscousSolve::apply(double* p, double* y) {
     Domain* dom = w_.domain.built();
     if (dom) dom->forwardField(p);  // the ghosts' p, read by this rank's tets
-    const int32_t* conn = w_.tetNodes.data();
     const ViscousStressOnly law;
     const AwakeNodes awake = awakeNodes();
     const int32_t count = awake.count;
@@ -79,23 +78,23 @@ void ViscousSolve::apply(double* p, double* y) {
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
         BatchOut out;
-        for (const TetSegment& sg : layout_.share[th]) {
+        const TetBlock* blocks = blocks_[th].blocks.data();
+        const double* X = w_.pos.data();
+        for (const BlockSegment& sg : blocks_[th].segments) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
             if (!viscous(w_.settings, m)) continue;
             const ElementParams prm{m.lambda(), m.mu(), m.beta()};
-            for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes) {
-                const int cnt = std::min<int32_t>(kLanes, sg.t1 - e0);
-                elementBatch<ViscousStressOnly, true, false>(law, e0, cnt, conn, w_.pos.data(), p, w_.tetB.data(),
-                                                             w_.tetVol0.data(), prm, out);
-                for (int l = 0; l < cnt; ++l) {
-                    const int32_t* c = conn + 4 * (e0 + l);
+            const TetBlock* b = blocks + sg.first;
+            for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes, ++b) {
+                const int cnt = sg.count(e0);
+                elementBlock<ViscousStressOnly, true, false>(law, *b, X, p, prm, out);
+                for (int l = 0; l < cnt; ++l)
                     for (int k = 0; k < 4; ++k) {
-                        double* o = buf.data() + 3 * (c[k] - lo);
+                        double* o = buf.data() + 3 * (b->node[k][l] - lo);
                         o[0] -= out.f[k][0][l];  // the kernel gives the force -C p
                         o[1] -= out.f[k][1][l];
                         o[2] -= out.f[k][2][l];
                     }
-                }
             }
         }
 #pragma omp barrier
@@ -146,8 +145,10 @@ void ViscousSolve::diagonal(double* diag) {
 const double* ViscousSolve::solve(double dt, const double* f) {
     const double t0 = omp_get_wtime();
     const int nth = omp_get_max_threads();
-    if (!layout_.matches(nth, w_.sleeping.version()))
+    if (!layout_.matches(nth, w_.sleeping.version())) {
         layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), nth, w_.sleeping.version());
+        buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), blocks_);
+    }
     const std::size_t n3 = 3 * w_.mass.size();
     for (auto* v : {&x_, &r_, &z_, &p_, &cp_, &q_, &diag_, &delta_})
         if (v->size() != n3) v->assign(n3, 0.0);

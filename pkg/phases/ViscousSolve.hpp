@@ -25,6 +25,7 @@
 #include "../parallel/DomainRef.hpp"
 #include "../world/PieceInfo.hpp"
 #include "../world/Settings.hpp"
+#include "../world/ThreadBlocks.hpp"
 #include "../world/ThreadLayout.hpp"
 
 namespace qdem {
@@ -90,6 +91,7 @@ private:
 
     Data w_;
     ThreadLayout layout_;
+    std::vector<ThreadBlocks> blocks_;  // the layout's shares as tet blocks (the operator's element pass)
     std::vector<double> x_, r_, z_, p_, y_, cp_, q_, diag_, delta_, partial_;
 };
 

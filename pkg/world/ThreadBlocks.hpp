@@ -1,0 +1,31 @@
+// Each thread's share of the tets (ThreadLayout) as blocks of kLanes tets
+// (TetBlock.hpp), in share order: what the element kernel reads of the
+// reference data.  Built with the layout; the element phase and the implicit
+// viscous solve each keep one beside their layout.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../core/Aligned.hpp"
+#include "../element/TetBlock.hpp"
+#include "ThreadLayout.hpp"
+
+namespace qdem {
+
+// Segment of a share: blocks [first, first + ceil((t1 - t0) / kLanes)),
+// tets t0 .. t1-1 of one piece.
+struct BlockSegment {
+    int32_t piece, first, t0, t1;
+    int count(int32_t e0) const { return t1 - e0 < kLanes ? t1 - e0 : kLanes; }  // live lanes of the block at e0
+};
+
+struct ThreadBlocks {
+    AlignedVector<TetBlock> blocks;
+    std::vector<BlockSegment> segments;
+};
+
+// blocks[t] for every thread t of layout (each thread fills its own: first touch).
+void buildThreadBlocks(const ThreadLayout& layout, const int32_t* tetNodes, const double* tetB, const double* tetVol0,
+                       std::vector<ThreadBlocks>& blocks);
+
+}  // namespace qdem
