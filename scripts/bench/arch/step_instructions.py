@@ -22,9 +22,7 @@ import argparse
 import json
 import os
 import re
-import subprocess
 import sys
-import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
@@ -45,29 +43,17 @@ def inner(a):
 
 
 def count(build, a):
-    out = tempfile.mktemp(prefix="callgrind.", dir="/tmp")
-    env = dict(os.environ, PYTHONPATH=build, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="passive")
-    cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out,
-           "--toggle-collect=qdem::World::step(double)",
-           "/usr/bin/python3.11", os.path.abspath(__file__), "--inner", "--scene", a.scene,
-           "--cells", str(a.cells), "--steps", str(a.steps)]
+    sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+    from callgrind_run import annotate
     t0 = time.time()
-    p = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if p.returncode != 0:
-        raise SystemExit("valgrind run failed:\n" + p.stdout[-2000:] + p.stderr[-3000:])
-    info = re.search(r"STEPS (\d+) rebuilds (\d+) tets (\d+)", p.stdout)
-    ann = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out],
-                         stdout=subprocess.PIPE, text=True).stdout
-    total = None
-    m = re.search(r"^\s*([\d,]+)\s+\(100\.0%\)\s+PROGRAM TOTALS", ann, re.M)
-    if m:
-        total = int(m.group(1).replace(",", ""))
+    stdout, ann, total = annotate(build, __file__, ["--inner", "--scene", a.scene, "--cells", str(a.cells),
+                                                    "--steps", str(a.steps)])
+    info = re.search(r"STEPS (\d+) rebuilds (\d+) tets (\d+)", stdout)
     phases = {}
     for ph in PHASES:
         m = re.search(r"^\s*([\d,]+)\s+\(\s*[\d.]+%\)\s+\S*:qdem::" + ph + r"::run\(double\)", ann, re.M)
         if m:
             phases[ph] = int(m.group(1).replace(",", ""))
-    os.unlink(out)
     return dict(build=build, totalIr=total, irPerStep=total / a.steps if total else None,
                 phaseIr=phases, rebuilds=int(info.group(2)) if info else None,
                 tets=int(info.group(3)) if info else None, seconds=time.time() - t0,

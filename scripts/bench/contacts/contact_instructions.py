@@ -25,9 +25,7 @@ import json
 import math
 import os
 import re
-import subprocess
 import sys
-import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -54,22 +52,12 @@ def inner(a):
 
 
 def count(build, mode, a):
-    out = tempfile.mktemp(prefix="callgrind.", dir="/tmp")
-    env = dict(os.environ, PYTHONPATH=build, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="passive")
-    cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out,
-           "--toggle-collect=qdem::World::step(double)", "--zero-before=qdem::World::step(double)",
-           sys.executable, os.path.abspath(__file__), "--inner", "--mode", mode, "--cells", str(a.cells),
-           "--warm", str(a.warm)]
+    sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+    from callgrind_run import annotate
     t0 = time.time()
-    p = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if p.returncode != 0:
-        raise SystemExit("valgrind run failed:\n" + p.stdout[-2000:] + p.stderr[-3000:])
-    info = re.search(r"TETS (\d+) REBUILT (\d+)", p.stdout)
-    ann = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out],
-                         stdout=subprocess.PIPE, text=True).stdout
-    os.unlink(out)
-    m = re.search(r"^\s*([\d,]+)\s+\(100\.0%\)\s+PROGRAM TOTALS", ann, re.M)
-    total = int(m.group(1).replace(",", "")) if m else None
+    stdout, ann, total = annotate(build, __file__, ["--inner", "--mode", mode, "--cells", str(a.cells),
+                                                    "--warm", str(a.warm)], zeroBefore=True)
+    info = re.search(r"TETS (\d+) REBUILT (\d+)", stdout)
     funcs = {}
     for line in ann.splitlines():
         m = re.match(r"^\s*([\d,]+)\s+\(\s*[\d.]+%\)\s+\S*?:(.*)$", line)
