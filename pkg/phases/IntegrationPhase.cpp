@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "../parallel/Domain.hpp"
+#include "../world/WorldState.hpp"
 #include "ElementPhase.hpp"
 #include "SleepPhase.hpp"
 #include "IntegrationPhase.hpp"
@@ -80,6 +81,7 @@ void IntegrationPhase::run(double dt) {
     const bool implicit = viscous_.active();
     const double* Fq = nullptr;
     viscous_.iterations = 0;
+    viscous_.startedWarm = false;
     viscous_.seconds = 0;
     if (implicit) {
 #pragma omp parallel for num_threads(nth) schedule(static)
@@ -169,7 +171,44 @@ void IntegrationPhase::report(PhaseReport& r) const {
     r.seconds.push_back({name(), seconds - viscous_.seconds});
     r.seconds.push_back({"viscousSolve", viscous_.seconds});
     r.counts.push_back({"viscousIterations", viscous_.iterations});
+    r.counts.push_back({"viscousWarmStart", viscous_.startedWarm ? 1 : 0});  // the last solve started warm
     r.counts.push_back({"viscousIterationsTotal", viscous_.totalIterations});  // since the world was built
+}
+
+void IntegrationPhase::stateColumns(StateColumns& c) {
+    c.add("viscousWarmStart", viscous_.warmStart(), Rows::Node, /*restart=*/false);  // (saveFields: optional)
+}
+
+void IntegrationPhase::piecesAdded() {
+    // The new nodes have no last velocity change; the others keep theirs.
+    viscous_.warmStart().resize(3 * w_.mass.size(), 0.0);
+}
+
+void IntegrationPhase::saveFields(WorldState& s) const {
+    const std::vector<double>& w = viscous_.warmStart();
+    s.put("viscousWarmStart", w.data(), w.size());
+    const double meta[2] = {static_cast<double>(viscous_.warmIter), viscous_.warmDt};
+    s.put("viscousWarmStep", meta, 2);
+}
+
+void IntegrationPhase::checkFields(const WorldState& s) const {
+    if (s.fields.count("viscousWarmStart") == 0) return;
+    s.check<double>("viscousWarmStart", viscous_.warmStart().size());
+    s.check<double>("viscousWarmStep", 2);
+}
+
+void IntegrationPhase::loadFields(const WorldState& s) {
+    std::vector<double>& w = viscous_.warmStart();
+    if (s.fields.count("viscousWarmStart") == 0) {
+        std::fill(w.begin(), w.end(), 0.0);
+        viscous_.warmIter = -1;
+        return;
+    }
+    s.get("viscousWarmStart", w.data(), w.size());
+    double meta[2];
+    s.get("viscousWarmStep", meta, 2);
+    viscous_.warmIter = static_cast<long>(meta[0]);
+    viscous_.warmDt = meta[1];
 }
 
 double IntegrationPhase::maxSpeed2(std::size_t piece) const {

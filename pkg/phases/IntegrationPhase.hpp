@@ -48,6 +48,14 @@ public:
     // conjugate-gradient iterations in the last step ("viscousIterations")
     // and in all steps so far ("viscousIterationsTotal").
     void report(PhaseReport& r) const override;
+    // The implicit solve's warm start (ViscousSolve::warmStart): migrated
+    // between MPI ranks as node rows, and saved in restarts (files from
+    // before it load with none: the next solve starts from 0).
+    void stateColumns(StateColumns& c) override;
+    void piecesAdded() override;
+    void saveFields(WorldState& s) const override;
+    void checkFields(const WorldState& s) const override;
+    void loadFields(const WorldState& s) override;
     // Largest squared node speed of a piece in the last run (sleeping on only).
     double maxSpeed2(std::size_t piece) const;
 

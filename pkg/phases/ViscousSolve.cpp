@@ -142,6 +142,85 @@ void ViscousSolve::diagonal(double* diag) {
     if (Domain* dom = w_.domain.built()) dom->returnPartials(layout_, diag);
 }
 
+bool ViscousSolve::start(double dt, const double* f, double* s) {
+    const double* M = w_.mass.data();
+    const uint8_t* blk = w_.blocked.data();
+    double* X = x_.data();
+    double* R = r_.data();
+    double* Z = z_.data();
+    double* P = p_.data();
+    double* CP = cp_.data();
+    double* Q = q_.data();
+    double* D = diag_.data();
+    // The last step's D, when it was the last step's (not after a pause of
+    // the solve, e.g. while every viscous piece slept); scaled to this dt,
+    // since D ~ dt a.
+    if (warm_.size() != x_.size()) warm_.assign(x_.size(), 0.0), warmIter = -1;
+    bool warm = w_.settings.viscousWarmStart && warmIter >= 0 && warmIter + 1 == w_.iter && warmDt > 0;
+    if (warm) {
+        const double* W = warm_.data();
+        const double scale = dt / warmDt;
+        nodeLoop(Sum::Local, 0, s, [&](int32_t n, double*) {
+            for (int d = 0; d < 3; ++d) X[3 * n + d] = ((blk[n] >> d) & 1u) ? 0.0 : scale * W[3 * n + d];
+        });
+        apply(X, CP);  // C x0: one operator application
+    }
+    // r = dt f - (M + dt C) x0, and the sums; bMb = ||dt f||_{M^-1}^2 is
+    // what the residual is from D = 0.
+    nodeLoop(Sum::Global, 4, s, [&](int32_t n, double* acc) {
+        for (int d = 0; d < 3; ++d) {
+            const int32_t k = 3 * n + d;
+            D[k] = M[n] + dt * D[k];
+            if (!warm) X[k] = 0;
+            Q[k] = warm ? CP[k] : 0.0;  // q = C x, on every DOF as in the iterations
+            if ((blk[n] >> d) & 1u) {
+                R[k] = Z[k] = P[k] = 0;
+                continue;
+            }
+            const double b = dt * f[k];
+            R[k] = warm ? b - M[n] * X[k] - dt * CP[k] : b;
+            Z[k] = R[k] / D[k];
+            P[k] = Z[k];
+            acc[0] += R[k] * Z[k];
+            acc[1] += R[k] * R[k] / M[n];
+            acc[2] += M[n] * X[k] * X[k];
+            acc[3] += b * b / M[n];
+        }
+    });
+    if (warm && !(s[1] < s[3])) {
+        // The guess is no closer than D = 0 (a contact began or ended, a jolt):
+        // start from 0.  The same decision on every rank (global sums).
+        warm = false;
+        nodeLoop(Sum::Global, 2, s, [&](int32_t n, double* acc) {
+            for (int d = 0; d < 3; ++d) {
+                const int32_t k = 3 * n + d;
+                X[k] = Q[k] = 0;
+                if ((blk[n] >> d) & 1u) continue;
+                R[k] = dt * f[k];
+                Z[k] = R[k] / D[k];
+                P[k] = Z[k];
+                acc[0] += R[k] * Z[k];
+                acc[1] += R[k] * R[k] / M[n];
+            }
+        });
+        s[2] = 0;
+    }
+    return warm;
+}
+
+void ViscousSolve::keep(double dt) {
+    // Nodes not solved for (asleep, or other ranks') start from 0 when they
+    // are next: a piece that wakes has no last change.
+    if (!w_.sleeping.everything()) std::fill(warm_.begin(), warm_.end(), 0.0);
+    double* W = warm_.data();
+    const double* X = x_.data();
+    nodeLoop(Sum::Local, 0, nullptr, [&](int32_t n, double*) {
+        for (int d = 0; d < 3; ++d) W[3 * n + d] = X[3 * n + d];  // (0 on blocked DOFs)
+    });
+    warmIter = w_.iter;
+    warmDt = dt;
+}
+
 const double* ViscousSolve::solve(double dt, const double* f) {
     const double t0 = omp_get_wtime();
     const int nth = omp_get_max_threads();
@@ -165,34 +244,18 @@ const double* ViscousSolve::solve(double dt, const double* f) {
 
     // Jacobi preconditioner: the diagonal of M + dt C on the current shape.
     diagonal(D);
-    // Warm start D = 0, i.e. v = v_{n-1/2} (the last step's solution to
-    // within its residual): the residual is dt f, no operator application.
     double s[4];
-    nodeLoop(Sum::Global, 2, s, [&](int32_t n, double* acc) {
-        for (int d = 0; d < 3; ++d) {
-            const int32_t k = 3 * n + d;
-            D[k] = M[n] + dt * D[k];
-            X[k] = 0, Q[k] = 0;
-            if ((blk[n] >> d) & 1u) {
-                R[k] = Z[k] = P[k] = 0;
-                continue;
-            }
-            R[k] = dt * f[k];
-            Z[k] = R[k] / D[k];
-            P[k] = Z[k];
-            acc[0] += R[k] * Z[k];
-            acc[1] += R[k] * R[k] / M[n];
-        }
-    });
-    double rz = s[0], rMr = s[1];
+    startedWarm = start(dt, f, s);
+    double rz = s[0], rMr = s[1], xMx = s[2];
     iterations = 0;
     // Stop when ||r||_{M^-1} <= tol ||D||_M: the velocity change's error is
-    // then at most tol times the change (doc/formulation.md 2.1).
-    while (rMr > 0) {
+    // then at most tol times the change (doc/formulation.md 2.1).  From a
+    // warm start that may hold before the first iteration.
+    while (rMr > tol2 * xMx) {
         if (iterations == kMaxIterations)
             throw StabilityError(cat("QDEM: the implicit viscous solve did not converge in ", kMaxIterations,
                                      " iterations at step ", w_.iter, " (relative error bound ",
-                                     std::sqrt(rMr) / std::sqrt(std::max(s[2], 1e-300)), ", asked ",
+                                     std::sqrt(rMr) / std::sqrt(std::max(xMx, 1e-300)), ", asked ",
                                      w_.settings.viscousTolerance,
                                      "): raise QdemEngine.viscousTolerance, lower O.dt, or use "
                                      "viscousIntegration='explicit'."));
@@ -222,8 +285,8 @@ const double* ViscousSolve::solve(double dt, const double* f) {
             }
         });
         ++iterations;
-        rMr = s[1];
-        if (rMr <= tol2 * s[2]) break;
+        rMr = s[1], xMx = s[2];
+        if (rMr <= tol2 * xMx) break;
         const double beta = s[0] / rz;
         rz = s[0];
         nodeLoop(Sum::Global, 0, s, [&](int32_t n, double*) {
@@ -233,6 +296,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
             }
         });
     }
+    keep(dt);
     totalIterations += iterations;
     seconds = omp_get_wtime() - t0;
     return Q;

@@ -7,8 +7,11 @@
 // elasticity and contacts stay explicit.  Written for the increment
 // D = v_{n+1/2} - v_{n-1/2} it reads (M + dt C) D = dt f, where f is the
 // explicit force of the step *with* the viscous force at v_{n-1/2} (what the
-// element phase computes anyway), so D = 0 is the warm start that costs no
-// operator application.  Jacobi-preconditioned conjugate gradients over the
+// element phase computes anyway).  The iterations start from the last
+// step's D (scaled by the ratio of the steps): the acceleration changes
+// little from one step to the next, so the start is close; when it is not
+// (the first step, a piece woke, the guess's residual larger than D = 0's)
+// they start from D = 0.  Jacobi-preconditioned conjugate gradients over the
 // free DOFs of the awake nodes (blocked DOFs keep their velocity: D = 0
 // there) return q = C D; the integrator then applies the force f - q, so
 // the viscous forces applied are element forces, each summing to zero:
@@ -64,7 +67,18 @@ public:
     double* velocityChange() { return delta_.data(); }
     double dissipation(double dt, const double* vNew);
 
+    // The warm start: the last solve's D, 3 per node (0 on blocked DOFs and on
+    // nodes it did not solve for), the step it was solved at and its dt.  Part
+    // of a run's state (a restart without it would start the next solve
+    // elsewhere and end within the tolerance, not on the same bits):
+    // IntegrationPhase saves it and migrates it between MPI ranks.
+    std::vector<double>& warmStart() { return warm_; }
+    const std::vector<double>& warmStart() const { return warm_; }
+    long warmIter = -1;  // -1: none
+    double warmDt = 0;
+
     int iterations = 0;    // of the last solve
+    bool startedWarm = false;  // the last solve started from the last step's change
     long totalIterations = 0;
     double seconds = 0;    // wall time of the last solve (and its energy term)
 
@@ -81,6 +95,11 @@ private:
     // overwritten) and the ghosts' partial sums come back to their owners.
     void apply(double* p, double* y);
     void diagonal(double* d);
+    // X = the warm start, or 0 when there is none; R, Z, P, Q and the sums
+    // (r.z, r.M^-1 r, x.M x) to match.  Returns whether it started warm.
+    bool start(double dt, const double* f, double* sums);
+    // After the solve: the warm start of the next step.
+    void keep(double dt);
     // Sums of a*b (and more) over the free DOFs of the awake nodes, per thread
     // then in thread order: the same bits for a given thread count.  Global:
     // under MPI then over the ranks in rank order (Domain::sumInRankOrder),
@@ -93,6 +112,7 @@ private:
     ThreadLayout layout_;
     std::vector<ThreadBlocks> blocks_;  // the layout's shares as tet blocks (the operator's element pass)
     std::vector<double> x_, r_, z_, p_, y_, cp_, q_, diag_, delta_, partial_;
+    std::vector<double> warm_;
 };
 
 }  // namespace qdem

@@ -6,6 +6,8 @@ elastic one), on P ranks against the same scene serially with 1 and 2
 threads in rank 0's process, at half the elastic limit: more than 10 times
 the explicit viscous one.
 Every rank records the conjugate gradients' iteration count of every step.
+Argument 'warm': viscousWarmStart on (each solve starts from the last step's
+change); otherwise off (from zero: results depend on the state alone).
 Rank 0 prints 'RESULT {json}'."""
 import json
 import os
@@ -21,12 +23,14 @@ from qdem import _core  # noqa: E402
 STEPS = int(os.environ.get("QDEM_MPI_STEPS", 300))
 CHUNK = 25
 VISCOSITY = 4000.0  # [Pa s]: the explicit viscous limit ~1/40 of the elastic one
+WARM = "warm" in sys.argv[1:]
 comm = MPI.COMM_WORLD
 
 
 def build():
     w = scenes.contactFree(viscosity=VISCOSITY)
     w.core.viscousIntegration = 1
+    w.core.viscousWarmStart = WARM
     return w
 
 
@@ -62,13 +66,15 @@ if comm.rank == 0:
         run(s, si, ss)
         ref[threads] = (scenes.positions(s), si, ss, s)
     (xs, vs), sIts, sseries, ser = ref[1]
-    (x2, v2), _, _, _ = ref[2]
+    (x2, v2), _, sseries2, ser2 = ref[2]
     out = {"ranks": comm.size, "steps": STEPS, "limits": {k: v_ for k, v_ in limits.items() if k != "limitedBy"},
            "maxDisplacement": float(np.abs(xs - x0).max()),
            "dx": float(np.abs(x - xs).max()), "dxThreads": float(np.abs(x2 - xs).max()),
            "dv": float(np.abs(v - vs).max()), "dvThreads": float(np.abs(v2 - vs).max()),
            "vmax": float(np.abs(vs).max()), "iterations": allIts, "serialIterations": sIts,
            "ownedTets": owned, "series": series, "serialSeries": sseries,
+           "serialSeries2Threads": sseries2, "warm": WARM,
            "momentum": (np.array(dist.core.mass)[:, None] * v).sum(axis=0).tolist(),
-           "serialMomentum": (np.array(ser.core.mass)[:, None] * vs).sum(axis=0).tolist()}
+           "serialMomentum": (np.array(ser.core.mass)[:, None] * vs).sum(axis=0).tolist(),
+           "serialMomentum2Threads": (np.array(ser2.core.mass)[:, None] * v2).sum(axis=0).tolist()}
     print("RESULT " + json.dumps(out), flush=True)

@@ -48,5 +48,5 @@ def result(out):
     raise AssertionError("no RESULT line in the MPI run's output:\n" + out[-4000:])
 
 
-def python(script):
-    return [PY, os.path.join(ROOT, script)]
+def python(script, *args):
+    return [PY, os.path.join(ROOT, script), *args]

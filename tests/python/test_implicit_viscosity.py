@@ -304,3 +304,54 @@ def test_yade_sphere_on_an_implicitly_viscous_slab_balances_momentum_through_the
     assert touched > 10
     assert b.state.vel[2] > 0  # it bounced
     assert np.abs(momentum() - p0 - impulse - gravityImpulse).max() < 1e-9 * scale
+
+
+def _warm_cube(tol=1e-6):
+    w, p = _table1_cube()
+    w.core.gravity = (0, 0, -9.81)
+    w.core.viscousIntegration = IMPLICIT
+    w.core.viscousTolerance = tol
+    return w, p, 0.8 * w.stableDt()["combined"]
+
+
+def _iterations(w, dt, steps):
+    its = []
+    for _ in range(steps):
+        w.core.step(dt, 1)
+        its.append(w.core.counts["viscousIterations"])
+    return np.array(its)
+
+
+def test_the_solve_starts_from_the_last_steps_change():
+    w, p, dt = _warm_cube()
+    warm = _iterations(w, dt, 40)[20:]              # (past the first steps' fast transient)
+    # A pause of the solve (one explicit step in between) leaves no last change: from 0.
+    w.core.viscousIntegration = 0
+    w.core.step(dt / 40, 1)
+    w.core.viscousIntegration = IMPLICIT
+    cold = _iterations(w, dt, 1)[0]
+    assert cold >= 20 and warm.mean() < 0.6 * cold, (cold, warm)
+
+
+def test_a_restart_continues_the_warm_started_solve_on_the_same_bits(tmp_path):
+    path = str(tmp_path / "run.qdem.npz")
+    w, p, dt = _warm_cube(tol=1e-4)
+    w.core.step(dt, 30)
+    qdem.saveState(path, world=w)
+    its = _iterations(w, dt, 30)
+    w2, p2, _ = _warm_cube(tol=1e-4)
+    qdem.loadState(path, world=w2)
+    its2 = _iterations(w2, dt, 30)
+    assert np.array_equal(its2, its)
+    assert np.array_equal(p2.pos, p.pos) and np.array_equal(p2.vel, p.vel)
+    # A state saved before the warm start existed (no such fields) loads; its
+    # first solve starts from 0 and the run stays within the solve's tolerance.
+    data = {k: v for k, v in np.load(path).items() if "viscousWarm" not in k}
+    assert len(data) == len(np.load(path).files) - 2
+    old = str(tmp_path / "old.npz")
+    np.savez(old, **data)
+    w3, p3, _ = _warm_cube(tol=1e-4)
+    qdem.loadState(old, world=w3)
+    its3 = _iterations(w3, dt, 30)
+    assert its3[0] > its[0] and its3[0] > 2 * its3[1:].mean()
+    assert np.abs(p3.vel - p.vel).max() < 1e-3 * np.abs(p.vel).max()

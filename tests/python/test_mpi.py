@@ -68,23 +68,31 @@ def test_error_on_one_rank_stops_every_rank(P):
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
 
 
-@pytest.mark.parametrize("P", [2, 3])
-def test_implicit_viscosity_on_ranks_as_serially(P):
+@pytest.mark.parametrize("P,warm", [(2, False), (3, False), (3, True)])
+def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     # The distributed conjugate gradients (doc/parallel.md): C p by one pass
     # over the owned tets with the ghosts' partial sums sent back, dot
-    # products summed in rank order, the serial stopping rule.
+    # products summed in rank order, the serial stopping rule.  From zero
+    # (viscousWarmStart False) the result depends on the state alone: equal
+    # to serial to rounding.  Warm, each step's solve error carries into the
+    # next start and rounding differences grow (within the tolerance): equal
+    # to serial within what separates 1 and 2 threads serially.
     requireMpi()
-    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py"), timeout=400)
+    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py", *(["warm"] if warm else [])), timeout=400)
     assert rc == 0, out[-4000:]
     r = result(out)
     lim = r["limits"]
     assert lim["combinedImplicit"] > 20 * lim["combinedExplicit"]  # viscosity would limit an explicit step
     assert all(t > 0 for t in r["ownedTets"])
     # Every rank took the same number of iterations at every step, and the
-    # solve did iterate.
+    # solve did iterate: the first from 0, the others from the last step's
+    # change (fewer), migrated and checked as the rest of the state.
     its = r["iterations"]
     assert len(its) == P and all(i == its[0] for i in its)
-    assert min(its[0]) >= 3
+    assert its[0][0] >= 10 and min(its[0]) >= 1
+    assert its[0] == r["serialIterations"] or warm
+    if warm:
+        assert np.mean(its[0]) < 0.5 * its[0][0]  # (the warm starts paid)
     # Trajectories as serial, within what separates 1 and 2 threads serially
     # (the order of the partial sums is the only difference).
     d = r["maxDisplacement"]
@@ -94,10 +102,14 @@ def test_implicit_viscosity_on_ranks_as_serially(P):
     # Floor reaction, energy ledger (total, viscous dissipation, kinetic) as serial.
     s, ss = np.array(r["series"]), np.array(r["serialSeries"])
     assert ss[-1, 4] > 1e-3 * ss[-1, 3], "viscosity must dissipate a visible share"
-    assert np.abs(s[:, :3] - ss[:, :3]).max() <= 1e-9 * np.abs(ss[:, :3]).max()
-    assert np.abs(s[:, 3:] - ss[:, 3:]).max() <= 1e-10 * np.abs(ss[:, 3:]).max()
+    licence = np.abs(np.array(r["serialSeries2Threads"]) - ss).max(axis=0) if warm else 0 * ss[0]
+    assert (np.abs(s[:, :3] - ss[:, :3]).max(axis=0) <= np.maximum(10 * licence[:3],
+                                                                  1e-9 * np.abs(ss[:, :3]).max())).all()
+    assert (np.abs(s[:, 3:] - ss[:, 3:]).max(axis=0) <= np.maximum(10 * licence[3:],
+                                                                  1e-10 * np.abs(ss[:, 3:]).max())).all()
     pm, ps = np.array(r["momentum"]), np.array(r["serialMomentum"])
-    assert np.abs(pm - ps).max() <= 1e-10 * np.abs(ps).max()
+    pLicence = np.abs(np.array(r["serialMomentum2Threads"]) - ps).max() if warm else 0.0
+    assert np.abs(pm - ps).max() <= max(10 * pLicence, 1e-10 * np.abs(ps).max())
 
 
 def test_yade_floor_force_under_mpiexec_equals_serial():
