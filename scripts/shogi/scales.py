@@ -16,7 +16,9 @@ the Kelvin-Voigt viscosity integrated explicitly and implicitly
    at 0.8 x each integration's stable step (stableDt()['combinedExplicit'] /
    ['combinedImplicit']).  At small scales explicit runs are never made in
    full: their cost is this per-step cost times the step count, simulated
-   time / step.
+   time / step.  Implicit twice: each solve started from the last step's
+   velocity change (the default, QdemEngine.viscousWarmStart) and from zero
+   ("implicit_cold").
 3. The runs of scripts/shogi/scales.table (scripts/shogi/domino.py, YADE),
    when present under out/shogi: first hits and falls, with their times
    brought to 766x by Froude scaling (t x sqrt(766 / scale)).
@@ -60,11 +62,15 @@ def material(scale, stable):
     return qdem.QdemMat(frictionPiece=0.1, radius=qdem.QdemMat().radius * scale / stable)
 
 
-def build(scale, stable, implicit):
+VARIANTS = ("explicit", "implicit", "implicit_cold")
+
+
+def build(scale, stable, variant):
     w = qdem.World()
     shogi.scene("two_rooks", material(scale, stable), scale, world=w)
     floorAndGravity(w, G)
-    w.core.viscousIntegration = 1 if implicit else 0
+    w.core.viscousIntegration = 0 if variant == "explicit" else 1
+    w.core.viscousWarmStart = variant != "implicit_cold"
     return w
 
 
@@ -79,9 +85,10 @@ def cpuMsPerStep(w, dt, steps):
 
 
 def timing(scale, stable, steps, rounds):
-    worlds = {name: build(scale, stable, name == "implicit") for name in ("explicit", "implicit")}
+    worlds = {name: build(scale, stable, name) for name in VARIANTS}
     limits = worlds["implicit"].stableDt()
-    dts = {"explicit": DT_FACTOR * limits["combinedExplicit"], "implicit": DT_FACTOR * limits["combinedImplicit"]}
+    dts = {name: DT_FACTOR * limits["combinedExplicit" if name == "explicit" else "combinedImplicit"]
+           for name in VARIANTS}
     for name, w in worlds.items():
         w.core.step(dts[name], 3)  # warm-up: lists, layouts
     samples = {name: [] for name in worlds}
@@ -99,6 +106,7 @@ def timing(scale, stable, steps, rounds):
                      "steps_per_simulated_s": 1.0 / dts[name],
                      "cpu_s_per_simulated_s": 1e-3 * ms / dts[name]}
     out["explicit_over_implicit"] = out["explicit"]["cpu_s_per_simulated_s"] / out["implicit"]["cpu_s_per_simulated_s"]
+    out["cold_over_warm"] = out["implicit_cold"]["cpu_s_per_simulated_s"] / out["implicit"]["cpu_s_per_simulated_s"]
     return out
 
 
@@ -141,6 +149,15 @@ def hms(seconds):
 
 def markdown(res):
     """The tables of doc/shogi.md, "Toward real size"."""
+    print("\n| scale | explicit dt | ms per step | CPU s per simulated s | implicit dt | CG iterations (from 0) | "
+          "ms per step (from 0) | CPU s per simulated s | explicit / implicit |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for key, r in res["scales"].items():
+        e, i, c = r["explicit"], r["implicit"], r.get("implicit_cold")
+        print("| %s | %.3g s | %.2g | %.2g | %.3g s | %.0f%s | %.2g%s | %.2g | %.2g |" % (
+            key, e["dt"], e["cpu_ms_per_step"], e["cpu_s_per_simulated_s"], i["dt"], i["cg_iterations_per_step"],
+            " (%.0f)" % c["cg_iterations_per_step"] if c else "", i["cpu_ms_per_step"],
+            " (%.2g)" % c["cpu_ms_per_step"] if c else "", i["cpu_s_per_simulated_s"], r["explicit_over_implicit"]))
     print("\n| scale | second rook hit at | explicit: CPU to the hit | implicit: CPU to the hit |")
     print("| --- | --- | --- | --- |")
     for key, r in res["scales"].items():
@@ -192,10 +209,10 @@ def main():
         r.update(timing(s, stable, a.steps, a.rounds))
         res["scales"]["%g" % s] = r
         print("scale %5g: xi_1 %.3g; explicit dt %.3g s %.3f ms/step %.3g s/s; implicit dt %.3g s %.3f ms/step "
-              "(%.0f CG its) %.3g s/s; ratio %.3g" % (
+              "(%.0f CG its; %.0f from 0) %.3g s/s; ratio %.3g" % (
                   s, xi, r["explicit"]["dt"], r["explicit"]["cpu_ms_per_step"], r["explicit"]["cpu_s_per_simulated_s"],
                   r["implicit"]["dt"], r["implicit"]["cpu_ms_per_step"], r["implicit"]["cg_iterations_per_step"],
-                  r["implicit"]["cpu_s_per_simulated_s"], r["explicit_over_implicit"]), flush=True)
+                  r["implicit_cold"]["cg_iterations_per_step"], r["implicit"]["cpu_s_per_simulated_s"], r["explicit_over_implicit"]), flush=True)
     res["runs"] = runs(stable)
     for item in a.progress:
         run, _, log = item.partition("=")
@@ -213,8 +230,9 @@ def main():
         for key, r in res["scales"].items():
             t = tHit * math.sqrt(float(key) / stable)
             r["first_hit_s"] = t
-            for name in ("explicit", "implicit"):
-                r[name]["cpu_s_to_first_hit"] = t * r[name]["cpu_s_per_simulated_s"]
+            for name in VARIANTS:
+                if name in r:
+                    r[name]["cpu_s_to_first_hit"] = t * r[name]["cpu_s_per_simulated_s"]
     for r in res["runs"]:
         print("run %s: %.4g s simulated (%.4g s at 766x), first hits %s, fallen %s" % (
             r["run"], r["simulated_s"], r["simulated_s_at_766x"], r["firstHit_s_at_766x"], r["fallen_s_at_766x"]))
