@@ -54,6 +54,17 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
         "Splits the world across the ranks of an mpi4py communicator (duplicated inside) from the next step on; "
         "None: back to one process.  Every rank must have built the same scene.  Ranks below firstRank own no "
         "node (yade.mpy's master: doc/parallel.md).");
+    world.def_property(
+        "partitionWholePieceFraction", [](const World& w) { return w.partitionOptions.wholePieceFraction; },
+        [](World& w, double f) {
+            if (!(f >= 0 && f <= 1))
+                throw InputError("partitionWholePieceFraction = " + std::to_string(f) +
+                                 " must lie in [0, 1] (0: every piece split along the curve)");
+            w.partitionOptions.wholePieceFraction = f;
+        },
+        "Under MPI: a piece weighing at most this fraction of one rank's share is kept whole on one rank where "
+        "balance allows (default 0.5; 0: every piece is split along the Hilbert curve).  Used by the next split "
+        "(the first step, rebalance()).  doc/parallel.md.");
     world.def(
         "splitPreview",
         [](World& w, int nRanks, int firstRank) {

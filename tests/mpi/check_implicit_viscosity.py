@@ -34,11 +34,22 @@ def build():
     return w
 
 
+moved = []
+
+
 def run(w, iterations, series):
     limits = w.stableDt()
     dt = 0.5 * limits["combinedImplicit"]
     assert dt > 10 * limits["combinedExplicit"], limits  # explicit viscosity could not take this step
     for k in range(STEPS):
+        if WARM and k == STEPS // 2 and w.core.mpiSize > 1:
+            # A rebalance forced mid-run: the warm start's rows move with the
+            # nodes (a lost or misplaced row would start that solve cold).
+            # (every piece split along the curve now, so that the split moves)
+            before = np.array(w.core.nodeOwner)
+            w.core.partitionWholePieceFraction = 0.0
+            w.core.rebalance()
+            moved.append(int((np.array(w.core.nodeOwner) != before).sum()))
         w.core.step(dt, 1)
         iterations.append(int(w.core.counts["viscousIterations"]))
         if (k + 1) % CHUNK == 0:
@@ -73,7 +84,7 @@ if comm.rank == 0:
            "dv": float(np.abs(v - vs).max()), "dvThreads": float(np.abs(v2 - vs).max()),
            "vmax": float(np.abs(vs).max()), "iterations": allIts, "serialIterations": sIts,
            "ownedTets": owned, "series": series, "serialSeries": sseries,
-           "serialSeries2Threads": sseries2, "warm": WARM,
+           "serialSeries2Threads": sseries2, "warm": WARM, "moved": moved,
            "momentum": (np.array(dist.core.mass)[:, None] * v).sum(axis=0).tolist(),
            "serialMomentum": (np.array(ser.core.mass)[:, None] * vs).sum(axis=0).tolist(),
            "serialMomentum2Threads": (np.array(ser2.core.mass)[:, None] * v2).sum(axis=0).tolist()}

@@ -325,11 +325,13 @@ def _iterations(w, dt, steps):
 def test_the_solve_starts_from_the_last_steps_change():
     w, p, dt = _warm_cube()
     warm = _iterations(w, dt, 40)[20:]              # (past the first steps' fast transient)
+    assert w.core.counts["viscousWarmStart"] == 1
     # A pause of the solve (one explicit step in between) leaves no last change: from 0.
     w.core.viscousIntegration = 0
     w.core.step(dt / 40, 1)
     w.core.viscousIntegration = IMPLICIT
     cold = _iterations(w, dt, 1)[0]
+    assert w.core.counts["viscousWarmStart"] == 0
     assert cold >= 20 and warm.mean() < 0.6 * cold, (cold, warm)
 
 

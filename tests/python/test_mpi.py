@@ -68,7 +68,7 @@ def test_error_on_one_rank_stops_every_rank(P):
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
 
 
-@pytest.mark.parametrize("P,warm", [(2, False), (3, False), (3, True)])
+@pytest.mark.parametrize("P,warm", [(2, False), (3, False), (2, True), (3, True)])
 def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     # The distributed conjugate gradients (doc/parallel.md): C p by one pass
     # over the owned tets with the ghosts' partial sums sent back, dot
@@ -85,14 +85,20 @@ def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     assert lim["combinedImplicit"] > 20 * lim["combinedExplicit"]  # viscosity would limit an explicit step
     assert all(t > 0 for t in r["ownedTets"])
     # Every rank took the same number of iterations at every step, and the
-    # solve did iterate: the first from 0, the others from the last step's
-    # change (fewer), migrated and checked as the rest of the state.
+    # solve did iterate: the first from 0, the others (warm) from the last
+    # step's change, fewer.
     its = r["iterations"]
     assert len(its) == P and all(i == its[0] for i in its)
-    assert its[0][0] >= 10 and min(its[0]) >= 1
+    assert its[0][0] >= 10
     assert its[0] == r["serialIterations"] or warm
     if warm:
         assert np.mean(its[0]) < 0.5 * its[0][0]  # (the warm starts paid)
+        # A rebalance forced half-way moved nodes; their last changes moved
+        # with them: the next solve is as warm as the others (11 iterations
+        # instead of 3 when the rows are not migrated).
+        half = r["steps"] // 2
+        assert r["moved"][0] > 0
+        assert its[0][half] <= 2 * np.median(its[0][1:]), (its[0][half - 3:half + 3], np.median(its[0][1:]))
     # Trajectories as serial, within what separates 1 and 2 threads serially
     # (the order of the partial sums is the only difference).
     d = r["maxDisplacement"]
