@@ -349,11 +349,20 @@ def _shogiSentence():
         sc = json.load(f)["scales"]
     if "766" not in sc or "1" not in sc:
         return ""
-    return ("  Measured on the shogi rook's mesh (doc/shogi.md, \"Toward real size\"; `scripts/shogi/scales.py`): "
+    text = ("  Measured on the shogi rook's mesh (doc/shogi.md, \"Toward real size\"; `scripts/shogi/scales.py`): "
             "the first mode's damping ratio is %.2g at 766x real size and %.3g at real size, where implicit costs "
-            "1/%.2g and 1/%.3g of explicit per simulated second." % (
+            "1/%.2g and 1/%.3g of explicit per simulated second in short runs from rest" % (
                 sc["766"]["first_mode_damping_ratio"], sc["1"]["first_mode_damping_ratio"],
                 sc["766"]["explicit_over_implicit"], sc["1"]["explicit_over_implicit"]))
+    runs = sorted(glob.glob(os.path.join(os.path.dirname(logs[-1]), "shogi_cost_in_run_*.json")))
+    if runs:  # the cost where the long real-size runs were (scripts/shogi/cost_in_run.py)
+        with open(runs[-1]) as f:
+            ms = [r["warm"]["cpu_ms_per_step"] / r["dt"] * 1e-3 for r in json.load(f)["runs"].values()
+                  if r["scale"] == 1]
+        if ms:
+            text += ", and 1/%.0f in the long runs (`scripts/shogi/cost_in_run.py`)" % (
+                sc["1"]["explicit"]["cpu_s_per_simulated_s"] / max(ms))
+    return text + "."
 
 
 def section(data):
