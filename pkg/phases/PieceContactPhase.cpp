@@ -20,6 +20,23 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
+namespace {
+
+// |d|^2 rounded exactly as the former list build's (A - P).squaredNorm()
+// compiled (-O3, FMA: its disassembly): dx^2 and dy^2 each rounded, summed,
+// then dz^2 fused in.  Written out so that the compiler cannot fuse
+// differently here (fma(x, x, 0) is x^2 rounded, and is not contracted into
+// the add): the same lists, bit for bit, as before.
+inline double distance2AsEigen(double dx, double dy, double dz) {
+#ifdef __FMA__
+    return std::fma(dz, dz, std::fma(dx, dx, 0.0) + std::fma(dy, dy, 0.0));
+#else
+    return dx * dx + dy * dy + dz * dz;
+#endif
+}
+
+}  // namespace
+
 PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
     for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
 }
@@ -281,7 +298,9 @@ void PieceContactPhase::run(double dt) {
         const int32_t i0 = st_.itemStart[ip], i1 = st_.itemStart[ip + 1];
         // Cells twice the reach: a query box of +-reach then spans 2 cells per
         // axis (8 cells) instead of 3 (27), for a few more items per cell.
-        if (rebuild) st_.itemGrid[ip].build(st_.itemPoint.data() + 3 * i0, i1 - i0, 2 * st_.itemReach);
+        if (rebuild)
+            st_.itemGrid[ip].build(st_.itemPoint.data() + 3 * i0, i1 - i0, 2 * st_.itemReach,
+                                   st_.itemRadius.data() + i0);  // (the radii ride along: the list build reads them)
         const int32_t e0 = st_.edgeStart[ip], e1 = st_.edgeStart[ip + 1];
         if (edgeRebuild)
             st_.edgeGrid[ip].build(st_.edgeLo.data() + 3 * e0, st_.edgeHi.data() + 3 * e0, e1 - e0,
@@ -331,30 +350,42 @@ void PieceContactPhase::run(double dt) {
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
-            const double ra = w_.materials[w_.pieces[pa].material].radius;
+            const double ra = st_.pieceRadius[pa];
+            // Branch-free test: every visited item is written to the next free
+            // slot and the count advanced only when it passes (about one in
+            // five does, unpredictably); more than KL pass: crowded, this node
+            // queries the cells each step.  The grid's slots are visited as
+            // before (cells in x-y-z order, descending items within a cell).
+            int32_t buf[KL + 1];
             int count = 0;
-            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count <= KL; ++q) {
                 const int32_t pb = st_.nbrs[q];
-                const double reach = ra + w_.materials[w_.pieces[pb].material].radius + skin;
-                bool overlap = true;
-                for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = A[d] - reach <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= A[d] + reach;
+                const double reach = ra + st_.pieceRadius[pb] + skin;
+                // (all six sides tested, one branch: most neighbours touch
+                // the piece elsewhere, unpredictably for a per-side branch)
+                const double* bl = &w_.bounds.lo[3 * pb];
+                const double* bh = &w_.bounds.hi[3 * pb];
+                const bool overlap = (A[0] - reach <= bh[0]) & (bl[0] <= A[0] + reach) & (A[1] - reach <= bh[1]) &
+                                     (bl[1] <= A[1] + reach) & (A[2] - reach <= bh[2]) & (bl[2] <= A[2] + reach);
                 if (!overlap) continue;
-                const int32_t i0 = st_.itemStart[pb];
                 const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
-                st_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
-                    const int32_t it = i0 + local;
-                    const double R = st_.itemRadius[it] + reach;
-                    if (count < 0 ||
-                        (A - Eigen::Map<const Vector3d>(&st_.itemPoint[3 * it])).squaredNorm() > R * R)
-                        return;
-                    if (count == KL) {
-                        count = -1;  // crowded: this node queries the cells each step
-                        return;
+                const CellGrid& g = st_.itemGrid[pb];
+                const int32_t* item = g.item();
+                const double *gx = g.x(), *gy = g.y(), *gz = g.z(), *gr = g.r();
+                const int c0 = count;
+                g.forRuns(qlo.data(), qhi.data(), [&](int32_t b, int32_t e) {
+                    for (int32_t k = b; k < e; ++k) {
+                        const double R = gr[k] + reach;
+                        const double d2 = distance2AsEigen(A[0] - gx[k], A[1] - gy[k], A[2] - gz[k]);
+                        buf[std::min(count, KL)] = item[k];
+                        count += !(d2 > R * R);
                     }
-                    st_.list[static_cast<std::size_t>(KL) * i + count++] = st_.items[it];
                 });
+                const int32_t i0 = st_.itemStart[pb];
+                for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
             }
+            if (count > KL) count = -1;
+            std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
             st_.listCount[i] = count;
         }
         // Pack the lists (the step streams through them node after node).
@@ -387,6 +418,18 @@ void PieceContactPhase::run(double dt) {
             for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
                 const int32_t pb = st_.nbrs[q];
                 if (pb < pa) continue;
+                // pb's registered edge boxes lie within its box (its surface
+                // nodes +- r) grown by half the skin: a piece whose box, grown
+                // by r + skin to spare rounding, misses this edge's box has
+                // none that overlaps it (most of the neighbours touch a piece
+                // elsewhere).
+                const double m = st_.pieceRadius[pb] + grow;
+                const double* lo = &st_.edgeLo[3 * ie];
+                const double* hi = &st_.edgeHi[3 * ie];
+                bool overlap = true;
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = lo[d] <= w_.bounds.hi[3 * pb + d] + m && w_.bounds.lo[3 * pb + d] - m <= hi[d];
+                if (!overlap) continue;
                 const int32_t j0 = st_.edgeStart[pb];
                 st_.edgeGrid[pb].forOverlapping(&st_.edgeLo[3 * ie], &st_.edgeHi[3 * ie], [&](int32_t local) {
                     if (count < 0) return;
