@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "../contact/ContactLaw.hpp"
@@ -343,6 +344,16 @@ void PieceContactPhase::run(double dt) {
         st_.list.resize(KL * static_cast<std::size_t>(ns));
         st_.listCount.assign(ns, 0);
         st_.listPos.resize(3 * static_cast<std::size_t>(ns));
+        // Per neighbour entry: the reach (ra + rb + skin, summed in that
+        // order) and the neighbour's box, side by side.
+        st_.nbrBox.resize(7 * st_.nbrs.size());
+        for (std::size_t pa = 0; pa < np; ++pa)
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1]; ++q) {
+                const int32_t pb = st_.nbrs[q];
+                double* nb = &st_.nbrBox[7 * static_cast<std::size_t>(q)];
+                nb[0] = st_.pieceRadius[pa] + st_.pieceRadius[pb] + skin;
+                for (int d = 0; d < 3; ++d) nb[1 + d] = w_.bounds.lo[3 * pb + d], nb[4 + d] = w_.bounds.hi[3 * pb + d];
+            }
 #pragma omp parallel for schedule(dynamic, 64)
         for (int32_t i = 0; i < ns; ++i) {
             const int32_t node = w_.surfNodes[i];
@@ -350,7 +361,6 @@ void PieceContactPhase::run(double dt) {
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
-            const double ra = st_.pieceRadius[pa];
             // Branch-free test: every visited item is written to the next free
             // slot and the count advanced only when it passes (about one in
             // five does, unpredictably); more than KL pass: crowded, this node
@@ -358,16 +368,24 @@ void PieceContactPhase::run(double dt) {
             // before (cells in x-y-z order, descending items within a cell).
             int32_t buf[KL + 1];
             int count = 0;
-            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count <= KL; ++q) {
+            // The neighbour pieces whose box, grown by the reach, holds the
+            // node: flagged 64 at a time without a branch (most neighbours
+            // touch the piece elsewhere, unpredictably), then visited in order.
+            const int32_t q0 = st_.nbrStart[pa], q1 = st_.nbrStart[pa + 1];
+            for (int32_t qb = q0; qb < q1 && count <= KL; qb += 64) {
+                const int m = static_cast<int>(std::min<int32_t>(64, q1 - qb));
+                uint64_t near = 0;
+                for (int t = 0; t < m; ++t) {
+                    const double* nb = &st_.nbrBox[7 * static_cast<std::size_t>(qb + t)];  // reach, lo, hi
+                    const double reach = nb[0];
+                    const bool o = (A[0] - reach <= nb[4]) & (nb[1] <= A[0] + reach) & (A[1] - reach <= nb[5]) &
+                                   (nb[2] <= A[1] + reach) & (A[2] - reach <= nb[6]) & (nb[3] <= A[2] + reach);
+                    near |= static_cast<uint64_t>(o) << t;
+                }
+            for (; near && count <= KL; near &= near - 1) {
+                const int32_t q = qb + std::countr_zero(near);
                 const int32_t pb = st_.nbrs[q];
-                const double reach = ra + st_.pieceRadius[pb] + skin;
-                // (all six sides tested, one branch: most neighbours touch
-                // the piece elsewhere, unpredictably for a per-side branch)
-                const double* bl = &w_.bounds.lo[3 * pb];
-                const double* bh = &w_.bounds.hi[3 * pb];
-                const bool overlap = (A[0] - reach <= bh[0]) & (bl[0] <= A[0] + reach) & (A[1] - reach <= bh[1]) &
-                                     (bl[1] <= A[1] + reach) & (A[2] - reach <= bh[2]) & (bl[2] <= A[2] + reach);
-                if (!overlap) continue;
+                const double reach = st_.nbrBox[7 * static_cast<std::size_t>(q)];
                 const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
                 const CellGrid& g = st_.itemGrid[pb];
                 const int32_t* item = g.item();
@@ -383,6 +401,7 @@ void PieceContactPhase::run(double dt) {
                 });
                 const int32_t i0 = st_.itemStart[pb];
                 for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
+            }
             }
             if (count > KL) count = -1;
             std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
