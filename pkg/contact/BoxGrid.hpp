@@ -57,6 +57,8 @@ public:
         });
     }
 
+    bool dense() const { return bins_.dense(); }  // the last build's indexing (CellBins)
+
 private:
     template <class F>
     void forCells(const double* lo, const double* hi, F&& f) const {

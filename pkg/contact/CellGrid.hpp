@@ -58,6 +58,8 @@ public:
     const double* z() const { return z_.data(); }
     const double* r() const { return r_.data(); }
 
+    bool dense() const { return bins_.dense(); }  // the last build's indexing (CellBins)
+
 private:
     CellBins bins_;
     std::vector<int64_t> cell_;          // per item: its cell (while building)

@@ -101,6 +101,7 @@ class CellBins {
 public:
     void setCellSize(double cellSize) { t_.setCellSize(cellSize); }
     int64_t coord(double v) const { return t_.coord(v); }
+    bool dense() const { return dense_; }  // which indexing the last build chose
 
     // n entries in cells (3 per entry); put(slot, e) is called once per entry,
     // slots of one cell in descending e.
