@@ -2,15 +2,14 @@
 // registration in cell lists, Verlet lists, and the phase driver.  The two
 // contact kinds are in PointPolygon.cpp and EdgeEdge.cpp.  Derivations and
 // the rules that keep forces continuous: doc/contacts.md.
-#include <immintrin.h>
 #include <omp.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
+#include "../contact/ListKernels.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
 #include "SleepPhase.hpp"
@@ -21,23 +20,6 @@ namespace qdem {
 
 using Eigen::Vector3d;
 using namespace contact_detail;
-
-namespace {
-
-// |d|^2 rounded exactly as the former list build's (A - P).squaredNorm()
-// compiled (-O3, FMA: its disassembly): dx^2 and dy^2 each rounded, summed,
-// then dz^2 fused in.  Written out so that the compiler cannot fuse
-// differently here (fma(x, x, 0) is x^2 rounded, and is not contracted into
-// the add): the same lists, bit for bit, as before.
-inline double distance2AsEigen(double dx, double dy, double dz) {
-#ifdef __FMA__
-    return std::fma(dz, dz, std::fma(dx, dx, 0.0) + std::fma(dy, dy, 0.0));
-#else
-    return dx * dx + dy * dy + dz * dz;
-#endif
-}
-
-}  // namespace
 
 PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
     for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
@@ -368,85 +350,35 @@ void PieceContactPhase::run(double dt) {
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
-            // Branch-free test: every visited item is written to the next free
-            // slot and the count advanced only when it passes (about one in
-            // five does, unpredictably); more than KL pass: crowded, this node
-            // queries the cells each step.  The grid's slots are visited as
-            // before (cells in x-y-z order, descending items within a cell).
+            // Branch-free tests (ListKernels.hpp): about one visited item in
+            // five passes, unpredictably; more than KL pass: crowded, this
+            // node queries the cells each step.  The grid's slots are visited
+            // as before (cells in x-y-z order, descending items within a cell).
             int32_t buf[KL + 8];
             int count = 0;
             // The neighbour pieces whose box, grown by the reach, holds the
-            // node: flagged 64 at a time without a branch (most neighbours
-            // touch the piece elsewhere, unpredictably), then visited in order.
+            // node: flagged 64 at a time (most neighbours touch the piece
+            // elsewhere, unpredictably for a branch), then visited in order.
             const int32_t q0 = st_.nbrStart[pa], q1 = st_.nbrStart[pa + 1];
             for (int32_t qb = q0; qb < q1 && count <= KL; qb += 64) {
                 const int m = static_cast<int>(std::min<int32_t>(64, q1 - qb));
-                uint64_t near = 0;
-#if defined(__AVX512F__)
-                // (8 neighbours at a time, the same comparisons lane by lane)
-                for (int t = 0; t < m; t += 8) {
-                    const __mmask8 lanes = m - t >= 8 ? __mmask8(0xFF) : static_cast<__mmask8>((1u << (m - t)) - 1);
-                    const __m512d R = _mm512_maskz_loadu_pd(lanes, nbrReach + qb + t);
-                    __mmask8 o = lanes;
-                    for (int d = 0; d < 3; ++d) {
-                        const __m512d a = _mm512_set1_pd(A[d]);
-                        o = _mm512_mask_cmp_pd_mask(o, _mm512_sub_pd(a, R), _mm512_maskz_loadu_pd(lanes, nbrHi[d] + qb + t), _CMP_LE_OQ);
-                        o = _mm512_mask_cmp_pd_mask(o, _mm512_maskz_loadu_pd(lanes, nbrLo[d] + qb + t), _mm512_add_pd(a, R), _CMP_LE_OQ);
-                    }
-                    near |= static_cast<uint64_t>(o) << t;
-                }
-#else
-                for (int t = 0; t < m; ++t) {
-                    const int32_t q = qb + t;
+                const double Ad[3] = {A[0], A[1], A[2]};
+                for (uint64_t near = boxesNear(Ad, nbrReach, nbrLo, nbrHi, qb, m); near && count <= KL;
+                     near &= near - 1) {
+                    const int32_t q = qb + std::countr_zero(near);
+                    const int32_t pb = st_.nbrs[q];
                     const double reach = nbrReach[q];
-                    const bool o = (A[0] - reach <= nbrHi[0][q]) & (nbrLo[0][q] <= A[0] + reach) &
-                                   (A[1] - reach <= nbrHi[1][q]) & (nbrLo[1][q] <= A[1] + reach) &
-                                   (A[2] - reach <= nbrHi[2][q]) & (nbrLo[2][q] <= A[2] + reach);
-                    near |= static_cast<uint64_t>(o) << t;
+                    const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
+                    const CellGrid& g = st_.itemGrid[pb];
+                    const int32_t* item = g.item();
+                    const double *gx = g.x(), *gy = g.y(), *gz = g.z(), *gr = g.r();
+                    const int c0 = count;
+                    g.forRuns(qlo.data(), qhi.data(), [&](int32_t b, int32_t e) {
+                        count = spheresWithin(Ad, reach, gx, gy, gz, gr, item, b, e, buf, count, KL);
+                    });
+                    const int32_t i0 = st_.itemStart[pb];
+                    for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
                 }
-#endif
-            for (; near && count <= KL; near &= near - 1) {
-                const int32_t q = qb + std::countr_zero(near);
-                const int32_t pb = st_.nbrs[q];
-                const double reach = nbrReach[q];
-                const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
-                const CellGrid& g = st_.itemGrid[pb];
-                const int32_t* item = g.item();
-                const double *gx = g.x(), *gy = g.y(), *gz = g.z(), *gr = g.r();
-                const int c0 = count;
-                g.forRuns(qlo.data(), qhi.data(), [&](int32_t b, int32_t e) {
-#if defined(__AVX512F__) && defined(__AVX512VL__)
-                    // 8 items at a time, the same operations lane by lane
-                    // (distance2AsEigen's: fma(d, d, 0) is d^2 rounded), the
-                    // passing ones packed in order by a register compress.
-                    const __m512d ax = _mm512_set1_pd(A[0]), ay = _mm512_set1_pd(A[1]), az = _mm512_set1_pd(A[2]);
-                    const __m512d rc = _mm512_set1_pd(reach), zero = _mm512_setzero_pd();
-                    for (int32_t k = b; k < e; k += 8) {
-                        const __mmask8 lanes = e - k >= 8 ? __mmask8(0xFF) : static_cast<__mmask8>((1u << (e - k)) - 1);
-                        const __m512d dx = _mm512_sub_pd(ax, _mm512_maskz_loadu_pd(lanes, gx + k));
-                        const __m512d dy = _mm512_sub_pd(ay, _mm512_maskz_loadu_pd(lanes, gy + k));
-                        const __m512d dz = _mm512_sub_pd(az, _mm512_maskz_loadu_pd(lanes, gz + k));
-                        const __m512d R = _mm512_add_pd(_mm512_maskz_loadu_pd(lanes, gr + k), rc);
-                        const __m512d d2 = _mm512_fmadd_pd(
-                            dz, dz, _mm512_add_pd(_mm512_fmadd_pd(dx, dx, zero), _mm512_fmadd_pd(dy, dy, zero)));
-                        const __mmask8 pass = _mm512_mask_cmp_pd_mask(lanes, d2, _mm512_mul_pd(R, R), _CMP_NGT_UQ);
-                        if (count <= KL)  // (buf has 8 slots to spare past KL)
-                            _mm256_storeu_si256(reinterpret_cast<__m256i*>(buf + count),
-                                                _mm256_maskz_compress_epi32(pass, _mm256_maskz_loadu_epi32(lanes, item + k)));
-                        count += std::popcount(static_cast<unsigned>(pass));
-                    }
-#else
-                    for (int32_t k = b; k < e; ++k) {
-                        const double R = gr[k] + reach;
-                        const double d2 = distance2AsEigen(A[0] - gx[k], A[1] - gy[k], A[2] - gz[k]);
-                        buf[std::min(count, KL)] = item[k];
-                        count += !(d2 > R * R);
-                    }
-#endif
-                });
-                const int32_t i0 = st_.itemStart[pb];
-                for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
-            }
             }
             if (count > KL) count = -1;
             std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
