@@ -9,6 +9,7 @@
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
+#include "../contact/ListKernels.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
 #include "SleepPhase.hpp"
@@ -281,7 +282,9 @@ void PieceContactPhase::run(double dt) {
         const int32_t i0 = st_.itemStart[ip], i1 = st_.itemStart[ip + 1];
         // Cells twice the reach: a query box of +-reach then spans 2 cells per
         // axis (8 cells) instead of 3 (27), for a few more items per cell.
-        if (rebuild) st_.itemGrid[ip].build(st_.itemPoint.data() + 3 * i0, i1 - i0, 2 * st_.itemReach);
+        if (rebuild)
+            st_.itemGrid[ip].build(st_.itemPoint.data() + 3 * i0, i1 - i0, 2 * st_.itemReach,
+                                   st_.itemRadius.data() + i0);  // (the radii ride along: the list build reads them)
         const int32_t e0 = st_.edgeStart[ip], e1 = st_.edgeStart[ip + 1];
         if (edgeRebuild)
             st_.edgeGrid[ip].build(st_.edgeLo.data() + 3 * e0, st_.edgeHi.data() + 3 * e0, e1 - e0,
@@ -324,6 +327,22 @@ void PieceContactPhase::run(double dt) {
         st_.list.resize(KL * static_cast<std::size_t>(ns));
         st_.listCount.assign(ns, 0);
         st_.listPos.resize(3 * static_cast<std::size_t>(ns));
+        // Per neighbour entry: the reach (ra + rb + skin, summed in that
+        // order) and the neighbour's box, side by side.
+        // Per neighbour entry: the reach (ra + rb + skin, summed in that
+        // order) and the neighbour's box, as 7 arrays over the entries.
+        const std::size_t nq = st_.nbrs.size();
+        st_.nbrBox.resize(7 * nq);
+        for (std::size_t pa = 0; pa < np; ++pa)
+            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1]; ++q) {
+                const int32_t pb = st_.nbrs[q];
+                st_.nbrBox[q] = st_.pieceRadius[pa] + st_.pieceRadius[pb] + skin;
+                for (int d = 0; d < 3; ++d)
+                    st_.nbrBox[(1 + d) * nq + q] = w_.bounds.lo[3 * pb + d], st_.nbrBox[(4 + d) * nq + q] = w_.bounds.hi[3 * pb + d];
+            }
+        const double* nbrReach = st_.nbrBox.data();
+        const double* nbrLo[3] = {nbrReach + nq, nbrReach + 2 * nq, nbrReach + 3 * nq};
+        const double* nbrHi[3] = {nbrReach + 4 * nq, nbrReach + 5 * nq, nbrReach + 6 * nq};
 #pragma omp parallel for schedule(dynamic, 64)
         for (int32_t i = 0; i < ns; ++i) {
             const int32_t node = w_.surfNodes[i];
@@ -331,30 +350,38 @@ void PieceContactPhase::run(double dt) {
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
-            const double ra = w_.materials[w_.pieces[pa].material].radius;
+            // Branch-free tests (ListKernels.hpp): about one visited item in
+            // five passes, unpredictably; more than KL pass: crowded, this
+            // node queries the cells each step.  The grid's slots are visited
+            // as before (cells in x-y-z order, descending items within a cell).
+            int32_t buf[KL + 8];
             int count = 0;
-            for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
-                const int32_t pb = st_.nbrs[q];
-                const double reach = ra + w_.materials[w_.pieces[pb].material].radius + skin;
-                bool overlap = true;
-                for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = A[d] - reach <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= A[d] + reach;
-                if (!overlap) continue;
-                const int32_t i0 = st_.itemStart[pb];
-                const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
-                st_.itemGrid[pb].forRange(qlo.data(), qhi.data(), [&](int32_t local) {
-                    const int32_t it = i0 + local;
-                    const double R = st_.itemRadius[it] + reach;
-                    if (count < 0 ||
-                        (A - Eigen::Map<const Vector3d>(&st_.itemPoint[3 * it])).squaredNorm() > R * R)
-                        return;
-                    if (count == KL) {
-                        count = -1;  // crowded: this node queries the cells each step
-                        return;
-                    }
-                    st_.list[static_cast<std::size_t>(KL) * i + count++] = st_.items[it];
-                });
+            // The neighbour pieces whose box, grown by the reach, holds the
+            // node: flagged 64 at a time (most neighbours touch the piece
+            // elsewhere, unpredictably for a branch), then visited in order.
+            const int32_t q0 = st_.nbrStart[pa], q1 = st_.nbrStart[pa + 1];
+            for (int32_t qb = q0; qb < q1 && count <= KL; qb += 64) {
+                const int m = static_cast<int>(std::min<int32_t>(64, q1 - qb));
+                const double Ad[3] = {A[0], A[1], A[2]};
+                for (uint64_t near = boxesNear(Ad, nbrReach, nbrLo, nbrHi, qb, m); near && count <= KL;
+                     near &= near - 1) {
+                    const int32_t q = qb + std::countr_zero(near);
+                    const int32_t pb = st_.nbrs[q];
+                    const double reach = nbrReach[q];
+                    const Vector3d qlo = A.array() - st_.itemReach, qhi = A.array() + st_.itemReach;
+                    const CellGrid& g = st_.itemGrid[pb];
+                    const int32_t* item = g.item();
+                    const double *gx = g.x(), *gy = g.y(), *gz = g.z(), *gr = g.r();
+                    const int c0 = count;
+                    g.forRuns(qlo.data(), qhi.data(), [&](int32_t b, int32_t e) {
+                        count = spheresWithin(Ad, reach, gx, gy, gz, gr, item, b, e, buf, count, KL);
+                    });
+                    const int32_t i0 = st_.itemStart[pb];
+                    for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
+                }
             }
+            if (count > KL) count = -1;
+            std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
             st_.listCount[i] = count;
         }
         // Pack the lists (the step streams through them node after node).
@@ -387,6 +414,18 @@ void PieceContactPhase::run(double dt) {
             for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1] && count >= 0; ++q) {
                 const int32_t pb = st_.nbrs[q];
                 if (pb < pa) continue;
+                // pb's registered edge boxes lie within its box (its surface
+                // nodes +- r) grown by half the skin: a piece whose box, grown
+                // by r + skin to spare rounding, misses this edge's box has
+                // none that overlaps it (most of the neighbours touch a piece
+                // elsewhere).
+                const double m = st_.pieceRadius[pb] + grow;
+                const double* lo = &st_.edgeLo[3 * ie];
+                const double* hi = &st_.edgeHi[3 * ie];
+                bool overlap = true;
+                for (int d = 0; d < 3 && overlap; ++d)
+                    overlap = lo[d] <= w_.bounds.hi[3 * pb + d] + m && w_.bounds.lo[3 * pb + d] - m <= hi[d];
+                if (!overlap) continue;
                 const int32_t j0 = st_.edgeStart[pb];
                 st_.edgeGrid[pb].forOverlapping(&st_.edgeLo[3 * ie], &st_.edgeHi[3 * ie], [&](int32_t local) {
                     if (count < 0) return;

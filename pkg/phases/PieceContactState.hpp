@@ -52,6 +52,7 @@ struct PieceContactState {
     std::vector<uint8_t> pieceActive;  // piece has a neighbour piece within reach
     std::vector<int32_t> nbrStart, nbrs;   // CSR: the pieces whose boxes overlap each piece's
     std::vector<int32_t> pieceOrder, pairs, nbrFill;  // sweep-and-prune work arrays
+    std::vector<double> nbrBox;  // per nbrs entry (list rebuilds): reach + skin, the neighbour's box lo, hi (7 arrays)
 
     // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
     // (pieceLo, pieceHi: the pieces' boxes, PieceBounds::lo/hi.)
