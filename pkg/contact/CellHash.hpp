@@ -143,14 +143,10 @@ public:
     template <class F>
     void forCells(const int64_t* a, const int64_t* b, F&& f) const {
         if (dense_) {
-            int64_t u[3], v[3];
-            if (!clip(a, b, u, v)) return;
-            for (int64_t i = u[0]; i <= v[0]; ++i)
-                for (int64_t j = u[1]; j <= v[1]; ++j) {
-                    const int32_t* s = &start_[static_cast<std::size_t>((i * dim_[1] + j) * dim_[2])];
-                    for (int64_t k = u[2]; k <= v[2]; ++k)
-                        if (s[k] < s[k + 1]) f(i + lo_[0], j + lo_[1], k + lo_[2], s[k], s[k + 1]);
-                }
+            forDenseColumns(a, b, [&](int64_t i, int64_t j, const int32_t* s, int64_t z0, int64_t z1) {
+                for (int64_t k = z0; k <= z1; ++k)
+                    if (s[k] < s[k + 1]) f(i + lo_[0], j + lo_[1], k + lo_[2], s[k], s[k + 1]);
+            });
             return;
         }
         for (int64_t i = a[0]; i <= b[0]; ++i)
@@ -167,13 +163,9 @@ public:
     template <class F>
     void forRuns(const int64_t* a, const int64_t* b, F&& f) const {
         if (dense_) {
-            int64_t u[3], v[3];
-            if (!clip(a, b, u, v)) return;
-            for (int64_t i = u[0]; i <= v[0]; ++i)
-                for (int64_t j = u[1]; j <= v[1]; ++j) {
-                    const int32_t* s = &start_[static_cast<std::size_t>((i * dim_[1] + j) * dim_[2])];
-                    if (s[u[2]] < s[v[2] + 1]) f(s[u[2]], s[v[2] + 1]);
-                }
+            forDenseColumns(a, b, [&](int64_t, int64_t, const int32_t* s, int64_t z0, int64_t z1) {
+                if (s[z0] < s[z1 + 1]) f(s[z0], s[z1 + 1]);
+            });
             return;
         }
         forCells(a, b, [&](int64_t, int64_t, int64_t, int32_t s0, int32_t s1) { f(s0, s1); });
@@ -190,6 +182,17 @@ private:
             if (u[d] > v[d]) return false;
         }
         return true;
+    }
+    // f(i, j, s, z0, z1) for each (x, y) column of the dense block within
+    // [a, b] (coordinates relative to its lowest cell, x then y): s the
+    // column's first slots along z, [z0, z1] the z range within [a, b].
+    template <class F>
+    void forDenseColumns(const int64_t* a, const int64_t* b, F&& f) const {
+        int64_t u[3], v[3];
+        if (!clip(a, b, u, v)) return;
+        for (int64_t i = u[0]; i <= v[0]; ++i)
+            for (int64_t j = u[1]; j <= v[1]; ++j)
+                f(i, j, &start_[static_cast<std::size_t>((i * dim_[1] + j) * dim_[2])], u[2], v[2]);
     }
 
     CellTable t_;

@@ -142,16 +142,13 @@ void ViscousSolve::diagonal(double* diag) {
     if (Domain* dom = w_.domain.built()) dom->returnPartials(layout_, diag);
 }
 
+ViscousSolve::Vectors ViscousSolve::vectors() {
+    return {w_.mass.data(), w_.blocked.data(), x_.data(), r_.data(), z_.data(), p_.data(), cp_.data(), q_.data(),
+            diag_.data()};
+}
+
 bool ViscousSolve::start(double dt, const double* f, double* s) {
-    const double* M = w_.mass.data();
-    const uint8_t* blk = w_.blocked.data();
-    double* X = x_.data();
-    double* R = r_.data();
-    double* Z = z_.data();
-    double* P = p_.data();
-    double* CP = cp_.data();
-    double* Q = q_.data();
-    double* D = diag_.data();
+    const auto [M, blk, X, R, Z, P, CP, Q, D] = vectors();
     // The last step's D, when it was the last step's (not after a pause of
     // the solve, e.g. while every viscous piece slept); scaled to this dt,
     // since D ~ dt a.
@@ -231,15 +228,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
     const std::size_t n3 = 3 * w_.mass.size();
     for (auto* v : {&x_, &r_, &z_, &p_, &cp_, &q_, &diag_, &delta_})
         if (v->size() != n3) v->assign(n3, 0.0);
-    const double* M = w_.mass.data();
-    const uint8_t* blk = w_.blocked.data();
-    double* X = x_.data();
-    double* R = r_.data();
-    double* Z = z_.data();
-    double* P = p_.data();
-    double* CP = cp_.data();
-    double* Q = q_.data();
-    double* D = diag_.data();
+    const auto [M, blk, X, R, Z, P, CP, Q, D] = vectors();
     const double tol2 = w_.settings.viscousTolerance * w_.settings.viscousTolerance;
 
     // Jacobi preconditioner: the diagonal of M + dt C on the current shape.

@@ -95,6 +95,15 @@ private:
     // overwritten) and the ghosts' partial sums come back to their owners.
     void apply(double* p, double* y);
     void diagonal(double* d);
+    // The iteration's vectors (sized by solve): masses, blocked flags, the
+    // iterate X, residual R, preconditioned residual Z, direction P, C P, q = C X
+    // and the preconditioner's diagonal D.
+    struct Vectors {
+        const double* M;
+        const uint8_t* blk;
+        double *X, *R, *Z, *P, *CP, *Q, *D;
+    };
+    Vectors vectors();
     // X = the warm start, or 0 when there is none; R, Z, P, Q and the sums
     // (r.z, r.M^-1 r, x.M x) to match.  Returns whether it started warm.
     bool start(double dt, const double* f, double* sums);
