@@ -295,8 +295,9 @@ def test_piece_added_mid_run_on_ranks():
 _serialSpheres = {}
 
 
-def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
-    """Runs tests/mpi/yade_spheres.py SCENE serially (P = 1) or on P ranks; its JSON."""
+def _yadeRun(script, scene, P=1, threads=1, tmp=None, **envExtra):
+    """Runs `yade -n -x tests/mpi/SCRIPT SCENE` serially (P = 1) or on P ranks,
+    QDEM on `threads` threads; the JSON it writes to QDEM_MPI_OUT."""
     import json
     import os
     import subprocess
@@ -304,17 +305,18 @@ def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
     from mpi_launch import ROOT, env
     fd, out = tempfile.mkstemp(suffix=".json", dir=tmp)
     os.close(fd)
-    e = env()
-    e.update(QDEM_THREADS=str(threads), QDEM_MPI_OUT=out, OMP_NUM_THREADS=str(threads), **envExtra)
-    args = ["yade", "-n", "-x", "tests/mpi/yade_spheres.py", scene]
+    args = ["yade", "-n", "-x", "tests/mpi/" + script, scene]
+    extra = dict(envExtra, QDEM_THREADS=str(threads), QDEM_MPI_OUT=out)
     try:
         if P == 1:
+            e = env()
+            e.update(extra, OMP_NUM_THREADS=str(threads))
             p = subprocess.run(["timeout", "300"] + args, cwd=ROOT, env=e, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
             rc, log = p.returncode, p.stdout
         else:
             saved = dict(os.environ)
-            os.environ.update(envExtra, QDEM_MPI_OUT=out)
+            os.environ.update(extra)
             try:
                 rc, log = mpirun(P, args, timeout=300)
             finally:
@@ -325,6 +327,11 @@ def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
             return json.load(f)
     finally:
         os.remove(out)
+
+
+def _yadeSpheres(scene, P=1, threads=1, tmp=None, **envExtra):
+    """Runs tests/mpi/yade_spheres.py SCENE serially (P = 1) or on P ranks; its JSON."""
+    return _yadeRun("yade_spheres.py", scene, P, threads, tmp, **envExtra)
 
 
 def _sphereReference(scene):
@@ -413,35 +420,7 @@ def test_yade_spheres_rebalance_and_save_load_keep_histories(tmp_path):
 def _yadeMpy(scene, P=1, threads=1, **envExtra):
     """Runs tests/mpi/yade_mpy.py SCENE serially (P = 1: mp.mpirun falls back
     to O.run) or on P ranks under yade.mpy; its JSON."""
-    import json
-    import os
-    import subprocess
-    import tempfile
-    from mpi_launch import ROOT, env
-    fd, out = tempfile.mkstemp(suffix=".json")
-    os.close(fd)
-    args = ["yade", "-n", "-x", "tests/mpi/yade_mpy.py", scene]
-    extra = dict(envExtra, QDEM_THREADS=str(threads), QDEM_MPI_OUT=out)
-    try:
-        if P == 1:
-            e = env()
-            e.update(extra, OMP_NUM_THREADS=str(threads))
-            p = subprocess.run(["timeout", "300"] + args, cwd=ROOT, env=e, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
-            rc, log = p.returncode, p.stdout
-        else:
-            saved = dict(os.environ)
-            os.environ.update(extra)
-            try:
-                rc, log = mpirun(P, args, timeout=300)
-            finally:
-                os.environ.clear()
-                os.environ.update(saved)
-        assert rc == 0, log[-4000:]
-        with open(out) as f:
-            return json.load(f)
-    finally:
-        os.remove(out)
+    return _yadeRun("yade_mpy.py", scene, P, threads, **envExtra)
 
 
 _serialMpy = {}
