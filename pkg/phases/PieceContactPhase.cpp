@@ -176,6 +176,10 @@ void PieceContactPhase::run(double dt) {
     };
     const std::size_t itemCap = !tetItems ? S.nTris() : allTets ? static_cast<std::size_t>(w_.tetNodes.size() / 4)
                                                                  : S.surfTets.size();
+    // (The arrays keep the capacity of every candidate: itemStart[np] and
+    // edgeStart[np] say how many are registered.  Shrinking them to that
+    // count made the next rebuild zero-fill them again: serial stores of
+    // the size of the surface.)
     if (rebuild) {
         st_.items.resize(itemCap), st_.itemPoint.resize(3 * itemCap), st_.itemRadius.resize(itemCap);
         st_.itemStart.assign(np + 1, 0);
@@ -190,7 +194,7 @@ void PieceContactPhase::run(double dt) {
     // Registers item id (its n nodes) of piece `piece` at slot k if it is
     // near another piece; returns whether it did.
     auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece, std::size_t k,
-                       double& rLargest) {
+                       double& rLargest, int32_t& hint) {
         if (cur)
             for (int j = 0; j < n; ++j)
                 if (!cur[nodes[j]]) return false;
@@ -203,7 +207,7 @@ void PieceContactPhase::run(double dt) {
         lo.array() -= r + grow, hi.array() += r + grow;
         // Ours filters out elements far from other pieces; the seed's cases
         // A/B/C register everything of their kind, as the paper measured.
-        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data()))
+        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data(), hint))
             return false;
         double R = 0;
         for (int j = 0; j < n; ++j) R = std::max(R, (at(X, nodes[j]) - c).squaredNorm());
@@ -223,15 +227,17 @@ void PieceContactPhase::run(double dt) {
             const auto [b, e] = itemRange(ip);
             const std::size_t k0 = !tetItems ? S.pieceTriStart[ip] : allTets ? p.tetBegin : S.pieceSurfTetStart[ip];
             std::size_t k = k0;
+            int32_t hint = -1;
             for (int32_t q = b; q < e; ++q) {
-                if (!tetItems) k += addItem(q, &S.tri[3 * q], 3, r, ip, k, itemR);
-                else if (allTets) k += addItem(q, &w_.tetNodes[4 * q], 4, r, ip, k, itemR);
-                else k += addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip, k, itemR);
+                if (!tetItems) k += addItem(q, &S.tri[3 * q], 3, r, ip, k, itemR, hint);
+                else if (allTets) k += addItem(q, &w_.tetNodes[4 * q], 4, r, ip, k, itemR, hint);
+                else k += addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip, k, itemR, hint);
             }
             st_.itemStart[ip + 1] = static_cast<int32_t>(k - k0);  // (a count until packed)
         }
         if (st_.pieceActive[ip] && edgeLists && edgeRebuild) {
             std::size_t k = S.pieceEdgeStart[ip];
+            int32_t hint = -1;
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
@@ -240,7 +246,7 @@ void PieceContactPhase::run(double dt) {
                 // r_a + r_b (+ skin) share a cell.
                 const double g = r + 0.5 * grow;
                 const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
-                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) continue;
+                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data(), hint)) continue;
                 edgeR = std::max(edgeR, (b - a).norm());
                 st_.edgeItems[k] = e;
                 for (int d = 0; d < 3; ++d) st_.edgeLo[3 * k + d] = lo[d], st_.edgeHi[3 * k + d] = hi[d];
@@ -260,8 +266,6 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.itemRadius[from], n, &st_.itemRadius[to]);
             st_.itemStart[ip + 1] = to + n;
         }
-        const std::size_t n = st_.itemStart[np];
-        st_.items.resize(n), st_.itemPoint.resize(3 * n), st_.itemRadius.resize(n);
     }
     if (edgeRebuild) {
         for (std::size_t ip = 0; ip < np; ++ip) {
@@ -272,8 +276,6 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.edgeHi[3 * from], 3 * n, &st_.edgeHi[3 * to]);
             st_.edgeStart[ip + 1] = to + n;
         }
-        const std::size_t n = st_.edgeStart[np];
-        st_.edgeItems.resize(n), st_.edgeLo.resize(3 * n), st_.edgeHi.resize(3 * n);
     }
     if (rebuild) st_.itemReach = itemR + 2 * rMax + grow;
     // (each piece's grids are its own: built in parallel)
@@ -324,11 +326,16 @@ void PieceContactPhase::run(double dt) {
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(w_.surfNodes.size());
         constexpr int KL = PieceContactState::kList;
-        st_.list.resize(KL * static_cast<std::size_t>(ns));
-        st_.listCount.assign(ns, 0);
+        // The nodes go in chunks of kListChunk, one chunk per task; a chunk's
+        // lists are written one after the other into its own stretch of
+        // listFlat (room for kList each), so they come out packed chunk by
+        // chunk with no second pass to pack them.
+        constexpr int32_t CH = PieceContactState::kListChunk;
+        const int32_t nChunks = (ns + CH - 1) / CH;
+        st_.listFlat.resize(static_cast<std::size_t>(KL) * CH * nChunks);  // (same size each rebuild: no fill)
+        st_.listCount.resize(ns);
+        st_.listStart.resize(ns);
         st_.listPos.resize(3 * static_cast<std::size_t>(ns));
-        // Per neighbour entry: the reach (ra + rb + skin, summed in that
-        // order) and the neighbour's box, side by side.
         // Per neighbour entry: the reach (ra + rb + skin, summed in that
         // order) and the neighbour's box, as 7 arrays over the entries.
         const std::size_t nq = st_.nbrs.size();
@@ -343,18 +350,18 @@ void PieceContactPhase::run(double dt) {
         const double* nbrReach = st_.nbrBox.data();
         const double* nbrLo[3] = {nbrReach + nq, nbrReach + 2 * nq, nbrReach + 3 * nq};
         const double* nbrHi[3] = {nbrReach + 4 * nq, nbrReach + 5 * nq, nbrReach + 6 * nq};
-#pragma omp parallel for schedule(dynamic, 64)
-        for (int32_t i = 0; i < ns; ++i) {
+        // Node i's list into buf (KL + 8 entries): its count, -1 when more
+        // than KL pass (crowded: the node queries the cells each step).
+        auto nodeList = [&](int32_t i, int32_t* buf) -> int {
             const int32_t node = w_.surfNodes[i];
             const int32_t pa = w_.nodePiece[node];
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
-            if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
+            if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) return 0;  // (another rank's query point)
             // Branch-free tests (ListKernels.hpp): about one visited item in
             // five passes, unpredictably; more than KL pass: crowded, this
             // node queries the cells each step.  The grid's slots are visited
             // as before (cells in x-y-z order, descending items within a cell).
-            int32_t buf[KL + 8];
             int count = 0;
             // The neighbour pieces whose box, grown by the reach, holds the
             // node: flagged 64 at a time (most neighbours touch the piece
@@ -380,19 +387,19 @@ void PieceContactPhase::run(double dt) {
                     for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
                 }
             }
-            if (count > KL) count = -1;
-            std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
-            st_.listCount[i] = count;
+            return count > KL ? -1 : count;
+        };
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int32_t chunk = 0; chunk < nChunks; ++chunk) {
+            int32_t fill = KL * CH * chunk;
+            for (int32_t i = CH * chunk; i < std::min(ns, CH * (chunk + 1)); ++i) {
+                int32_t buf[KL + 8];
+                const int count = nodeList(i, buf);
+                std::copy_n(buf, std::max(0, count), &st_.listFlat[fill]);
+                st_.listStart[i] = fill, st_.listCount[i] = count;
+                fill += std::max(0, count);
+            }
         }
-        // Pack the lists (the step streams through them node after node).
-        st_.listStart.resize(static_cast<std::size_t>(ns) + 1);
-        st_.listStart[0] = 0;
-        for (int32_t i = 0; i < ns; ++i) st_.listStart[i + 1] = st_.listStart[i] + std::max(0, st_.listCount[i]);
-        st_.listFlat.resize(st_.listStart[ns]);
-#pragma omp parallel for schedule(static)
-        for (int32_t i = 0; i < ns; ++i)
-            std::copy_n(&st_.list[static_cast<std::size_t>(KL) * i], std::max(0, st_.listCount[i]),
-                        &st_.listFlat[st_.listStart[i]]);
         st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
         w_.sleeping.listsRebuilt();  // lists now from the current positions
         st_.listSkin = skin;
@@ -403,7 +410,7 @@ void PieceContactPhase::run(double dt) {
     }
     if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
-        const auto ne = static_cast<int32_t>(st_.edgeItems.size());
+        const int32_t ne = st_.edgeStart[np];
         constexpr int KE = PieceContactState::kEdgeList;
         st_.edgeList.resize(KE * static_cast<std::size_t>(ne));
         st_.edgeListCount.assign(ne, 0);
