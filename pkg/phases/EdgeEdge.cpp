@@ -23,7 +23,7 @@ using namespace contact_detail;
 template <bool Friction>
 void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
     const SurfaceIndex& S = w_.surface;
-    const int32_t ne = st_.edgeStart.empty() ? 0 : st_.edgeStart.back();  // (registered; the arrays keep more room)
+    const int32_t ne = st_.registeredEdges();
     constexpr int K = PieceContactState::kEE;
     const double sinFade2 = std::pow(std::sin(w_.settings.edgeFadeAngle), 2);
     const long stamp = w_.iter;

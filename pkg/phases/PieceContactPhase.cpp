@@ -410,7 +410,7 @@ void PieceContactPhase::run(double dt) {
     }
     if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
-        const int32_t ne = st_.edgeStart[np];
+        const int32_t ne = st_.registeredEdges();
         constexpr int KE = PieceContactState::kEdgeList;
         st_.edgeList.resize(KE * static_cast<std::size_t>(ne));
         st_.edgeListCount.assign(ne, 0);

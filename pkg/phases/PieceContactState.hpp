@@ -25,6 +25,7 @@ struct PieceContactState {
     std::vector<double> itemPoint;              // their reference points (3 each)
     std::vector<double> itemRadius;             // and bounding radii about them
     std::vector<int32_t> edgeStart, edgeItems;  // CSR per piece: registered edge ids, edgeStart[np] of them
+    int32_t registeredEdges() const { return edgeStart.empty() ? 0 : edgeStart.back(); }
     std::vector<double> edgeLo, edgeHi;         // their boxes grown by half the contact reach (3 each)
     double itemReach = 0;                       // largest bounding radius + contact reach
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
