@@ -186,6 +186,7 @@ void PieceContactPhase::run(double dt) {
     }
     if (edgeRebuild) {
         st_.edgeItems.resize(S.nEdges()), st_.edgeLo.resize(3 * S.nEdges()), st_.edgeHi.resize(3 * S.nEdges());
+        st_.edgeRec.resize(PieceContactState::kEdgeRec * S.nEdges());
         st_.edgeStart.assign(np + 1, 0);
     }
     st_.triNormal.resize(3 * S.nTris());
@@ -250,6 +251,8 @@ void PieceContactPhase::run(double dt) {
                 edgeR = std::max(edgeR, (b - a).norm());
                 st_.edgeItems[k] = e;
                 for (int d = 0; d < 3; ++d) st_.edgeLo[3 * k + d] = lo[d], st_.edgeHi[3 * k + d] = hi[d];
+                int32_t* rec = &st_.edgeRec[PieceContactState::kEdgeRec * k];
+                rec[0] = S.edge[2 * e], rec[1] = S.edge[2 * e + 1], rec[2] = ip, rec[3] = e - S.pieceEdgeStart[ip];
                 ++k;
             }
             st_.edgeStart[ip + 1] = static_cast<int32_t>(k - S.pieceEdgeStart[ip]);
@@ -274,6 +277,8 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.edgeItems[from], n, &st_.edgeItems[to]);
             std::copy_n(&st_.edgeLo[3 * from], 3 * n, &st_.edgeLo[3 * to]);
             std::copy_n(&st_.edgeHi[3 * from], 3 * n, &st_.edgeHi[3 * to]);
+            constexpr int R = PieceContactState::kEdgeRec;
+            std::copy_n(&st_.edgeRec[R * from], R * n, &st_.edgeRec[R * to]);
             st_.edgeStart[ip + 1] = to + n;
         }
     }

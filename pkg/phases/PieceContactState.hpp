@@ -26,6 +26,11 @@ struct PieceContactState {
     std::vector<double> itemRadius;             // and bounding radii about them
     std::vector<int32_t> edgeStart, edgeItems;  // CSR per piece: registered edge ids, edgeStart[np] of them
     int32_t registeredEdges() const { return edgeStart.empty() ? 0 : edgeStart.back(); }
+    // Per registered edge, what edge-edge reads of the other edge of a pair:
+    // its two nodes, its piece and its id within that piece (kEdgeRec each,
+    // 16 bytes), one load where the surface index took three dependent ones.
+    static constexpr int kEdgeRec = 4;
+    std::vector<int32_t> edgeRec;
     std::vector<double> edgeLo, edgeHi;         // their boxes grown by half the contact reach (3 each)
     double itemReach = 0;                       // largest bounding radius + contact reach
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
