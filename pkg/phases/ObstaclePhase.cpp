@@ -109,7 +109,12 @@ void ObstaclePhase::run(double dt) {
         const int th = omp_get_thread_num();
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
-#pragma omp for schedule(static)
+        // Chunks of 64 nodes dealt round-robin: the nodes that meet an
+        // obstacle are those of the few pieces near it (the bottom layer of a
+        // stack on a floor), contiguous in the surface order, so halves
+        // (schedule(static)) gave all of them to one thread.  A fixed deal:
+        // the same thread sums the same reactions every run.
+#pragma omp for schedule(static, 64)
         for (int32_t i = 0; i < nSurf; ++i) {
             const int32_t s = all ? i : awakeSurf[i];
             const int32_t node = surfNodes[s];
