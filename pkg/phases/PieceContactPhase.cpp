@@ -109,12 +109,27 @@ void PieceContactPhase::run(double dt) {
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     // The contact law's material constants of each pair of pieces that can
     // touch (a log and roots each): once per step, not once per contact.
+    // Pieces share few materials: each pair of materials is computed once
+    // (a table when it is small; the scene's materials may have changed
+    // since the last step, so it is filled afresh).
     st_.nbrLaw.resize(st_.nbrs.size());
     st_.pieceRadius.resize(np);
+    const std::size_t nm = w_.materials.size();
+    const bool table = nm * nm <= 4 * st_.nbrs.size() + 64;
+    if (table) matPairDone_.assign(nm * nm, 0), matPairLaw_.resize(nm * nm);
     for (std::size_t i = 0; i < np; ++i) {
-        st_.pieceRadius[i] = w_.materials[w_.pieces[i].material].radius;
-        for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q)
-            st_.nbrLaw[q] = pairConst(w_.materials[w_.pieces[i].material], w_.materials[w_.pieces[st_.nbrs[q]].material]);
+        const int ma = w_.pieces[i].material;
+        st_.pieceRadius[i] = w_.materials[ma].radius;
+        for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q) {
+            const int mb = w_.pieces[st_.nbrs[q]].material;
+            if (!table) {
+                st_.nbrLaw[q] = pairConst(w_.materials[ma], w_.materials[mb]);
+                continue;
+            }
+            const std::size_t k = static_cast<std::size_t>(ma) * nm + mb;
+            if (!matPairDone_[k]) matPairLaw_[k] = pairConst(w_.materials[ma], w_.materials[mb]), matPairDone_[k] = 1;
+            st_.nbrLaw[q] = matPairLaw_[k];
+        }
     }
     w_.contacts.begin();
 
