@@ -318,7 +318,8 @@ void PieceContactPhase::run(double dt) {
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     const bool all = w_.sleeping.everything();
     // Unit normals of the surface triangles of active pieces (quick plane test);
-    // a sleeping piece's once after it stopped.  The same region zeroes the
+    // a sleeping piece's once after it stopped (and again after a rebuild,
+    // which may register others of its triangles).  The same region zeroes the
     // thread buffers (only awake pieces' nodes are read, and so zeroed): one
     // fork and join less.
 #pragma omp parallel num_threads(nth)
@@ -330,13 +331,22 @@ void PieceContactPhase::run(double dt) {
                 for (std::size_t ip = 0; ip < np; ++ip)
                     if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
         }
+        auto normal = [&](int32_t t) {
+            const int32_t* c = &S.tri[3 * t];
+            const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
+            for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+        };
         for (std::size_t ip = 0; ip < np; ++ip) {
-            if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
+            if (!st_.pieceActive[ip] || (normalsFresh_[ip] && !rebuild)) continue;
+            if (tetItems) {  // (the seed's cases: every tet face may be read)
 #pragma omp for schedule(static) nowait
-            for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
-                const int32_t* c = &S.tri[3 * t];
-                const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
-                for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+                for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) normal(t);
+            } else {
+                // Only the registered triangles are read (listed, or met in
+                // the cells): a third of the stack's surface faces out, and
+                // most of a sparse scene's is far from any other piece.
+#pragma omp for schedule(static) nowait
+                for (int32_t k = st_.itemStart[ip]; k < st_.itemStart[ip + 1]; ++k) normal(st_.items[k]);
             }
         }
     }
