@@ -113,13 +113,12 @@ void ObstaclePhase::run(double dt) {
         const int th = omp_get_thread_num();
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
-        // Chunks of 64 nodes dealt round-robin: the nodes that meet an
-        // obstacle are those of the few pieces near it, contiguous in the
-        // surface order; halves (schedule(static)) would give them all to one
-        // thread when those pieces come first or last (a stack built layer
-        // by layer on its floor).  A fixed deal: the same thread sums the
-        // same reactions every run.
-#pragma omp for schedule(static, 64)
+        // Halves of the surface nodes, as the contact sums and the
+        // integration split them: each thread meets the force lines it will
+        // touch again.  (Chunks dealt round-robin balanced scenes whose floor
+        // pieces come first, but cost the 27-cube stack 15-25 % here: lines
+        // passed between the cores, bench/logs/obstacle_deal_2026-11-24.txt.)
+#pragma omp for schedule(static)
         for (int32_t i = 0; i < nSurf; ++i) {
             const int32_t s = all ? i : awakeSurf[i];
             const int32_t node = surfNodes[s];
