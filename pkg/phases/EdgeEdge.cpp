@@ -23,7 +23,7 @@ using namespace contact_detail;
 template <bool Friction>
 void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv) {
     const SurfaceIndex& S = w_.surface;
-    const auto ne = static_cast<int32_t>(st_.edgeItems.size());
+    const int32_t ne = st_.registeredEdges();
     constexpr int K = PieceContactState::kEE;
     const double sinFade2 = std::pow(std::sin(w_.settings.edgeFadeAngle), 2);
     const long stamp = w_.iter;
@@ -54,7 +54,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             double* ref = &st_.eeRef[K * e];
             const bool watched = st_.eeStamp[e] == stamp - 1;
             if (!watched)  // history is only valid from the previous step
-                for (int k = 0; k < K; ++k) other[k] = -1, otherPiece[k] = -1;
+                for (int k = 0; k < K; ++k) other[k] = -1, otherPiece[k] = -1, side[k] = 0, ref[k] = 0.0;
             st_.eeStamp[e] = stamp;
             const Material& ma = w_.materials[w_.pieces[pa].material];
             const int32_t a0 = S.edge[2 * e], a1 = S.edge[2 * e + 1];
@@ -68,12 +68,12 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             // One pair of edges: je indexes the registered edges.
             auto pair = [&](int32_t je) {
                     if (nNew == K) return;
-                    const int32_t e2 = st_.edgeItems[je];
-                    const int32_t pb = S.edgePiece[e2];
+                    const int32_t* rec = &st_.edgeRec[PieceContactState::kEdgeRec * je];
+                    const int32_t pb = rec[2];
                     if (!st_.pieceActive[pb]) return;
                     const Material& mb = w_.materials[w_.pieces[pb].material];
                     const double reach = ma.radius + mb.radius;
-                    const int32_t b0 = S.edge[2 * e2], b1 = S.edge[2 * e2 + 1];
+                    const int32_t b0 = rec[0], b1 = rec[1];
                     // Under MPI one rank computes the pair: the owner of the lower
                     // node of this edge, the one whose slots keep the pair's history
                     // (so a history row has one owner: Domain::rebalance).
@@ -99,7 +99,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const Vector3d d = sp.c1 - sp.c2;
                     const double dist = d.norm();
                     int slot = -1;
-                    const int32_t local2 = e2 - S.pieceEdgeStart[pb];  // history by stable id
+                    const int32_t local2 = rec[3];  // history by stable id (the edge's id in its piece)
                     for (int k = 0; k < K; ++k)
                         if (other[k] == local2 && otherPiece[k] == pb) slot = k;
                     // Which side of edge 2 edge 1 is on, along the common normal;
@@ -181,6 +181,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     st_.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
                 }
             }
+            if (nNew == 0 && other[0] < 0) continue;  // no touch, none before (slots fill from 0): nothing to store
             for (int k = 0; k < K; ++k) {
                 other[k] = k < nNew ? newOther[k] : -1;
                 otherPiece[k] = k < nNew ? newOtherPiece[k] : -1;

@@ -74,7 +74,11 @@ void ObstaclePhase::run(double dt) {
     // Reactions per thread and (piece, obstacle) pair: a piece that falls
     // asleep keeps its own.
     const std::size_t nPairs = pieceObstacles_.size();
-    threadReaction_.assign(static_cast<std::size_t>(nth) * nPairs * 6, 0.0);
+    // Each thread's block rounded up to whole cache lines (8 doubles), one
+    // line apart: two threads adding reactions into a shared line would hand
+    // it back and forth on every contact.
+    const std::size_t reactStride = (nPairs * 6 + 7) / 8 * 8 + 8;
+    threadReaction_.assign(static_cast<std::size_t>(nth) * reactStride, 0.0);
     const bool energyOn = w_.settings.trackEnergy;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     double eDamp = 0, eSlip = 0, eBound = 0;
@@ -107,8 +111,13 @@ void ObstaclePhase::run(double dt) {
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
     {
         const int th = omp_get_thread_num();
-        double* react = threadReaction_.data() + static_cast<std::size_t>(th) * nPairs * 6;
+        double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
+        // Halves of the surface nodes, as the contact sums and the
+        // integration split them: each thread meets the force lines it will
+        // touch again.  (Chunks dealt round-robin balanced scenes whose floor
+        // pieces come first, but cost the 27-cube stack 15-25 % here: lines
+        // passed between the cores, bench/logs/obstacle_deal_2026-11-24.txt.)
 #pragma omp for schedule(static)
         for (int32_t i = 0; i < nSurf; ++i) {
             const int32_t s = all ? i : awakeSurf[i];
@@ -183,7 +192,7 @@ void ObstaclePhase::run(double dt) {
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)
-            pairReaction_[j] += threadReaction_[static_cast<std::size_t>(th) * nPairs * 6 + j];
+            pairReaction_[j] += threadReaction_[static_cast<std::size_t>(th) * reactStride + j];
     for (std::size_t j = 0; j < nPairs; ++j) {
         const double* R = &pairReaction_[6 * j];
         Obstacle& o = w_.obstacles[pieceObstacles_[j]];

@@ -109,12 +109,27 @@ void PieceContactPhase::run(double dt) {
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     // The contact law's material constants of each pair of pieces that can
     // touch (a log and roots each): once per step, not once per contact.
+    // Pieces share few materials: each pair of materials is computed once
+    // (a table when it is small; the scene's materials may have changed
+    // since the last step, so it is filled afresh).
     st_.nbrLaw.resize(st_.nbrs.size());
     st_.pieceRadius.resize(np);
+    const std::size_t nm = w_.materials.size();
+    const bool table = nm * nm <= 4 * st_.nbrs.size() + 64;
+    if (table) matPairDone_.assign(nm * nm, 0), matPairLaw_.resize(nm * nm);
     for (std::size_t i = 0; i < np; ++i) {
-        st_.pieceRadius[i] = w_.materials[w_.pieces[i].material].radius;
-        for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q)
-            st_.nbrLaw[q] = pairConst(w_.materials[w_.pieces[i].material], w_.materials[w_.pieces[st_.nbrs[q]].material]);
+        const int ma = w_.pieces[i].material;
+        st_.pieceRadius[i] = w_.materials[ma].radius;
+        for (int32_t q = st_.nbrStart[i]; q < st_.nbrStart[i + 1]; ++q) {
+            const int mb = w_.pieces[st_.nbrs[q]].material;
+            if (!table) {
+                st_.nbrLaw[q] = pairConst(w_.materials[ma], w_.materials[mb]);
+                continue;
+            }
+            const std::size_t k = static_cast<std::size_t>(ma) * nm + mb;
+            if (!matPairDone_[k]) matPairLaw_[k] = pairConst(w_.materials[ma], w_.materials[mb]), matPairDone_[k] = 1;
+            st_.nbrLaw[q] = matPairLaw_[k];
+        }
     }
     w_.contacts.begin();
 
@@ -176,12 +191,17 @@ void PieceContactPhase::run(double dt) {
     };
     const std::size_t itemCap = !tetItems ? S.nTris() : allTets ? static_cast<std::size_t>(w_.tetNodes.size() / 4)
                                                                  : S.surfTets.size();
+    // (The arrays keep the capacity of every candidate: itemStart[np] and
+    // edgeStart[np] say how many are registered.  Shrinking them to that
+    // count made the next rebuild zero-fill them again: serial stores of
+    // the size of the surface.)
     if (rebuild) {
         st_.items.resize(itemCap), st_.itemPoint.resize(3 * itemCap), st_.itemRadius.resize(itemCap);
         st_.itemStart.assign(np + 1, 0);
     }
     if (edgeRebuild) {
         st_.edgeItems.resize(S.nEdges()), st_.edgeLo.resize(3 * S.nEdges()), st_.edgeHi.resize(3 * S.nEdges());
+        st_.edgeRec.resize(PieceContactState::kEdgeRec * S.nEdges());
         st_.edgeStart.assign(np + 1, 0);
     }
     st_.triNormal.resize(3 * S.nTris());
@@ -190,7 +210,7 @@ void PieceContactPhase::run(double dt) {
     // Registers item id (its n nodes) of piece `piece` at slot k if it is
     // near another piece; returns whether it did.
     auto addItem = [&](int32_t id, const int32_t* nodes, int n, double r, int32_t piece, std::size_t k,
-                       double& rLargest) {
+                       double& rLargest, int32_t& hint) {
         if (cur)
             for (int j = 0; j < n; ++j)
                 if (!cur[nodes[j]]) return false;
@@ -203,7 +223,7 @@ void PieceContactPhase::run(double dt) {
         lo.array() -= r + grow, hi.array() += r + grow;
         // Ours filters out elements far from other pieces; the seed's cases
         // A/B/C register everything of their kind, as the paper measured.
-        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data()))
+        if (!tetItems && !st_.nearOther(piece, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data(), hint))
             return false;
         double R = 0;
         for (int j = 0; j < n; ++j) R = std::max(R, (at(X, nodes[j]) - c).squaredNorm());
@@ -223,15 +243,17 @@ void PieceContactPhase::run(double dt) {
             const auto [b, e] = itemRange(ip);
             const std::size_t k0 = !tetItems ? S.pieceTriStart[ip] : allTets ? p.tetBegin : S.pieceSurfTetStart[ip];
             std::size_t k = k0;
+            int32_t hint = -1;
             for (int32_t q = b; q < e; ++q) {
-                if (!tetItems) k += addItem(q, &S.tri[3 * q], 3, r, ip, k, itemR);
-                else if (allTets) k += addItem(q, &w_.tetNodes[4 * q], 4, r, ip, k, itemR);
-                else k += addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip, k, itemR);
+                if (!tetItems) k += addItem(q, &S.tri[3 * q], 3, r, ip, k, itemR, hint);
+                else if (allTets) k += addItem(q, &w_.tetNodes[4 * q], 4, r, ip, k, itemR, hint);
+                else k += addItem(S.surfTets[q], &w_.tetNodes[4 * S.surfTets[q]], 4, r, ip, k, itemR, hint);
             }
             st_.itemStart[ip + 1] = static_cast<int32_t>(k - k0);  // (a count until packed)
         }
         if (st_.pieceActive[ip] && edgeLists && edgeRebuild) {
             std::size_t k = S.pieceEdgeStart[ip];
+            int32_t hint = -1;
             for (int32_t e = S.pieceEdgeStart[ip]; e < S.pieceEdgeStart[ip + 1]; ++e) {
                 if (!S.edgeSharp[e]) continue;
                 if (cur && (!cur[S.edge[2 * e]] || !cur[S.edge[2 * e + 1]])) continue;
@@ -240,10 +262,12 @@ void PieceContactPhase::run(double dt) {
                 // r_a + r_b (+ skin) share a cell.
                 const double g = r + 0.5 * grow;
                 const Vector3d lo = a.cwiseMin(b).array() - g, hi = a.cwiseMax(b).array() + g;
-                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data())) continue;
+                if (!st_.nearOther(ip, lo.data(), hi.data(), w_.bounds.lo.data(), w_.bounds.hi.data(), hint)) continue;
                 edgeR = std::max(edgeR, (b - a).norm());
                 st_.edgeItems[k] = e;
                 for (int d = 0; d < 3; ++d) st_.edgeLo[3 * k + d] = lo[d], st_.edgeHi[3 * k + d] = hi[d];
+                int32_t* rec = &st_.edgeRec[PieceContactState::kEdgeRec * k];
+                rec[0] = S.edge[2 * e], rec[1] = S.edge[2 * e + 1], rec[2] = ip, rec[3] = e - S.pieceEdgeStart[ip];
                 ++k;
             }
             st_.edgeStart[ip + 1] = static_cast<int32_t>(k - S.pieceEdgeStart[ip]);
@@ -260,8 +284,6 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.itemRadius[from], n, &st_.itemRadius[to]);
             st_.itemStart[ip + 1] = to + n;
         }
-        const std::size_t n = st_.itemStart[np];
-        st_.items.resize(n), st_.itemPoint.resize(3 * n), st_.itemRadius.resize(n);
     }
     if (edgeRebuild) {
         for (std::size_t ip = 0; ip < np; ++ip) {
@@ -270,10 +292,10 @@ void PieceContactPhase::run(double dt) {
             std::copy_n(&st_.edgeItems[from], n, &st_.edgeItems[to]);
             std::copy_n(&st_.edgeLo[3 * from], 3 * n, &st_.edgeLo[3 * to]);
             std::copy_n(&st_.edgeHi[3 * from], 3 * n, &st_.edgeHi[3 * to]);
+            constexpr int R = PieceContactState::kEdgeRec;
+            std::copy_n(&st_.edgeRec[R * from], R * n, &st_.edgeRec[R * to]);
             st_.edgeStart[ip + 1] = to + n;
         }
-        const std::size_t n = st_.edgeStart[np];
-        st_.edgeItems.resize(n), st_.edgeLo.resize(3 * n), st_.edgeHi.resize(3 * n);
     }
     if (rebuild) st_.itemReach = itemR + 2 * rMax + grow;
     // (each piece's grids are its own: built in parallel)
@@ -296,7 +318,8 @@ void PieceContactPhase::run(double dt) {
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     const bool all = w_.sleeping.everything();
     // Unit normals of the surface triangles of active pieces (quick plane test);
-    // a sleeping piece's once after it stopped.  The same region zeroes the
+    // a sleeping piece's once after it stopped (and again after a rebuild,
+    // which may register others of its triangles).  The same region zeroes the
     // thread buffers (only awake pieces' nodes are read, and so zeroed): one
     // fork and join less.
 #pragma omp parallel num_threads(nth)
@@ -308,13 +331,22 @@ void PieceContactPhase::run(double dt) {
                 for (std::size_t ip = 0; ip < np; ++ip)
                     if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
         }
+        auto normal = [&](int32_t t) {
+            const int32_t* c = &S.tri[3 * t];
+            const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
+            for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+        };
         for (std::size_t ip = 0; ip < np; ++ip) {
-            if (!st_.pieceActive[ip] || normalsFresh_[ip]) continue;
+            if (!st_.pieceActive[ip] || (normalsFresh_[ip] && !rebuild)) continue;
+            if (tetItems) {  // (the seed's cases: every tet face may be read)
 #pragma omp for schedule(static) nowait
-            for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) {
-                const int32_t* c = &S.tri[3 * t];
-                const Vector3d n = (at(X, c[1]) - at(X, c[0])).cross(at(X, c[2]) - at(X, c[0])).normalized();
-                for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
+                for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) normal(t);
+            } else {
+                // Only the registered triangles are read (listed, or met in
+                // the cells): a third of the stack's surface faces out, and
+                // most of a sparse scene's is far from any other piece.
+#pragma omp for schedule(static) nowait
+                for (int32_t k = st_.itemStart[ip]; k < st_.itemStart[ip + 1]; ++k) normal(st_.items[k]);
             }
         }
     }
@@ -324,11 +356,16 @@ void PieceContactPhase::run(double dt) {
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(w_.surfNodes.size());
         constexpr int KL = PieceContactState::kList;
-        st_.list.resize(KL * static_cast<std::size_t>(ns));
-        st_.listCount.assign(ns, 0);
+        // The nodes go in chunks of kListChunk, one chunk per task; a chunk's
+        // lists are written one after the other into its own stretch of
+        // listFlat (room for kList each), so they come out packed chunk by
+        // chunk with no second pass to pack them.
+        constexpr int32_t CH = PieceContactState::kListChunk;
+        const int32_t nChunks = (ns + CH - 1) / CH;
+        st_.listFlat.resize(static_cast<std::size_t>(KL) * CH * nChunks);  // (same size each rebuild: no fill)
+        st_.listCount.resize(ns);
+        st_.listStart.resize(ns);
         st_.listPos.resize(3 * static_cast<std::size_t>(ns));
-        // Per neighbour entry: the reach (ra + rb + skin, summed in that
-        // order) and the neighbour's box, side by side.
         // Per neighbour entry: the reach (ra + rb + skin, summed in that
         // order) and the neighbour's box, as 7 arrays over the entries.
         const std::size_t nq = st_.nbrs.size();
@@ -343,18 +380,18 @@ void PieceContactPhase::run(double dt) {
         const double* nbrReach = st_.nbrBox.data();
         const double* nbrLo[3] = {nbrReach + nq, nbrReach + 2 * nq, nbrReach + 3 * nq};
         const double* nbrHi[3] = {nbrReach + 4 * nq, nbrReach + 5 * nq, nbrReach + 6 * nq};
-#pragma omp parallel for schedule(dynamic, 64)
-        for (int32_t i = 0; i < ns; ++i) {
+        // Node i's list into buf (KL + 8 entries): its count, -1 when more
+        // than KL pass (crowded: the node queries the cells each step).
+        auto nodeList = [&](int32_t i, int32_t* buf) -> int {
             const int32_t node = w_.surfNodes[i];
             const int32_t pa = w_.nodePiece[node];
             const Vector3d A = at(X, node);
             for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
-            if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) continue;  // (another rank's query point)
+            if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) return 0;  // (another rank's query point)
             // Branch-free tests (ListKernels.hpp): about one visited item in
             // five passes, unpredictably; more than KL pass: crowded, this
             // node queries the cells each step.  The grid's slots are visited
             // as before (cells in x-y-z order, descending items within a cell).
-            int32_t buf[KL + 8];
             int count = 0;
             // The neighbour pieces whose box, grown by the reach, holds the
             // node: flagged 64 at a time (most neighbours touch the piece
@@ -380,19 +417,19 @@ void PieceContactPhase::run(double dt) {
                     for (int k = c0; k < std::min(count, KL); ++k) buf[k] = st_.items[i0 + buf[k]];
                 }
             }
-            if (count > KL) count = -1;
-            std::copy_n(buf, std::max(0, count), &st_.list[static_cast<std::size_t>(KL) * i]);
-            st_.listCount[i] = count;
+            return count > KL ? -1 : count;
+        };
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int32_t chunk = 0; chunk < nChunks; ++chunk) {
+            int32_t fill = KL * CH * chunk;
+            for (int32_t i = CH * chunk; i < std::min(ns, CH * (chunk + 1)); ++i) {
+                int32_t buf[KL + 8];
+                const int count = nodeList(i, buf);
+                std::copy_n(buf, std::max(0, count), &st_.listFlat[fill]);
+                st_.listStart[i] = fill, st_.listCount[i] = count;
+                fill += std::max(0, count);
+            }
         }
-        // Pack the lists (the step streams through them node after node).
-        st_.listStart.resize(static_cast<std::size_t>(ns) + 1);
-        st_.listStart[0] = 0;
-        for (int32_t i = 0; i < ns; ++i) st_.listStart[i + 1] = st_.listStart[i] + std::max(0, st_.listCount[i]);
-        st_.listFlat.resize(st_.listStart[ns]);
-#pragma omp parallel for schedule(static)
-        for (int32_t i = 0; i < ns; ++i)
-            std::copy_n(&st_.list[static_cast<std::size_t>(KL) * i], std::max(0, st_.listCount[i]),
-                        &st_.listFlat[st_.listStart[i]]);
         st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
         w_.sleeping.listsRebuilt();  // lists now from the current positions
         st_.listSkin = skin;
@@ -403,7 +440,7 @@ void PieceContactPhase::run(double dt) {
     }
     if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
-        const auto ne = static_cast<int32_t>(st_.edgeItems.size());
+        const int32_t ne = st_.registeredEdges();
         constexpr int KE = PieceContactState::kEdgeList;
         st_.edgeList.resize(KE * static_cast<std::size_t>(ne));
         st_.edgeListCount.assign(ne, 0);

@@ -81,6 +81,8 @@ private:
     long listedTriangles_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
+    std::vector<PairConst> matPairLaw_;  // per step: the law's constants per pair of materials (a, b)
+    std::vector<uint8_t> matPairDone_;   // and which of them this step has computed
 };
 
 }  // namespace qdem

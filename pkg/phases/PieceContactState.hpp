@@ -19,10 +19,18 @@ struct PieceContactState {
     // from one piece visits only the other pieces' elements.
     std::vector<CellGrid> itemGrid;
     std::vector<BoxGrid> edgeGrid;
-    std::vector<int32_t> itemStart, items;      // CSR per piece: registered triangle or tet ids
+    // CSR per piece: registered triangle or tet ids, itemStart[np] of them
+    // (the arrays keep room for every candidate: no refill per rebuild).
+    std::vector<int32_t> itemStart, items;
     std::vector<double> itemPoint;              // their reference points (3 each)
     std::vector<double> itemRadius;             // and bounding radii about them
-    std::vector<int32_t> edgeStart, edgeItems;  // CSR per piece: registered edge ids
+    std::vector<int32_t> edgeStart, edgeItems;  // CSR per piece: registered edge ids, edgeStart[np] of them
+    int32_t registeredEdges() const { return edgeStart.empty() ? 0 : edgeStart.back(); }
+    // Per registered edge, what edge-edge reads of the other edge of a pair:
+    // its two nodes, its piece and its id within that piece (kEdgeRec each,
+    // 16 bytes), one load where the surface index took three dependent ones.
+    static constexpr int kEdgeRec = 4;
+    std::vector<int32_t> edgeRec;
     std::vector<double> edgeLo, edgeHi;         // their boxes grown by half the contact reach (3 each)
     double itemReach = 0;                       // largest bounding radius + contact reach
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
@@ -34,10 +42,13 @@ struct PieceContactState {
     // surface node has moved more than skin/2 since then (two nodes closing
     // in on each other then still cannot have crossed the skin).
     static constexpr int kList = 48;
-    std::vector<int32_t> list;       // kList per surface node: built here, then packed into listFlat
     std::vector<int32_t> listCount;  // per surface node; -1 = overflow, query the cells instead
-    // The lists packed (CSR): node i's triangles are listFlat[listStart[i] ..
-    // listStart[i] + listCount[i]), so the step reads them as one stream.
+    // The lists packed chunk by chunk: node i's triangles are
+    // listFlat[listStart[i] .. listStart[i] + listCount[i]); the lists of a
+    // chunk of kListChunk nodes follow one another in the chunk's stretch of
+    // kListChunk * kList entries, so the step reads them as one stream per
+    // chunk, and the build writes them there with no packing pass.
+    static constexpr int32_t kListChunk = 64;
     std::vector<int32_t> listStart, listFlat;
     std::vector<double> listPos;     // surface node positions at the rebuild (3 each)
     std::vector<uint8_t> listActive; // pieces active at the rebuild
@@ -55,15 +66,27 @@ struct PieceContactState {
     std::vector<double> nbrBox;  // per nbrs entry (list rebuilds): reach + skin, the neighbour's box lo, hi (7 arrays)
 
     // Does the box [lo, hi] touch the box of a piece that piece pa can reach?
-    // (pieceLo, pieceHi: the pieces' boxes, PieceBounds::lo/hi.)
-    bool nearOther(int32_t pa, const double* lo, const double* hi, const double* pieceLo, const double* pieceHi) const {
-        for (int32_t q = nbrStart[pa]; q < nbrStart[pa + 1]; ++q) {
+    // (pieceLo, pieceHi: the pieces' boxes, PieceBounds::lo/hi.)  `hint`: the
+    // neighbour entry that answered the caller's previous question (-1: none),
+    // tested first and updated on a hit.  Consecutive elements of a surface
+    // mostly lie near the same neighbour, so one test usually answers, where
+    // the scan in order meets the corner and edge neighbours first (a branch
+    // mispredicted per miss); the answer is the scan's either way.
+    bool nearOther(int32_t pa, const double* lo, const double* hi, const double* pieceLo, const double* pieceHi,
+                   int32_t& hint) const {
+        auto overlaps = [&](int32_t q) {
             const int32_t pb = nbrs[q];
             bool overlap = true;
             for (int d = 0; d < 3 && overlap; ++d)
                 overlap = lo[d] <= pieceHi[3 * pb + d] && pieceLo[3 * pb + d] <= hi[d];
-            if (overlap) return true;
-        }
+            return overlap;
+        };
+        if (hint >= nbrStart[pa] && hint < nbrStart[pa + 1] && overlaps(hint)) return true;
+        for (int32_t q = nbrStart[pa]; q < nbrStart[pa + 1]; ++q)
+            if (q != hint && overlaps(q)) {
+                hint = q;
+                return true;
+            }
         return false;
     }
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node

@@ -131,7 +131,7 @@ TEST(ContactKindTable, BroadPhaseBuildsTheListsTheRowsDeclare) {
         w.step(1e-9);
         removeContactKind(row.name);
         // Verlet lists of triangles built, feature edges registered.
-        return std::pair<long, std::size_t>{w.verletRebuilds(), w.pieceContactState().edgeItems.size()};
+        return std::pair<long, std::size_t>{w.verletRebuilds(), static_cast<std::size_t>(w.pieceContactState().registeredEdges())};
     };
     EXPECT_EQ(lists(RegisterNothing), (std::pair<long, std::size_t>{0, 0}));
     const auto tris = lists(RegisterSurfaceTriangles);
