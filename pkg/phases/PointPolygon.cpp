@@ -63,6 +63,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         Candidate* const cand = cl.c;
         TriLanes lanes;
         TriLanesOut near;
+        for (int l = 0; l < kTriLanes; ++l)  // a unit triangle in every lane until one is loaded
+            for (int d = 0; d < 3; ++d)
+                lanes.a[d][l] = 0, lanes.b[d][l] = d == 0, lanes.c[d][l] = d == 1, lanes.n[d][l] = d == 2;
 #pragma omp for schedule(dynamic, 64)
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = surfNodes[s];
@@ -92,10 +95,14 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             }
             const Material& ma = w_.materials[w_.pieces[pa].material];
             // The law's constants of this node's piece with piece pb.
+            int32_t lastPb = -1;  // the last piece looked up (a node's contacts are mostly with one piece)
+            PairConst lastLaw{};
             auto lawOf = [&](int32_t pb) -> PairConst {
+                if (pb == lastPb) return lastLaw;
+                lastPb = pb;
                 for (int32_t q = st_.nbrStart[pa]; q < st_.nbrStart[pa + 1]; ++q)
-                    if (st_.nbrs[q] == pb) return st_.nbrLaw[q];
-                return pairConst(ma, w_.materials[w_.pieces[pb].material]);  // listed before the pieces parted
+                    if (st_.nbrs[q] == pb) return lastLaw = st_.nbrLaw[q];
+                return lastLaw = pairConst(ma, w_.materials[w_.pieces[pb].material]);  // listed before the pieces parted
             };
             const Vector3d A = at(X, node);
             cl.clear();
@@ -117,8 +124,11 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 listed += n;
                 for (int32_t k0 = 0; k0 < n; k0 += kTriLanes) {
                     const int cnt = std::min<int32_t>(kTriLanes, n - k0);
-                    for (int l = 0; l < kTriLanes; ++l) {
-                        const int32_t t = L[k0 + (l < cnt ? l : cnt - 1)];
+                    // Lanes past cnt keep the triangles last loaded (a whole
+                    // triangle each, so finite numbers); their results are
+                    // not read.  (A quarter of the lanes here.)
+                    for (int l = 0; l < cnt; ++l) {
+                        const int32_t t = L[k0 + l];
                         const int32_t* c = tri + 3 * t;
                         for (int d = 0; d < 3; ++d) {
                             lanes.a[d][l] = X[3 * c[0] + d];
@@ -140,14 +150,15 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                         const bool behind =
                             h < 0 && straightBehind(near.feature[l] == static_cast<int32_t>(TriFeature::Face), dist, h);
                         if (!behind && dist >= reach) continue;
-                        Candidate cd;
-                        cd.tri = t;
-                        cd.cp.point = Vector3d(near.point[0][l], near.point[1][l], near.point[2][l]);
-                        for (int k = 0; k < 3; ++k) cd.cp.w[k] = near.w[k][l];
-                        cd.cp.feature = static_cast<TriFeature>(near.feature[l]);
-                        cd.dist = dist;
-                        cd.behind = behind;
-                        cl.add(cd);
+                        Candidate* cd = cl.slotFor(dist);
+                        if (!cd) continue;
+                        cd->tri = t;
+                        cd->cp.point = Vector3d(near.point[0][l], near.point[1][l], near.point[2][l]);
+                        for (int k = 0; k < 3; ++k) cd->cp.w[k] = near.w[k][l];
+                        cd->cp.feature = static_cast<TriFeature>(near.feature[l]);
+                        cd->dist = dist;
+                        cd->behind = behind;
+                        cl.noteBehind(behind);
                     }
                 }
             }
