@@ -11,7 +11,8 @@
 
 namespace qdem::contact_detail {
 
-// cand[0..nc) are the candidate closest points of one query point A; keep[i]
+// cand[0..nc) are the candidate closest points of one query point A, their
+// features snapped (snappedFeature, PointTriangle.hpp: CandidateList does it); keep[i]
 // starts true (false for candidates already rejected, e.g. by the inside test).
 // triPiece maps a triangle to its piece: duplicates are only resolved within
 // one piece.  eps: a length at rounding level; cosFeature: cosine of the
@@ -24,11 +25,6 @@ namespace qdem::contact_detail {
 // checks it against the pairwise form on random and tied candidate sets).
 inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
                           double eps, double cosFeature) {
-    const double tol = 1e-9;
-    // Snapping rounding-level weights: with m the weights above tol as bits,
-    // three make a face, one a corner (4 + its index); otherwise (an edge)
-    // the feature stays, a face becoming Edge0 (on an edge: not a face).
-    static constexpr int8_t snapTo[8] = {-1, 4, 5, -1, 6, -1, -1, 0};
     // Edge and corner closest points are shared by the triangles around
     // them: per piece keep only the nearest one, and only if no face contact
     // of that piece is nearer (the point is then in that edge's or corner's
@@ -53,10 +49,7 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
     int gKept[kCandidates];     // its faces kept, then its candidates kept
     int ng = 0;
     for (int i = 0; i < nc; ++i) {
-        Candidate& c = cand[i];
-        const int m = (c.cp.w[0] > tol) | (c.cp.w[1] > tol) << 1 | (c.cp.w[2] > tol) << 2;
-        const int8_t f = static_cast<int8_t>(c.cp.feature);
-        c.cp.feature = static_cast<TriFeature>(snapTo[m] >= 0 ? snapTo[m] : (f == 0 ? int8_t{1} : f));
+        const Candidate& c = cand[i];
         if (!keep[i]) continue;
         const int32_t pb = piece[i] = triPiece[c.tri];
         int g = 0;

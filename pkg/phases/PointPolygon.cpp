@@ -138,6 +138,10 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                         }
                     }
                     closestOnTriangles(A.data(), lanes, near);
+                    alignas(64) int32_t snapped[kTriLanes];  // the features as candidates carry them
+#pragma omp simd
+                    for (int l = 0; l < kTriLanes; ++l)
+                        snapped[l] = snappedFeature(near.w[0][l], near.w[1][l], near.w[2][l], near.feature[l]);
                     for (int l = 0; l < cnt; ++l) {
                         const int32_t t = L[k0 + l];
                         const int32_t pb = triPiece[t];
@@ -155,7 +159,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                         cd->tri = t;
                         cd->cp.point = Vector3d(near.point[0][l], near.point[1][l], near.point[2][l]);
                         for (int k = 0; k < 3; ++k) cd->cp.w[k] = near.w[k][l];
-                        cd->cp.feature = static_cast<TriFeature>(near.feature[l]);
+                        cd->cp.feature = static_cast<TriFeature>(snapped[l]);
                         cd->dist = dist;
                         cd->behind = behind;
                         cl.noteBehind(behind);

@@ -1,6 +1,8 @@
 // The touch rules (contact/TouchSelection.hpp, doc/contacts.md §3): the
-// one-pass selectTouches against the pairwise form it replaced (kept here as
-// the reference, verbatim), candidate for candidate, on random candidate sets
+// one-pass selectTouches, with the features snapped beforehand by
+// snappedFeature as the candidate lists do, against the pairwise form with
+// its own snapping that it replaced (kept here as the reference, verbatim),
+// candidate for candidate and feature for feature, on random candidate sets
 // built to hit every branch: several pieces, edge/corner candidates at equal
 // distances (the tie-break by index), faces at the same distance as an edge
 // up to eps, faces behind (negative signed distance), candidates already
@@ -12,6 +14,7 @@
 #include <cmath>
 #include <random>
 
+#include "contact/PointTriangle.hpp"
 #include "contact/TouchSelection.hpp"
 
 using namespace qdem;
@@ -104,6 +107,9 @@ TEST(TouchSelection, OnePassEqualsPairwise) {
             kb[i] = ka[i];
         }
         selectTouchesPairwise(A, a, nc, ka, triPiece, eps, cosFeature);
+        for (int i = 0; i < nc; ++i)  // snapped as CandidateList makes them
+            b[i].cp.feature = static_cast<TriFeature>(
+                snappedFeature(b[i].cp.w[0], b[i].cp.w[1], b[i].cp.w[2], static_cast<int32_t>(b[i].cp.feature)));
         selectTouches(A, b, nc, kb, triPiece, eps, cosFeature);
         for (int i = 0; i < nc; ++i) {
             ASSERT_EQ(ka[i], kb[i]) << "trial " << trial << " candidate " << i << " of " << nc;
