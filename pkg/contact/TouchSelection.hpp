@@ -23,8 +23,12 @@ namespace qdem::contact_detail {
 // point-polygon); they are evaluated here in one pass per rule with the same
 // result, bit for bit (the argument at each rule; tests/cpp/test_touch_selection.cpp
 // checks it against the pairwise form on random and tied candidate sets).
-inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
-                          double eps, double cosFeature) {
+//
+// Returns the candidates kept as bits (bit i: keep[i]), for the callers'
+// loops over the touches (one in six candidates in the 27-cube stack).
+static_assert(kCandidates <= 32, "selectTouches returns the kept candidates as 32 bits");
+inline uint32_t selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
+                              double eps, double cosFeature) {
     // Edge and corner closest points are shared by the triangles around
     // them: per piece keep only the nearest one, and only if no face contact
     // of that piece is nearer (the point is then in that edge's or corner's
@@ -48,6 +52,7 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
     double gFace[kCandidates];  // least signed distance of its faces (when gKept > 0)
     int gKept[kCandidates];     // its faces kept, then its candidates kept
     int ng = 0;
+    uint32_t mask = 0;
     for (int i = 0; i < nc; ++i) {
         const Candidate& c = cand[i];
         if (!keep[i]) continue;
@@ -58,6 +63,7 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
         if (c.cp.feature == TriFeature::Face) {
             gFace[g] = std::min(gFace[g], c.behind ? -c.dist : c.dist);
             ++gKept[g];
+            mask |= 1u << i;
         } else {
             keep[i] = false;  // back below if it is its piece's touch
             if (gBest[g] < 0 || c.dist < cand[gBest[g]].dist) gBest[g] = i;
@@ -66,10 +72,11 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
     bool twoOnAPiece = false;
     for (int g = 0; g < ng; ++g) {
         const int b = gBest[g];
-        if (b >= 0 && (gKept[g] == 0 || cand[b].dist < gFace[g] - eps)) keep[b] = true, ++gKept[g];  // (no face: kept)
+        if (b >= 0 && (gKept[g] == 0 || cand[b].dist < gFace[g] - eps))  // (no face: kept)
+            keep[b] = true, ++gKept[g], mask |= 1u << b;
         twoOnAPiece = twoOnAPiece || gKept[g] > 1;
     }
-    if (!twoOnAPiece) return;  // the rule below compares contacts with one piece
+    if (!twoOnAPiece) return mask;  // the rule below compares contacts with one piece
     // Two contacts with the same piece whose normals differ by less than the
     // feature angle are one touch of a nearly flat (possibly slightly folded)
     // surface: keep the nearer.  Without this, a point over a shallow concave
@@ -99,6 +106,10 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
             else keep[j] = false;
         }
     }
+    mask = 0;
+    for (int a = 0; a < nk; ++a)
+        if (keep[kept[a]]) mask |= 1u << kept[a];
+    return mask;
 }
 
 // Tangential history slot for the contact keyed kk = 8 * triangle + feature

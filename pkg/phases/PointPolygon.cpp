@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 
@@ -301,7 +302,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 }
 
             const double eps = 1e-12 * ma.radius;
-            selectTouches(A, cand, nc, keep, triPiece, eps, cosFeature);
+            const uint32_t touches = selectTouches(A, cand, nc, keep, triPiece, eps, cosFeature);
 
             int32_t newKey[K], newPiece[K];
             Vector3d newShear[K];
@@ -309,9 +310,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             bool usedOld[K] = {false, false, false, false, false, false};
             int nNew = 0;
             Vector3d fA = Vector3d::Zero();
-            for (int i = 0; i < nc; ++i) {
+            for (uint32_t m = touches; m && nNew < K; m &= m - 1) {  // the kept candidates in order
+                const int i = std::countr_zero(m);
                 const Candidate& c = cand[i];
-                if (!keep[i] || nNew == K) continue;
 
                 const int32_t* tn = &S.tri[3 * c.tri];
                 const int32_t pb = triPiece[c.tri];

@@ -110,9 +110,10 @@ TEST(TouchSelection, OnePassEqualsPairwise) {
         for (int i = 0; i < nc; ++i)  // snapped as CandidateList makes them
             b[i].cp.feature = static_cast<TriFeature>(
                 snappedFeature(b[i].cp.w[0], b[i].cp.w[1], b[i].cp.w[2], static_cast<int32_t>(b[i].cp.feature)));
-        selectTouches(A, b, nc, kb, triPiece, eps, cosFeature);
+        const uint32_t touches = selectTouches(A, b, nc, kb, triPiece, eps, cosFeature);
         for (int i = 0; i < nc; ++i) {
             ASSERT_EQ(ka[i], kb[i]) << "trial " << trial << " candidate " << i << " of " << nc;
+            ASSERT_EQ(kb[i], ((touches >> i) & 1u) != 0) << "trial " << trial << " candidate " << i;
             ASSERT_EQ(a[i].cp.feature, b[i].cp.feature) << "trial " << trial << " candidate " << i;
         }
         // What the sets exercised (so a generator that stops reaching a rule shows).
