@@ -19,10 +19,11 @@ namespace qdem::contact_detail {
 // feature angle below which two contacts with one piece are one touch.
 //
 // The rules below were first written as pairwise loops over the candidates
-// (O(nc^2), ~800 instructions per node of the 27-cube stack, a quarter of
+// (O(nc^2), ~800 instructions per node of the 27-cube stack, a sixth of
 // point-polygon); they are evaluated here in one pass per rule with the same
-// result, bit for bit (the argument at each rule; tests/cpp/test_touch_selection.cpp
-// checks it against the pairwise form on random and tied candidate sets).
+// result, bit for bit, for any distances that are not NaN (the argument at
+// each rule; tests/cpp/test_touch_selection.cpp checks it against the
+// pairwise form on random and tied candidate sets).
 //
 // Returns the candidates kept as bits (bit i: keep[i]), for the callers'
 // loops over the touches (one in six candidates in the 27-cube stack).
