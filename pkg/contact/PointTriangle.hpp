@@ -14,6 +14,22 @@
 
 namespace qdem::contact_detail {
 
+// The feature a closest point is reported as, with rounding-level weights
+// snapped (doc/contacts.md §3): three weights above 1e-9 make a face, one a
+// corner (4 + its index); otherwise (an edge) the feature stays, a face
+// becoming Edge0 (on an edge: not a face).  Applied when a candidate is made
+// (CandidateList::add, and point-polygon's lanes), after its behind test,
+// which reads the feature as found.  Branch-free: point-polygon evaluates it
+// for kTriLanes lanes at once.
+inline int32_t snappedFeature(double w0, double w1, double w2, int32_t f) {
+    const double tol = 1e-9;
+    const bool p0 = w0 > tol, p1 = w1 > tol, p2 = w2 > tol;
+    const int32_t nz = int32_t{p0} + int32_t{p1} + int32_t{p2};
+    const int32_t corner = p0 ? 4 : (p1 ? 5 : 6);
+    const int32_t other = f == 0 ? 1 : f;
+    return nz == 3 ? 0 : (nz == 1 ? corner : other);
+}
+
 // A point behind a triangle's plane (h < 0) is inside the other piece when it
 // lies straight behind the triangle: its closest point is inside the face, or
 // on the face's boundary with the point straight below it (dist = |h|, to
@@ -59,7 +75,8 @@ inline bool frontFaceNearer(const Eigen::Vector3d& P, const Eigen::Vector3d& a, 
 }
 
 // The candidate policy: the kCandidates (32) nearest triangles, in the order
-// they were found (a farther one is replaced when a nearer one comes).  32
+// they were found (a farther one is replaced when a nearer one comes), their
+// features snapped (snappedFeature).  32
 // covers a node among the finest meshes' corners many times over; a big
 // sphere on small triangles sees more, and its nearest are the ones that
 // touch.
@@ -77,6 +94,19 @@ struct CandidateList {
         bool behind;
         if (pointTriangle(P, a, b, c3, nrm, reach, regions, cp, dist, behind)) add(Candidate{tri, cp, dist, behind});
     }
+    // The slot a candidate at distance dist goes to (written there by the
+    // caller, its feature snapped), or nullptr when the list is full of
+    // nearer ones: add() without building the candidate first and copying it
+    // (~80 bytes; 51,840 times a step in the 27-cube stack).  The caller
+    // passes the candidate's behind flag to noteBehind.
+    Candidate* slotFor(double dist) {
+        if (n < kCandidates) return &c[n++];
+        int slot = 0;
+        for (int k = 1; k < n; ++k)
+            if (c[k].dist > c[slot].dist) slot = k;
+        return dist >= c[slot].dist ? nullptr : &c[slot];
+    }
+    void noteBehind(bool behind) { anyBehind = anyBehind || behind; }
     void add(const Candidate& x) {
         int slot = n;
         if (n == kCandidates) {
@@ -88,6 +118,8 @@ struct CandidateList {
             ++n;
         }
         c[slot] = x;
+        TriPoint& cp = c[slot].cp;
+        cp.feature = static_cast<TriFeature>(snappedFeature(cp.w[0], cp.w[1], cp.w[2], static_cast<int32_t>(cp.feature)));
         anyBehind = anyBehind || x.behind;
     }
 };

@@ -11,55 +11,94 @@
 
 namespace qdem::contact_detail {
 
-// cand[0..nc) are the candidate closest points of one query point A; keep[i]
+// cand[0..nc) are the candidate closest points of one query point A, their
+// features snapped (snappedFeature, PointTriangle.hpp: CandidateList does it); keep[i]
 // starts true (false for candidates already rejected, e.g. by the inside test).
 // triPiece maps a triangle to its piece: duplicates are only resolved within
 // one piece.  eps: a length at rounding level; cosFeature: cosine of the
 // feature angle below which two contacts with one piece are one touch.
-inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
-                          double eps, double cosFeature) {
-    const double tol = 1e-9;
-    int32_t piece[kCandidates];  // each candidate's piece, looked up once
-    for (int i = 0; i < nc; ++i) piece[i] = triPiece[cand[i].tri];
-    for (int i = 0; i < nc; ++i) {  // snap rounding-level weights
-        TriPoint& cp = cand[i].cp;
-        int nz = 0, last = 0;
-        for (int k = 0; k < 3; ++k)
-            if (cp.w[k] > tol) ++nz, last = k;
-        if (nz == 3) cp.feature = TriFeature::Face;
-        else if (nz == 1) cp.feature = static_cast<TriFeature>(4 + last);
-        else if (cp.feature == TriFeature::Face) cp.feature = TriFeature::Edge0;  // on an edge: not a face
-    }
+//
+// The rules below were first written as pairwise loops over the candidates
+// (O(nc^2), ~800 instructions per node of the 27-cube stack, a sixth of
+// point-polygon); they are evaluated here in one pass per rule with the same
+// result, bit for bit, for any distances that are not NaN (the argument at
+// each rule; tests/cpp/test_touch_selection.cpp checks it against the
+// pairwise form on random and tied candidate sets).
+//
+// Returns the candidates kept as bits (bit i: keep[i]), for the callers'
+// loops over the touches (one in six candidates in the 27-cube stack).
+static_assert(kCandidates <= 32, "selectTouches returns the kept candidates as 32 bits");
+inline uint32_t selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep, const int32_t* triPiece,
+                              double eps, double cosFeature) {
     // Edge and corner closest points are shared by the triangles around
     // them: per piece keep only the nearest one, and only if no face contact
     // of that piece is nearer (the point is then in that edge's or corner's
     // region of the surface).  Each point of a surface is thus reported once,
     // and a point sliding across edges and corners keeps one continuous contact.
+    //
+    // As a pairwise rule (visiting i in order, j over the candidates still
+    // kept): an edge or corner candidate i stays while dist_i < d_j - eps for
+    // every face j of its piece (d_j signed: negative behind) and (dist_i,
+    // i) < (dist_j, j) for every other edge or corner j.  Faces never drop
+    // here, so the face test is dist_i < min_j d_j - eps (rounding of x - eps
+    // is monotone in x).  Among edges and corners only the least M by (dist,
+    // index) can stay: any other i meets M (still kept when M comes later;
+    // when M came earlier, either it stayed, or a face dropped it and then
+    // drops i too, dist_i >= dist_M).  M itself stays iff it passes the
+    // faces.  So one pass: per piece the least edge or corner and the
+    // nearest face.
+    int32_t piece[kCandidates];  // each kept candidate's piece, looked up once
+    int32_t gPiece[kCandidates];
+    int gBest[kCandidates];     // least edge or corner candidate of the piece (-1: none)
+    double gFace[kCandidates];  // least signed distance of its faces (when gKept > 0)
+    int gKept[kCandidates];     // its faces kept, then its candidates kept
+    int ng = 0;
+    uint32_t mask = 0;
     for (int i = 0; i < nc; ++i) {
         const Candidate& c = cand[i];
-        if (!keep[i] || c.cp.feature == TriFeature::Face) continue;
-        const int32_t pb = piece[i];
-        for (int j = 0; j < nc && keep[i]; ++j) {
-            if (j == i || !keep[j] || piece[j] != pb) continue;
-            const double dj = cand[j].behind ? -cand[j].dist : cand[j].dist;
-            // A face point at (practically) the same distance is the same
-            // touch seen from the face: the face keeps it.
-            if (cand[j].cp.feature == TriFeature::Face) keep[i] = c.dist < dj - eps;
-            else keep[i] = c.dist < cand[j].dist || (c.dist == cand[j].dist && i < j);
+        if (!keep[i]) continue;
+        const int32_t pb = piece[i] = triPiece[c.tri];
+        int g = 0;
+        while (g < ng && gPiece[g] != pb) ++g;
+        if (g == ng) gPiece[ng] = pb, gBest[ng] = -1, gFace[ng] = INFINITY, gKept[ng] = 0, ++ng;
+        if (c.cp.feature == TriFeature::Face) {
+            gFace[g] = std::min(gFace[g], c.behind ? -c.dist : c.dist);
+            ++gKept[g];
+            mask |= 1u << i;
+        } else {
+            keep[i] = false;  // back below if it is its piece's touch
+            if (gBest[g] < 0 || c.dist < cand[gBest[g]].dist) gBest[g] = i;
         }
     }
+    bool twoOnAPiece = false;
+    for (int g = 0; g < ng; ++g) {
+        const int b = gBest[g];
+        if (b >= 0 && (gKept[g] == 0 || cand[b].dist < gFace[g] - eps))  // (no face: kept)
+            keep[b] = true, ++gKept[g], mask |= 1u << b;
+        twoOnAPiece = twoOnAPiece || gKept[g] > 1;
+    }
+    if (!twoOnAPiece) return mask;  // the rule below compares contacts with one piece
     // Two contacts with the same piece whose normals differ by less than the
     // feature angle are one touch of a nearly flat (possibly slightly folded)
     // surface: keep the nearer.  Without this, a point over a shallow concave
     // fold would feel both faces at full strength, and the count would
     // flicker as the fold flexes.  Real corners (a point in a concave corner)
-    // keep both contacts.
-    Vector3d cn[kCandidates];
+    // keep both contacts.  (Pairwise over the candidates still kept, in
+    // order: the same visits as over all of them, skipping the dropped ones.)
+    int kept[kCandidates];
+    int nk = 0;
     for (int i = 0; i < nc; ++i)
-        if (keep[i]) cn[i] = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
-    for (int i = 0; i < nc; ++i) {
+        if (keep[i]) kept[nk++] = i;
+    Vector3d cn[kCandidates];
+    for (int a = 0; a < nk; ++a) {
+        const int i = kept[a];
+        cn[i] = (cand[i].behind ? -1.0 : 1.0) * (A - cand[i].cp.point) / std::max(cand[i].dist, eps);
+    }
+    for (int a = 0; a < nk; ++a) {
+        const int i = kept[a];
         if (!keep[i]) continue;
-        for (int j = i + 1; j < nc && keep[i]; ++j) {
+        for (int b = a + 1; b < nk && keep[i]; ++b) {
+            const int j = kept[b];
             if (!keep[j] || piece[j] != piece[i]) continue;
             if (cn[i].dot(cn[j]) < cosFeature) continue;
             const double di = cand[i].behind ? -cand[i].dist : cand[i].dist;
@@ -68,6 +107,10 @@ inline void selectTouches(const Vector3d& A, Candidate* cand, int nc, bool* keep
             else keep[j] = false;
         }
     }
+    mask = 0;
+    for (int a = 0; a < nk; ++a)
+        if (keep[kept[a]]) mask |= 1u << kept[a];
+    return mask;
 }
 
 // Tangential history slot for the contact keyed kk = 8 * triangle + feature
