@@ -108,10 +108,9 @@ void PieceContactPhase::run(double dt) {
     const bool any = !st_.pairs.empty();
     if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
     // The contact law's material constants of each pair of pieces that can
-    // touch (a log and roots each): once per step, not once per contact.
-    // Pieces share few materials: each pair of materials is computed once
-    // (a table when it is small; the scene's materials may have changed
-    // since the last step, so it is filled afresh).
+    // touch (a log and roots each): once per step, not once per contact,
+    // and once per pair of materials, which pieces share (a table when it
+    // is small; filled afresh each step, as materials may have changed).
     st_.nbrLaw.resize(st_.nbrs.size());
     st_.pieceRadius.resize(np);
     const std::size_t nm = w_.materials.size();
