@@ -39,7 +39,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = st_.edgeItems[ie];
             const int32_t pa = S.edgePiece[e];

@@ -101,7 +101,7 @@ void IntegrationPhase::run(double dt) {
 #pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT)
         {
             double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
             for (int32_t i = 0; i < count; ++i) {
                 const int32_t n = all ? i : ids[i];
                 double f[3];

@@ -118,7 +118,7 @@ void ObstaclePhase::run(double dt) {
         // touch again.  (Chunks dealt round-robin balanced scenes whose floor
         // pieces come first, but cost the 27-cube stack 15-25 % here: lines
         // passed between the cores, bench/logs/obstacle_deal_2026-11-24.txt.)
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t i = 0; i < nSurf; ++i) {
             const int32_t s = all ? i : awakeSurf[i];
             const int32_t node = surfNodes[s];

@@ -72,7 +72,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         for (int l = 0; l < kTriLanes; ++l)  // a unit triangle in every lane until one is loaded
             for (int d = 0; d < 3; ++d)
                 lanes.a[d][l] = 0, lanes.b[d][l] = d == 0, lanes.c[d][l] = d == 1, lanes.n[d][l] = d == 2;
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = surfNodes[s];
             if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
