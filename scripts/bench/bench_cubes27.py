@@ -174,8 +174,9 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     w = scene(throw=a.throw)
     w.core.checkDt(DT)
-    print("cubes27: %d tets, %d nodes; dt %g s (stable %.3g s); thrown at up to %g m/s"
-          % (w.core.nTets, w.core.nNodes, DT, w.stableDt()["combined"], a.throw), flush=True)
+    print("cubes27: %d tets, %d nodes; dt %g s (stable %.3g s); thrown at up to %g m/s; OMP_WAIT_POLICY %s"
+          % (w.core.nTets, w.core.nNodes, DT, w.stableDt()["combined"], a.throw,
+             os.environ.get("OMP_WAIT_POLICY", "unset (libgomp's default: spin, then sleep)")), flush=True)
     _core.setThreads(2)
     w.core.step(DT, 20)                     # let every contact form
     state = w.core.saveState()
@@ -204,7 +205,12 @@ def main():
            "scene": "27 cubes of 4 m, 8x8x8 cells of 12 tets, Table 1, thrown at up to %g m/s per axis, spin "
                     "%g rad/s, seed 3" % (a.throw, 0.2 * a.throw),
            "tets": w.core.nTets, "nodes": w.core.nNodes, "dt": DT, "stable_dt": w.stableDt()["combined"],
-           "throw_m_per_s": a.throw, "rounds": a.rounds, "busy_rule": BUSY_RULE, "threads": res,
+           "throw_m_per_s": a.throw, "rounds": a.rounds, "busy_rule": BUSY_RULE,
+           # libgomp reads these once, at start: with 'passive' every fork, barrier
+           # and join costs ~20-40 us on this machine, without it < 1 us
+           # (scripts/bench/omp_sync.py; doc/performance.md, "What a fork costs").
+           "OMP_WAIT_POLICY": os.environ.get("OMP_WAIT_POLICY"), "GOMP_SPINCOUNT": os.environ.get("GOMP_SPINCOUNT"),
+           "threads": res,
            "targets": targets(res)}
     with open(os.path.join(a.out, "cubes27.json"), "w") as f:
         json.dump(out, f, indent=1)
