@@ -7,6 +7,12 @@ machine's cores) and 'default' (no OMP_WAIT_POLICY: libgomp spins a while,
 then sleeps; what a YADE user gets).
 
     /usr/bin/python3.11 scripts/bench/omp_sync.py [--build build] [--rounds 5] [--out out/bench/omp_sync.json]
+                                                  [--halt-poll-ns NS]
+
+--halt-poll-ns (root, KVM guests with the haltpoll idle driver): run with
+the guest's idle-poll window set to NS nanoseconds, restored afterwards
+(this machine has 0: an idle vCPU halts at once, and a sleeping thread
+waits for the hypervisor to wake it).
 
 Prints a table of the medians over the rounds (each round's figure is the
 median over its iterations) and writes every run's JSON."""
@@ -18,6 +24,7 @@ import subprocess
 import sys
 
 POLICIES = {"passive": {"OMP_WAIT_POLICY": "passive"}, "default": {}}
+HALT_POLL = "/sys/module/haltpoll/parameters/guest_halt_poll_ns"
 
 
 def run(binary, policy, iterations):
@@ -34,7 +41,28 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--iterations", type=int, default=200)
     ap.add_argument("--out", default="out/bench/omp_sync.json")
+    ap.add_argument("--halt-poll-ns", type=int, default=None)
     a = ap.parse_args()
+    if a.halt_poll_ns is None:
+        measure(a)
+        return
+    if a.halt_poll_ns < 0:
+        ap.error("--halt-poll-ns must be at least 0")
+    try:
+        with open(HALT_POLL) as f:
+            before = f.read().strip()
+        with open(HALT_POLL, "w") as f:
+            f.write(str(a.halt_poll_ns))
+    except OSError as e:
+        sys.exit("omp_sync.py: cannot set %s (%s): needs root on a KVM guest with the haltpoll driver" % (HALT_POLL, e))
+    try:
+        measure(a)
+    finally:
+        with open(HALT_POLL, "w") as f:
+            f.write(before)
+
+
+def measure(a):
     binary = os.path.join(a.build, "omp_sync")
     if not os.access(binary, os.X_OK):
         sys.exit("omp_sync.py: %s not found: build it first (make build)" % binary)
