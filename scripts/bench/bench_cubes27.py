@@ -119,7 +119,7 @@ def chart(res, path):
     colors = dict(broadPhase="#4c72b0", pointPolygon="#dd8452", edgeEdge="#55a868", elements="#c44e52",
                   integrate="#8172b3", obstacles="#937860")
     for ax, (th, cases) in zip(axes, sorted(res.items())):
-        names = [c for c, _ in CASES][::-1]
+        names = [c for c, _ in CASES if c in cases][::-1]  # (--abc-steps 0: ours only)
         bottom = np.zeros(len(names))
         for ph in PHASES:
             v = np.array([best(cases[c], ph)[0] or 0.0 for c in names])

@@ -15,6 +15,9 @@ OMP_WAIT_POLICY=passive "$BUILD"/roofline > out/bench/roofline.json 2> out/bench
 /usr/bin/python3.11 scripts/bench/kernel_ops.py --build "$BUILD" > out/bench/kernel_ops.json
 /usr/bin/python3.11 scripts/bench/perf_tables.py roofline out/bench/roofline.json
 
+echo "bench: the price of an OpenMP fork, barrier and join, with and without OMP_WAIT_POLICY=passive"
+/usr/bin/python3.11 scripts/bench/omp_sync.py --build "$BUILD" --out out/bench/omp_sync.json 2> out/bench/omp_sync.log
+
 echo "bench: QDEM element + integration and whole step, 165,888 and 1,327,104 tets (Hilbert-ordered as addPiece)"
 OMP_WAIT_POLICY=passive "$BUILD"/bench_elements --steps "${QDEM_BENCH_STEPS:-200}" --cubes 3,6 \
   > out/bench/elements_qdem.json 2> out/bench/elements_qdem.log
@@ -33,6 +36,11 @@ grep -A4 '"qdem_ns_per_tet_step"\|"yade_fem_over_qdem"' out/bench/elements.json 
 echo "bench: 27 cubes thrown (seed Figure 6 scene moving): ours amortised over its Verlet rebuilds, cases A/B/C beside it"
 OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-600}" --out out/bench
 /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27 out/bench/cubes27.json
+echo "bench: the same without OMP_WAIT_POLICY (libgomp's default, what a YADE run gets), and its synchronisations per step"
+env -u OMP_WAIT_POLICY /usr/bin/python3.11 scripts/bench/bench_cubes27.py --steps "${QDEM_BENCH_CONTACT_STEPS:-600}" \
+  --abc-steps 0 --out out/bench/cubes27_default_policy > out/bench/cubes27_default_policy.log
+tail -n 20 out/bench/cubes27_default_policy.log
+/usr/bin/python3.11 scripts/bench/contacts/sync_points.py --threads 2 | tee out/bench/sync_points.txt
 
 echo "bench: shogi scenes (seed Figures 7-10) through their first hits, QdemEngine in a YADE script"
 OMP_WAIT_POLICY=passive yade -n -j 2 -x scripts/bench/bench_shogi.py --rounds "${QDEM_BENCH_SHOGI_ROUNDS:-5}" \
