@@ -34,6 +34,13 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     const double* X = w_.pos.data();
     const double* V = w_.vel.data();
     const double* M = w_.mass.data();
+    const bool listValid = st_.listValid;
+    const int32_t* edgeItems = st_.edgeItems.data();
+    const int32_t* edgeList = st_.edgeList.data();
+    const int32_t* edgeListCount = st_.edgeListCount.data();
+    const int32_t* edgeRec = st_.edgeRec.data();
+    constexpr int KE = PieceContactState::kEdgeList, kER = PieceContactState::kEdgeRec;
+    constexpr int32_t kAheadFar = 4, kAheadNear = 2;
 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
@@ -41,6 +48,33 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t ie = 0; ie < ne; ++ie) {
+            // Software prefetch, as in point-polygon: the edges ahead are
+            // scattered over the surface's arrays (history by global edge
+            // id, the listed edges' records and end positions), and their
+            // loads were this loop's stalls.  Far ahead: the edge's history
+            // and ends, its listed edges' records; nearer: their positions.
+            if (listValid) {
+                // (not for a sleeping scene's frozen edges, which are skipped)
+                const int32_t ef = ie + kAheadFar < ne ? edgeItems[ie + kAheadFar] : -1;
+                if (ef >= 0 && edgeListCount[ie + kAheadFar] > 0 && !frozen_[S.edgePiece[ef]]) {
+                    __builtin_prefetch(&st_.eeStamp[ef]);
+                    __builtin_prefetch(&st_.eeOther[K * ef]);
+                    __builtin_prefetch(&st_.eePiece[K * ef]);
+                    __builtin_prefetch(&S.edge[2 * ef]);
+                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * (ie + kAheadFar);
+                    for (int k = 0; k < edgeListCount[ie + kAheadFar]; ++k) __builtin_prefetch(edgeRec + kER * L[k]);
+                }
+                const int32_t en = ie + kAheadNear < ne ? edgeItems[ie + kAheadNear] : -1;
+                if (en >= 0 && edgeListCount[ie + kAheadNear] > 0 && !frozen_[S.edgePiece[en]]) {
+                    __builtin_prefetch(X + 3 * S.edge[2 * en]);
+                    __builtin_prefetch(X + 3 * S.edge[2 * en + 1]);
+                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * (ie + kAheadNear);
+                    for (int k = 0; k < edgeListCount[ie + kAheadNear]; ++k) {
+                        __builtin_prefetch(X + 3 * edgeRec[kER * L[k]]);
+                        __builtin_prefetch(X + 3 * edgeRec[kER * L[k] + 1]);
+                    }
+                }
+            }
             const int32_t e = st_.edgeItems[ie];
             const int32_t pa = S.edgePiece[e];
             if (frozen_[pa]) {  // asleep among sleeping pieces: history kept

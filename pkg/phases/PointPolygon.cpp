@@ -51,6 +51,11 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     const int32_t* surfNodes = w_.surfNodes.data();
     const int32_t* nodePiece = w_.nodePiece.data();
     const Domain* dom = w_.domain.built();
+    const bool listValid = st_.listValid;
+    // (nodes ahead; 2/1, 3/1, 4/2 and 6/3 measured alike, within noise)
+    constexpr int32_t kAheadFar = 3, kAheadNear = 1;
+    const double* V = w_.vel.data();
+    const double* M = w_.mass.data();
     struct Tunnel {
         int32_t node = -1, pa = -1, pb = -1;
         double depth = 0, speed = 0, mass = 0, kn = 0;
@@ -74,6 +79,39 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 lanes.a[d][l] = 0, lanes.b[d][l] = d == 0, lanes.c[d][l] = d == 1, lanes.n[d][l] = d == 2;
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t s = 0; s < ns; ++s) {
+            // Software prefetch for the nodes ahead.  The loop's hottest
+            // stalls were loads that miss: a listed triangle's corners,
+            // normal and piece (by its id), then the corners' positions
+            // (by those), and in the contacts the corners' velocities and
+            // masses.  Far ahead, the triangles' own rows; near (those rows
+            // now in cache), the corners' rows and the node's history.
+            // (Not for a sleeping scene's frozen nodes, which are skipped.)
+            if (listValid) {
+                const int32_t sa = s + kAheadFar, sb = s + kAheadNear;
+                if (sa < ns && listCount[sa] > 0 && !frozen_[nodePiece[surfNodes[sa]]]) {
+                    const int32_t* L2 = listFlat + listStart[sa];
+                    for (int32_t k = 0; k < listCount[sa]; ++k) {
+                        __builtin_prefetch(tri + 3 * L2[k]);
+                        __builtin_prefetch(normal + 3 * L2[k]);
+                        __builtin_prefetch(triPiece + L2[k]);
+                    }
+                }
+                if (sb < ns && listCount[sb] > 0 && !frozen_[nodePiece[surfNodes[sb]]]) {
+                    const int32_t* L1 = listFlat + listStart[sb];
+                    for (int32_t k = 0; k < listCount[sb]; ++k) {
+                        const int32_t* c = tri + 3 * L1[k];
+                        for (int j = 0; j < 3; ++j) {
+                            __builtin_prefetch(X + 3 * c[j]);
+                            __builtin_prefetch(V + 3 * c[j]);
+                            __builtin_prefetch(M + c[j]);
+                        }
+                    }
+                    __builtin_prefetch(&st_.ppKey[K * sb]);
+                    __builtin_prefetch(&st_.ppPiece[K * sb]);
+                    __builtin_prefetch(&st_.ppShear[3 * K * sb]);
+                    __builtin_prefetch(&st_.ppRef[K * sb]);
+                }
+            }
             const int32_t node = surfNodes[s];
             if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
             const int32_t pa = nodePiece[node];
