@@ -21,6 +21,10 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
+namespace {
+constexpr int kMaxSumThreads = 64;  // thread buffers summed through a table of pointers
+}
+
 PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
     for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
 }
@@ -492,11 +496,22 @@ void PieceContactPhase::run(double dt) {
     // (Under MPI the ghosts' too: their owners get them back, Domain.hpp.)
     const std::vector<int32_t>& summed = dom ? dom->currentSurf() : w_.sleeping.awakeSurf();
     const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(summed.size());
+    // (Raw pointers in locals: through w_'s columns and the vector of
+    // vectors, every store to a double reloaded them.)
+    double* Fc = w_.contacts.force.data();
+    const int32_t* surfNodes = w_.surfNodes.data();
+    const int32_t* summedIds = summed.data();
+    const double* tf[kMaxSumThreads];
+    const int nSum = std::min(nth, kMaxSumThreads);
+    for (int th = 0; th < nSum; ++th) tf[th] = st_.threadForce[th].data();
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t j = 0; j < ns; ++j) {
-        const int32_t s = all ? j : summed[j];
-        for (int th = 0; th < nth; ++th)
-            for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += st_.threadForce[th][3 * s + d];
+        const int32_t s = all ? j : summedIds[j];
+        double* f = Fc + 3 * surfNodes[s];
+        for (int th = 0; th < nSum; ++th)
+            for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
+        for (int th = nSum; th < nth; ++th)  // (more threads than the table: the same sums, in order)
+            for (int d = 0; d < 3; ++d) f[d] += st_.threadForce[th][3 * s + d];
     }
     sumSeconds_ = omp_get_wtime() - tSum;
     maxOverlap_ = ks.maxOverlap;
