@@ -152,7 +152,8 @@ void PieceContactPhase::run(double dt) {
     const Domain* dom = w_.domain.built();
     const uint8_t* cur = dom ? dom->currentMask().data() : nullptr;
     bool rebuild = !verlet || !st_.listValid || st_.listTris != S.nTris() || st_.listSkin != skin ||
-                   st_.listActive.size() != np || (dom && listDomainVersion_ != dom->currentVersion());
+                   st_.listActive.size() != np || st_.listKinds != lists ||
+                   (dom && listDomainVersion_ != dom->currentVersion());
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
     if (!rebuild) {
         // Only the awake pieces' nodes move; under MPI the current ones (the
@@ -300,7 +301,7 @@ void PieceContactPhase::run(double dt) {
             st_.edgeStart[ip + 1] = to + n;
         }
     }
-    if (rebuild) st_.itemReach = itemR + 2 * rMax + grow;
+    if (rebuild) st_.itemReach = itemR + 2 * rMax + grow, st_.listKinds = lists;
     // (each piece's grids are its own: built in parallel)
 #pragma omp parallel for schedule(dynamic, 1) if (edgeRebuild)
     for (int32_t ip = 0; ip < (edgeRebuild ? npi : 0); ++ip) {

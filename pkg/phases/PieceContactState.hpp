@@ -55,6 +55,11 @@ struct PieceContactState {
     double listSkin = 0;
     std::size_t listTris = 0;        // triangle count at the rebuild (pieces added: rebuild)
     bool listValid = false;
+    // The registrations (ContactKind.hpp bits) the last rebuild made.  A kind
+    // switched on since has nothing of its own registered (edge-edge found
+    // no edges until some node moved half the skin: in a still scene,
+    // never), so a change forces a rebuild.
+    unsigned listKinds = 0;
     long listBuilds = 0;
     // The same for feature edges: per registered edge, registered edges of
     // higher pieces whose (skin-grown) boxes overlapped at the rebuild.

@@ -95,3 +95,48 @@ def test_pieces_out_of_reach_run_no_contact_code():
     t = w.core.timings
     assert t["pointPolygon"] == 0 and t["edgeEdge"] == 0
     assert w.core.verletRebuilds == 0
+
+
+def _stillScene(kind):
+    """Two pieces held still (every DOF blocked), already within contact
+    reach: crossed square bars ridge over ridge (their touch is edge-edge
+    only) or a cube face-down on another (point-polygon)."""
+    import math
+    mat = rubber(radius=1e-3)
+    w = qdem.World()
+    if kind == "edgeEdge":
+        h = 0.01 * math.sqrt(2)
+        a = w.addPiece(qdem.boxMesh((0.22, 0.02, 0.02), (11, 1, 1)), mat, pos=(0, 0, h + 0.5e-3),
+                       ori=((1, 0, 0), math.pi / 4))
+        b = w.addPiece(qdem.boxMesh((0.02, 0.22, 0.02), (1, 11, 1)), mat, pos=(0, 0, -h - 0.5e-3),
+                       ori=((0, 1, 0), math.pi / 4))
+    else:
+        a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.01, 0, 0.05 + 1e-3))
+        b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, -0.05))
+    a.blocked[:] = 7
+    b.blocked[:] = 7
+    w.core.gravity = (0, 0, 0)
+    return w, a
+
+
+@pytest.mark.parametrize("kind", ["edgeEdge", "pointPolygon"])
+def test_contact_kind_switched_on_mid_run_finds_its_contacts_at_once(kind):
+    """A contact kind switched on during a run has nothing of its own in the
+    broad phase's lists (they were built for the kinds on at the time), and a
+    still scene never moves far enough to rebuild them: edge-edge switched on
+    later found no contact, ever, and said nothing.  Switching now rebuilds
+    the lists, so the kind sees at once what it sees when on from the start."""
+    on, aOn = _stillScene(kind)
+    late, aLate = _stillScene(kind)
+    setattr(late.core, kind + "On", False)
+    dt = 1e-6
+    on.core.step(dt, 5)
+    late.core.step(dt, 5)
+    assert on.core.contactCounts[kind] > 0 and late.core.contactCounts[kind] == 0
+    setattr(late.core, kind + "On", True)
+    for _ in range(3):
+        on.core.step(dt, 1)
+        late.core.step(dt, 1)
+        assert late.core.contactCounts[kind] == on.core.contactCounts[kind]
+        # (blocked pieces: the same positions, so the same contact forces)
+        assert np.array_equal(late.core.force, on.core.force)
