@@ -48,6 +48,12 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t ie = 0; ie < ne; ++ie) {
+            const int32_t e = st_.edgeItems[ie];
+            const int32_t pa = S.edgePiece[e];
+            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
+                st_.eeStamp[e] = stamp;
+                continue;
+            }
             // Software prefetch, as in point-polygon: the edges ahead are
             // scattered over the surface's arrays (history by global edge
             // id, the listed edges' records and end positions), and their
@@ -74,12 +80,6 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                         __builtin_prefetch(X + 3 * edgeRec[kER * L[k] + 1]);
                     }
                 }
-            }
-            const int32_t e = st_.edgeItems[ie];
-            const int32_t pa = S.edgePiece[e];
-            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
-                st_.eeStamp[e] = stamp;
-                continue;
             }
             int32_t* other = &st_.eeOther[K * e];        // the other edge: local id in its piece
             int32_t* otherPiece = &st_.eePiece[K * e];   // and that piece

@@ -79,13 +79,20 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 lanes.a[d][l] = 0, lanes.b[d][l] = d == 0, lanes.c[d][l] = d == 1, lanes.n[d][l] = d == 2;
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t s = 0; s < ns; ++s) {
+            const int32_t node = surfNodes[s];
+            if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
+            const int32_t pa = nodePiece[node];
+            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
+                st_.ppStamp[s] = stamp;
+                continue;
+            }
             // Software prefetch for the nodes ahead.  The loop's hottest
             // stalls were loads that miss: a listed triangle's corners,
             // normal and piece (by its id), then the corners' positions
             // (by those), and in the contacts the corners' velocities and
             // masses.  Far ahead, the triangles' own rows; near (those rows
             // now in cache), the corners' rows and the node's history.
-            // (Not for a sleeping scene's frozen nodes, which are skipped.)
+            // (Not from or for a sleeping scene's frozen nodes, which are skipped.)
             if (listValid) {
                 const int32_t sa = s + kAheadFar, sb = s + kAheadNear;
                 if (sa < ns && listCount[sa] > 0 && !frozen_[nodePiece[surfNodes[sa]]]) {
@@ -111,13 +118,6 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     __builtin_prefetch(&st_.ppShear[3 * K * sb]);
                     __builtin_prefetch(&st_.ppRef[K * sb]);
                 }
-            }
-            const int32_t node = surfNodes[s];
-            if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact
-            const int32_t pa = nodePiece[node];
-            if (frozen_[pa]) {  // asleep among sleeping pieces: history kept
-                st_.ppStamp[s] = stamp;
-                continue;
             }
             int32_t* key = &st_.ppKey[K * s];
             int32_t* kpiece = &st_.ppPiece[K * s];
