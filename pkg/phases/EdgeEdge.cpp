@@ -61,21 +61,22 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             // and ends, its listed edges' records; nearer: their positions.
             if (listValid) {
                 // (not for a sleeping scene's frozen edges, which are skipped)
-                const int32_t ef = ie + kAheadFar < ne ? edgeItems[ie + kAheadFar] : -1;
-                if (ef >= 0 && edgeListCount[ie + kAheadFar] > 0 && !frozen_[S.edgePiece[ef]]) {
+                const int32_t jf = ie + kAheadFar, jn = ie + kAheadNear;
+                const int32_t ef = jf < ne ? edgeItems[jf] : -1;
+                if (ef >= 0 && edgeListCount[jf] > 0 && !frozen_[S.edgePiece[ef]]) {
                     __builtin_prefetch(&st_.eeStamp[ef]);
                     __builtin_prefetch(&st_.eeOther[K * ef]);
                     __builtin_prefetch(&st_.eePiece[K * ef]);
                     __builtin_prefetch(&S.edge[2 * ef]);
-                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * (ie + kAheadFar);
-                    for (int k = 0; k < edgeListCount[ie + kAheadFar]; ++k) __builtin_prefetch(edgeRec + kER * L[k]);
+                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * jf;
+                    for (int k = 0; k < edgeListCount[jf]; ++k) __builtin_prefetch(edgeRec + kER * L[k]);
                 }
-                const int32_t en = ie + kAheadNear < ne ? edgeItems[ie + kAheadNear] : -1;
-                if (en >= 0 && edgeListCount[ie + kAheadNear] > 0 && !frozen_[S.edgePiece[en]]) {
+                const int32_t en = jn < ne ? edgeItems[jn] : -1;
+                if (en >= 0 && edgeListCount[jn] > 0 && !frozen_[S.edgePiece[en]]) {
                     __builtin_prefetch(X + 3 * S.edge[2 * en]);
                     __builtin_prefetch(X + 3 * S.edge[2 * en + 1]);
-                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * (ie + kAheadNear);
-                    for (int k = 0; k < edgeListCount[ie + kAheadNear]; ++k) {
+                    const int32_t* L = edgeList + static_cast<std::size_t>(KE) * jn;
+                    for (int k = 0; k < edgeListCount[jn]; ++k) {
                         __builtin_prefetch(X + 3 * edgeRec[kER * L[k]]);
                         __builtin_prefetch(X + 3 * edgeRec[kER * L[k] + 1]);
                     }

@@ -21,10 +21,6 @@ namespace qdem {
 using Eigen::Vector3d;
 using namespace contact_detail;
 
-namespace {
-constexpr int kMaxSumThreads = 64;  // thread buffers summed through a table of pointers
-}
-
 PieceContactPhase::PieceContactPhase(const Data& data) : w_(data) {
     for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
 }
@@ -320,6 +316,8 @@ void PieceContactPhase::run(double dt) {
     const int nth = omp_get_max_threads();
     if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
+    st_.threadForceData.resize(nth);
+    for (int th = 0; th < nth; ++th) st_.threadForceData[th] = st_.threadForce[th].data();
     const bool all = w_.sleeping.everything();
     // Unit normals of the surface triangles of active pieces (quick plane test);
     // a sleeping piece's once after it stopped (and again after a rebuild,
@@ -502,17 +500,13 @@ void PieceContactPhase::run(double dt) {
     double* Fc = w_.contacts.force.data();
     const int32_t* surfNodes = w_.surfNodes.data();
     const int32_t* summedIds = summed.data();
-    const double* tf[kMaxSumThreads];
-    const int nSum = std::min(nth, kMaxSumThreads);
-    for (int th = 0; th < nSum; ++th) tf[th] = st_.threadForce[th].data();
+    const double* const* tf = st_.threadForceData.data();
 #pragma omp parallel for schedule(static) num_threads(nth)
     for (int32_t j = 0; j < ns; ++j) {
         const int32_t s = all ? j : summedIds[j];
         double* f = Fc + 3 * surfNodes[s];
-        for (int th = 0; th < nSum; ++th)
+        for (int th = 0; th < nth; ++th)
             for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
-        for (int th = nSum; th < nth; ++th)  // (more threads than the table: the same sums, in order)
-            for (int d = 0; d < 3; ++d) f[d] += st_.threadForce[th][3 * s + d];
     }
     sumSeconds_ = omp_get_wtime() - tSum;
     maxOverlap_ = ks.maxOverlap;

@@ -95,6 +95,7 @@ struct PieceContactState {
         return false;
     }
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
+    std::vector<const double*> threadForceData;    // their data(), for the sum's inner loop
     // Per step: the law's material constants of each neighbour pair (one per
     // nbrs entry) and each piece's particle radius, so the narrow phase takes
     // no log or root per contact.
