@@ -24,12 +24,18 @@ struct alignas(64) BatchOut {
 
 // Forces for the kLanes tets of block blk (padding lanes included: the caller
 // drops them).  Law: one of laws/*.hpp (its lane() is inlined: no virtual call).
+//
+// elementLanes is the arithmetic alone, from the edge vectors of positions
+// (dx) and velocities (dv, read only when Viscous) already in lanes;
+// elementBlock gathers them and calls it (inlined: one function, as compiled
+// before the split).  The split lets scripts/bench/element_parts.cpp time the
+// gather, the arithmetic and the scatter apart.
 template <class Law, bool Viscous, bool Energy>
-__attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk, const double* X, const double* V,
-                                            const ElementParams& p, BatchOut& out) {
-    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes], aux[kLanes];
-    gatherEdges(X, blk.node, dx);
-    if constexpr (Viscous) gatherEdges(V, blk.node, dv);
+__attribute__((always_inline)) inline void elementLanes(const Law& law, const TetBlock& blk,
+                                                        const double (&dx)[3][3][kLanes],
+                                                        const double (&dv)[3][3][kLanes], const ElementParams& p,
+                                                        BatchOut& out) {
+    alignas(64) double aux[kLanes];
     const auto& B = blk.B;
     const auto& V0 = blk.vol;
     const double blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
@@ -92,6 +98,15 @@ __attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk,
     }
     if constexpr (Energy && Law::kEnergyFinish)
         for (int l = 0; l < kLanes; ++l) out.wElastic[l] += V0[l] * law.energyFinish(aux[l]);
+}
+
+template <class Law, bool Viscous, bool Energy>
+__attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk, const double* X, const double* V,
+                                            const ElementParams& p, BatchOut& out) {
+    alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes];
+    gatherEdges(X, blk.node, dx);
+    if constexpr (Viscous) gatherEdges(V, blk.node, dv);
+    elementLanes<Law, Viscous, Energy>(law, blk, dx, dv, p, out);
 }
 
 // Computes forces for tets e0 .. e0+count-1 (1 <= count <= kLanes) of the

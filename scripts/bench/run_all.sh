@@ -25,6 +25,11 @@ OMP_WAIT_POLICY=passive "$BUILD"/bench_elements --steps "${QDEM_BENCH_STEPS:-200
 /usr/bin/python3.11 scripts/bench/perf_tables.py roofline out/bench/roofline.json out/bench/elements_qdem.json \
   out/bench/kernel_ops.json | tail -n 20
 
+echo "bench: the element kernel taken apart (gather, arithmetic, scatter; whole mesh and in L1), 1 thread"
+"$BUILD"/element_parts --rounds 7 --passes 20 > out/bench/element_parts.json 2> out/bench/element_parts.log
+grep -A1 '"law"' out/bench/element_parts.json | grep -v '^--' || true
+grep '"derived_cpu_median"' out/bench/element_parts.json || true
+
 echo "bench: YADE's own tetrahedral FEM on the same mesh (2 threads)"
 yade -j 2 -n -x scripts/bench/yade_fem_bench.py --cubes 27 --out out/bench/yade_fem.json > out/bench/yade_fem.log 2>&1 \
   || echo "bench: YADE FEM run failed, see out/bench/yade_fem.log"
