@@ -76,7 +76,11 @@ inline void cornerColumns(const double* A, const int32_t (&node)[4][kLanes], int
 // (lo, hi) as one 8-wide register.  (Not _mm512_insertf64x4: GCC 12's
 // version reads an undefined register and warns under -Wall.)
 inline __m512d join(__m256d lo, __m256d hi) {
-    return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    return _mm512_insertf64x4(_mm512_castpd256_pd512(lo), hi, 1);
+#pragma GCC diagnostic pop
 }
 #endif
 
