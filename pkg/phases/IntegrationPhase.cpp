@@ -8,6 +8,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
 #include "../parallel/Domain.hpp"
 #include "../world/WorldState.hpp"
 #include "ElementPhase.hpp"
@@ -98,7 +100,8 @@ void IntegrationPhase::run(double dt) {
         constexpr bool EnergyOn = decltype(energyTag)::value;
         constexpr bool SleepOn = decltype(sleepTag)::value;
         double ekT = 0, egT = 0, edT = 0;
-#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT)
+        bool finiteT = true;
+#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT) reduction(&& : finiteT)
         {
             double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
@@ -131,6 +134,10 @@ void IntegrationPhase::run(double dt) {
                     if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
                     else X[3 * n + d] += dt * V[3 * n + d];
                 }
+                // Every step, so that no run ends on a NaN it did not report
+                // (a few compares in a loop that waits for memory).
+                finiteT = finiteT & std::isfinite(V[3 * n]) & std::isfinite(V[3 * n + 1]) & std::isfinite(V[3 * n + 2]) &
+                          std::isfinite(X[3 * n]) & std::isfinite(X[3 * n + 1]) & std::isfinite(X[3 * n + 2]);
                 if constexpr (SleepOn) {
                     const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
                     double& m = speed2[nodePiece[n]];
@@ -138,13 +145,13 @@ void IntegrationPhase::run(double dt) {
                 }
             }
         }
-        return std::array<double, 3>{ekT, egT, edT};
+        return std::array<double, 4>{ekT, egT, edT, finiteT ? 1.0 : 0.0};
     };
     // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
     const auto withFlag = [](bool on, auto&& next) {
         return on ? next(std::true_type{}) : next(std::false_type{});
     };
-    const std::array<double, 3> e = withFlag(Fq != nullptr, [&](auto im) {
+    const std::array<double, 4> e = withFlag(Fq != nullptr, [&](auto im) {
         return withFlag(damp > 0, [&](auto dm) {
             return withFlag(energyOn, [&](auto en) {
                 return withFlag(sleepOn, [&](auto sl) { return advance(im, dm, en, sl); });
@@ -152,6 +159,7 @@ void IntegrationPhase::run(double dt) {
         });
     });
     ek = e[0], eg = e[1], ed = e[2];
+    if (e[3] == 0) reportNotFinite(ids, all, count, Fout);
     if (dV) {
         w_.energy.viscous += viscous_.dissipation(dt, V);
 #pragma omp parallel for num_threads(nth) schedule(static)
@@ -165,6 +173,32 @@ void IntegrationPhase::run(double dt) {
         w_.energy.gravity += eg;
         w_.energy.localDamping += ed;
     }
+}
+
+void IntegrationPhase::reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const {
+    const auto finite3 = [](const double* a) {
+        return std::isfinite(a[0]) && std::isfinite(a[1]) && std::isfinite(a[2]);
+    };
+    for (int32_t i = 0; i < count; ++i) {
+        const int32_t n = all ? i : ids[i];
+        if (finite3(&w_.vel[3 * n]) && finite3(&w_.pos[3 * n])) continue;
+        const int32_t piece = w_.nodePiece[n];
+        const int32_t local = n - w_.pieces[piece].nodeBegin;
+        const std::string where = cat("QDEM: during step ", w_.iter + 1, " (t=", w_.time, " s) node ", local,
+                                      " of piece ", piece, " got a ", finite3(&w_.vel[3 * n]) ? "position" : "velocity",
+                                      " that is not a finite number");
+        if (!finite3(&w_.extForce[3 * n]))
+            throw StabilityError(cat(where, ": its external force is not finite (piece.extForce[", local, "] = (",
+                                     w_.extForce[3 * n], ", ", w_.extForce[3 * n + 1], ", ", w_.extForce[3 * n + 2],
+                                     ")). Set finite external forces."));
+        if (!std::isfinite(w_.mass[n]) || !(w_.mass[n] > 0))
+            throw StabilityError(cat(where, ": its mass is ", w_.mass[n], "."));
+        throw StabilityError(cat(where, " (force on it (", force[3 * n], ", ", force[3 * n + 1], ", ", force[3 * n + 2],
+                                 ")). Either a NaN was written into the piece's pos or vel arrays, or the ",
+                                 "integration blew up: keep O.dt below QdemEngine.stableTimeStep() (QdemEngine's ",
+                                 "checkDt names a stiffened element before this happens)."));
+    }
+    throw StabilityError(cat("QDEM: during step ", w_.iter + 1, " a node state became not finite"));  // (not reached)
 }
 
 void IntegrationPhase::report(PhaseReport& r) const {

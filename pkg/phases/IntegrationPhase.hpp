@@ -39,6 +39,8 @@ public:
         Column<double>& vel;
         Column<double>& force;             // the total force of the step, for output
         Energy& energy;                    // kinetic, gravity work, local damping
+        const long& iter;                  // steps done (the error names the step being made)
+        const double& time;
         ViscousSolve::Data viscous;        // what the implicit viscous solve reads
     };
     explicit IntegrationPhase(const Data& data) : w_(data), viscous_(data.viscous) {}
@@ -60,6 +62,10 @@ public:
     double maxSpeed2(std::size_t piece) const;
 
 private:
+    // Throws StabilityError naming the first visited node whose new state or
+    // force is not finite and what made it so (called when the update found one).
+    [[noreturn]] void reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const;
+
     Data w_;
     ViscousSolve viscous_;  // settings.viscousIntegration = Implicit
     std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece

@@ -93,9 +93,44 @@ def test_nan_state_is_reported_not_propagated():
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat(viscosity=0))
     p.vel[3, 0] = np.nan
-    w.core.step(1e-7, 3)
-    with pytest.raises(qdem.StabilityError, match="not finite at node"):
+    with pytest.raises(qdem.StabilityError, match="checkFinite|not finite at node"):
         w.core.checkFinite()
+    # The step that meets it stops, naming the node and the likely causes.
+    with pytest.raises(qdem.StabilityError, match=r"during step 1 .*node 3 of piece 0 got a velocity that is not a "
+                                                  r"finite number.*NaN was written into the piece's pos or vel"):
+        w.core.step(1e-7, 3)
+    assert w.core.iter == 0  # the failed step is not counted
+
+
+@pytest.mark.parametrize("column", ["pos", "extForce"])
+def test_a_nan_stops_the_very_step_it_enters(column):
+    """No run ends on a NaN it did not report: the integration checks every
+    node it moves, every step (QdemEngine's checks run every checkPeriod
+    steps, so a short run could end on one)."""
+    w = qdem.World()
+    a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat(viscosity=0))
+    b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat(viscosity=0), pos=(1, 0, 0))
+    w.core.step(1e-6, 5)
+    getattr(b, column)[4, 2] = np.inf if column == "extForce" else np.nan
+    want = (r"during step 6 .*node 4 of piece 1 .*extForce\[4\] = \(0, 0, inf\).*Set finite external forces"
+            if column == "extForce" else r"during step 6 .*node \d+ of piece 1 got a")
+    with pytest.raises(qdem.StabilityError, match=want):
+        w.core.step(1e-6, 3)
+    assert w.core.iter == 5
+    assert np.isfinite(a.pos).all()
+
+
+def test_a_nan_external_force_stops_a_short_yade_run():
+    from yade import O, ForceResetter, NewtonIntegrator
+    O.reset()
+    p = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat(viscosity=0), pos=(0, 0, 1))
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * qe.stableTimeStep()  # noqa: F821 (label)
+    O.run(3, True)
+    p.extForce[2, 0] = np.nan
+    with pytest.raises(qdem.StabilityError, match=r"node 2 of piece 0 .*extForce\[2\]"):
+        O.run(20, True)  # shorter than checkPeriod (100)
+    O.reset()
 
 
 def test_mesh_with_unused_node_is_rejected():
