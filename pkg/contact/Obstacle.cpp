@@ -43,6 +43,36 @@ void Obstacle::updateDerived() {
     }
 }
 
+bool crossedThin(const Obstacle& o, const Vector3d& from, const Vector3d& to) {
+    if (o.kind == ObstacleKind::Wall) {
+        if (o.sense != 0) return false;
+        const double a = from[o.axis] - o.pos[o.axis], b = to[o.axis] - o.pos[o.axis];
+        return (a > 0 && b < 0) || (a < 0 && b > 0);
+    }
+    if (o.kind != ObstacleKind::Facet) return false;
+    const Vector3d& p0 = o.worldVerts[0];
+    const Vector3d n = (o.worldVerts[1] - p0).cross(o.worldVerts[2] - p0);
+    const double a = (from - p0).dot(n), b = (to - p0).dot(n);
+    if (!((a > 0 && b < 0) || (a < 0 && b > 0))) return false;
+    // Where the segment meets the plane: inside the triangle (edge functions
+    // of one sign)?
+    const Vector3d c = from + (a / (a - b)) * (to - from);
+    double sgn = 0;
+    for (int k = 0; k < 3; ++k) {
+        const Vector3d& u = o.worldVerts[k];
+        const Vector3d& v = o.worldVerts[(k + 1) % 3];
+        const double e = (v - u).cross(c - u).dot(n);
+        if (e * sgn < 0) return false;
+        if (e != 0) sgn = e;
+    }
+    return true;
+}
+
+double depthBehind(const Obstacle& o, const Vector3d& x) {
+    if (o.kind != ObstacleKind::Wall || o.sense == 0) return 0;
+    return -o.sense * (x[o.axis] - o.pos[o.axis]);
+}
+
 bool touchObstacle(const Obstacle& o, const Vector3d& x, double r, int prevSide, ObstacleHit& hit) {
     switch (o.kind) {
         case ObstacleKind::Wall: {

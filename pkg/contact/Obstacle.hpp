@@ -42,6 +42,16 @@ struct Obstacle {
     Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return vel + angVel.cross(p - pos); }
 };
 
+// Did a point that moved from `from` to `to` (relative to the obstacle)
+// pass through a thin obstacle's surface: the plane of a two-sided wall, or
+// a facet's triangle?  (One-sided walls and boxes are solid: a point behind
+// or inside them is pushed out, not lost.)
+bool crossedThin(const Obstacle& o, const Eigen::Vector3d& from, const Eigen::Vector3d& to);
+
+// How far behind a one-sided wall's plane x lies (<= 0: on its side); 0 for
+// the other kinds.
+double depthBehind(const Obstacle& o, const Eigen::Vector3d& x);
+
 // What identifies a list of obstacles apart from their motion: kind, body,
 // material and shape of each, flattened (18 numbers per obstacle).  Equal
 // signatures mean contact histories and reactions by index stay valid.

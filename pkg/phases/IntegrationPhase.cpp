@@ -185,8 +185,8 @@ void IntegrationPhase::reportNotFinite(const int32_t* ids, bool all, int32_t cou
         const int32_t piece = w_.nodePiece[n];
         const int32_t local = n - w_.pieces[piece].nodeBegin;
         const std::string where = cat("QDEM: during step ", w_.iter + 1, " (t=", w_.time, " s) node ", local,
-                                      " of piece ", piece, " got a ", finite3(&w_.vel[3 * n]) ? "position" : "velocity",
-                                      " that is not a finite number");
+                                      " of piece ", piece, " has a ", finite3(&w_.vel[3 * n]) ? "position" : "velocity",
+                                      " that is not finite");
         if (!finite3(&w_.extForce[3 * n]))
             throw StabilityError(cat(where, ": its external force is not finite (piece.extForce[", local, "] = (",
                                      w_.extForce[3 * n], ", ", w_.extForce[3 * n + 1], ", ", w_.extForce[3 * n + 2],

@@ -10,6 +10,8 @@
 
 #include "../contact/ContactLaw.hpp"
 #include "../contact/ContactModel.hpp"
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
 #include "SleepPhase.hpp"
 #include "ObstaclePhase.hpp"
 
@@ -50,9 +52,11 @@ void ObstaclePhase::run(double dt) {
             if (o.kind == ObstacleKind::Wall) {
                 // The piece's box is already grown by r; a centre within r of
                 // the plane (on an allowed side) can touch it.
+                // A one-sided wall is a half-space: a piece anywhere behind
+                // it is touched (and pushed out, or refused at the start).
                 const double w = o.pos[o.axis];
-                if (o.sense > 0) near = lo[o.axis] <= w + r && hi[o.axis] >= w - r;
-                else if (o.sense < 0) near = hi[o.axis] >= w - r && lo[o.axis] <= w + r;
+                if (o.sense > 0) near = lo[o.axis] <= w + r;
+                else if (o.sense < 0) near = hi[o.axis] >= w - r;
                 else near = lo[o.axis] <= w + r && hi[o.axis] >= w - r;
             } else {
                 near = (lo.array() <= o.hi.array()).all() && (hi.array() >= o.lo.array()).all();
@@ -107,10 +111,25 @@ void ObstaclePhase::run(double dt) {
     const double regVelocity = w_.settings.frictionRegVelocity;
     const bool frictionOn = w_.settings.frictionOn;
 
+    // Each piece's largest extent (its box less the radius it was grown by):
+    // a node deeper than that behind a one-sided wall has taken the piece
+    // through the solid.  (Not half the thickness, as point-polygon's "past
+    // the middle": a rubber cube hitting a floor at 50 m/s pushes nodes 45 %
+    // of its size behind the plane and still comes back, test_hard_cases.py.)
+    pieceExtent_.resize(w_.pieces.size());
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
+        const double r = w_.materials[w_.pieces[ip].material].radius;
+        double e = 0;
+        for (int d = 0; d < 3; ++d) e = std::max(e, w_.bounds.hi[3 * ip + d] - w_.bounds.lo[3 * ip + d] - 2 * r);
+        pieceExtent_[ip] = e;
+    }
+    const double* extent = pieceExtent_.data();
+    threadThrough_.assign(nth, Through{});
     long nWall = 0;
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
     {
         const int th = omp_get_thread_num();
+        Through& through = threadThrough_[th];
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
         // Halves of the surface nodes, as the contact sums and the
@@ -145,6 +164,16 @@ void ObstaclePhase::run(double dt) {
                 int slot = -1;
                 for (int k = 0; k < kSlots; ++k)
                     if (body[k] == o.bodyId) slot = k;
+                // Went through it?  (Checked before the contact: a node that
+                // jumped past a thin obstacle is not touching it any more.)
+                if (through.node < 0 || node < through.node) {
+                    const Eigen::Vector3d vRelNode = v - o.velocityAt(x);
+                    const bool thin = slot < 0 && crossedThin(o, x - dt * vRelNode, x);
+                    const double depth = depthBehind(o, x);
+                    if (thin || depth > extent[ip])
+                        through = Through{node, ip, io, thin, dt * vRelNode.norm(), depth, vRelNode.norm(), M[node],
+                                          W[s] * pairLaw(pairConsts[j], M[node]).kn};
+                }
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
@@ -189,6 +218,10 @@ void ObstaclePhase::run(double dt) {
         }
     }
     contacts_ = nWall;
+    const Through* first = nullptr;
+    for (const Through& t : threadThrough_)
+        if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
+    if (first) reportThrough(*first, dt);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)
@@ -204,6 +237,27 @@ void ObstaclePhase::run(double dt) {
         w_.energy.friction += eSlip;
         w_.energy.boundaryWork += eBound;
     }
+}
+
+void ObstaclePhase::reportThrough(const Through& t, double dt) const {
+    const Obstacle& o = w_.obstacles[t.obstacle];
+    const char* kind = o.kind == ObstacleKind::Wall ? (o.sense != 0 ? "one-sided wall" : "wall")
+                       : o.kind == ObstacleKind::Box ? "box" : "facet";
+    const double r = w_.materials[w_.pieces[t.piece].material].radius;
+    const std::string where = cat("QDEM: during step ", w_.iter + 1, " node ", t.node - w_.pieces[t.piece].nodeBegin,
+                                  " of piece ", t.piece, " went through the ", kind, " (YADE body ", o.bodyId, ")");
+    if (t.thin)
+        throw StabilityError(cat(where, " without touching it: it moved ", t.travel, " m in this step (relative speed ",
+                                 t.speed, " m/s, dt = ", dt, " s) from one side to the other, and its contact ",
+                                 "zone is only r = ", r, " m thick. Lower O.dt or the speed, or make the contact ",
+                                 "zone thicker (QdemMat radius)."));
+    const double stop = t.speed * std::sqrt(t.mass / t.kn);
+    throw StabilityError(cat(where, ": it is ", t.depth, " m behind the wall's plane, more than the piece's largest ",
+                             "extent (", pieceExtent_[t.piece], " m). The contact is too soft for this load: ",
+                             "stopping distance v sqrt(m_node/kn) = ", stop, " m at ", t.speed, " m/s (node mass ",
+                             t.mass, " kg, kn ", t.kn, " N/m). Make the contact stiffer (kn = E r: a larger QdemMat ",
+                             "young or radius), the impact slower, or check the mesh's units (a mesh in mm with SI ",
+                             "material values is 1000 times too large)."));
 }
 
 void ObstaclePhase::stateColumns(StateColumns& c) {

@@ -39,6 +39,7 @@ public:
         ContactForces& contacts;
         Energy& energy;                  // contact damping, friction, boundary work
         std::vector<std::vector<double>>& threadPieceEnergy;  // contact energy with obstacles per piece
+        const long& iter;                // steps done (errors name the step being made)
     };
     explicit ObstaclePhase(const Data& data) : w_(data) {}
     const char* name() const override { return "obstacles"; }
@@ -71,6 +72,18 @@ private:
     // Refuses (InputError) a piece whose nodes start inside a wall, box or
     // facet, once per piece and obstacle list.
     void checkStartOverlaps();
+    // A node that went through an obstacle this step: passed a thin one's
+    // surface (two-sided wall, facet) without touching it the step before,
+    // or lies behind a one-sided wall by more than its piece's largest extent.
+    struct Through {
+        int32_t node = -1;
+        int piece = -1, obstacle = -1;
+        bool thin = false;
+        double travel = 0, depth = 0, speed = 0, mass = 0, kn = 0;
+    };
+    [[noreturn]] void reportThrough(const Through& t, double dt) const;
+    std::vector<Through> threadThrough_;  // per thread: its first
+    std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
 
     Data w_;
 

@@ -264,7 +264,7 @@ private:
                                   .surfWeight = surfWeight, .pieces = pieces, .materials = materials,
                                   .settings = settings, .sleeping = sleepPhase_, .bounds = bounds_,
                                   .obstacles = obstacles, .contacts = contactForces_, .energy = energy,
-                                  .threadPieceEnergy = threadPieceEnergy_}};
+                                  .threadPieceEnergy = threadPieceEnergy_, .iter = iter}};
     PieceContactPhase pieceContactPhase_{{.pos = pos, .vel = vel, .refPos = refPos, .mass = mass,
                                           .nodePiece = nodePiece, .tetNodes = tetNodes, .surfNodes = surfNodes,
                                           .surfWeight = surfWeight, .pieces = pieces, .materials = materials,

@@ -50,9 +50,10 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
                         "whenever the number of bodies changes).")
     checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
                          "(raises qdem.StabilityError naming the limit).")
-    checkPeriod = Attr(100, "Every this many steps, check that all node positions and velocities "
-                            "are finite, count inverted elements (see inverted), and (with checkDt) that "
-                            "O.dt is below the stable step of the current, strained shape (0 = never).")
+    checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
+                            "checkDt) check that O.dt is below the stable step of the current, strained "
+                            "shape (0 = never).  Non-finite positions and velocities are caught every "
+                            "step regardless: the step that meets one raises qdem.StabilityError.")
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
     threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
                       "own count either way.")

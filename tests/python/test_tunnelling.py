@@ -97,3 +97,70 @@ def test_cube_hitting_a_floor_rebounds_above_it(speed):
     w.core.step(dt, int(0.01 / dt))
     assert p.velocity()[2] > 0
     assert p.pos[:, 2].min() > 0
+
+
+# --- going through obstacles ---------------------------------------------------
+
+def _obstacle(w, kind, sense=0):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId = kind, 7
+    if kind == 0:
+        o.axis, o.sense = 2, sense
+    else:
+        o.setVertices((-1, -1, 0), (1, -1, 0), (0, 1.5, 0))
+    w.core.setObstacles([o])
+    w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
+
+
+@pytest.mark.parametrize("kind, name", [(0, "wall"), (2, "facet")])
+def test_a_node_that_jumps_through_a_thin_obstacle_in_one_step_stops_the_run(kind, name):
+    """A two-sided wall or a facet is a surface: a node that moves from one
+    side to the other in one step, more than its contact zone r, never touched
+    it.  Before, the cube went on through it without a word (a wall pushes
+    such a node towards the side it is found on)."""
+    w = qdem.World()
+    r = 2e-3
+    p = w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3)), rubber(radius=r, viscosity=100.0), pos=(0, 0, L / 2 + 1.5 * r))
+    _obstacle(w, kind)
+    dt = 0.8 * w.stableDt()["combined"]
+    p.vel[:] = (0, 0, -3 * r / dt)          # 3 r per step: 1.5 r above to 1.5 r below in step 1, seen in step 2
+    with pytest.raises(qdem.StabilityError, match=r"during step 2 node \d+ of piece 0 went through the %s "
+                                                  r"\(YADE body 7\) without touching it: it moved 0.006 m in this step"
+                                                  r".*Lower O.dt or the speed" % name):
+        w.core.step(dt, 3)
+    # Slower, the same cube is stopped by the contact and nothing is raised.
+    w2 = qdem.World()
+    p2 = w2.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3)), rubber(radius=r, viscosity=100.0), pos=(0, 0, L / 2 + 1.5 * r))
+    _obstacle(w2, kind)
+    p2.vel[:] = (0, 0, -2.0)
+    w2.core.step(dt, int(0.01 / dt))
+    assert p2.pos[:, 2].min() > 0 and p2.velocity()[2] > 0
+
+
+def test_a_block_too_heavy_for_its_contact_going_through_a_floor_stops_the_run():
+    """The units mistake: a mesh made in millimetres with SI material values
+    is a 400 m block on a 1 cm contact zone.  Its contact cannot hold it and
+    it sank through the one-sided floor; before, the floor stopped seeing it
+    once it was wholly below (the obstacle cull did not match the one-sided
+    contact, which pushes however deep) and it fell on for kilometres."""
+    w = qdem.World()
+    mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=700, radius=0.01)
+    p = w.addPiece(qdem.boxMesh((400, 400, 400), (4, 4, 4)), mat, pos=(0, 0, 300))
+    _obstacle(w, 0, sense=1)
+    w.core.gravity = (0, 0, -9.81)
+    dt = 0.5 * w.stableDt()["combined"]
+    with pytest.raises(qdem.StabilityError, match=r"piece 0 went through the one-sided wall \(YADE body 7\): it is "
+                                                  r"[\d.]+ m behind the wall's plane, more than the piece's largest "
+                                                  r"extent .*stopping distance.*check the mesh's units"):
+        w.core.step(dt, 200)
+    assert p.pos[:, 2].min() > -1000            # stopped within a few steps of going under
+
+
+def test_a_piece_started_wholly_behind_a_one_sided_wall_is_refused():
+    """Wholly below a one-sided floor: inside the half-space, refused like a
+    piece started partly inside (the cull used to leave it unseen)."""
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3)), rubber(radius=2e-3), pos=(0, 0, -1.0))
+    _obstacle(w, 0, sense=1)
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body 7 \(one-sided wall\)"):
+        w.core.step(1e-6, 1)
