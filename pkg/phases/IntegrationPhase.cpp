@@ -99,9 +99,8 @@ void IntegrationPhase::run(double dt) {
         constexpr bool Damp = decltype(dampTag)::value;
         constexpr bool EnergyOn = decltype(energyTag)::value;
         constexpr bool SleepOn = decltype(sleepTag)::value;
-        double ekT = 0, egT = 0, edT = 0;
-        bool finiteT = true;
-#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT) reduction(&& : finiteT)
+        double ekT = 0, egT = 0, edT = 0, sumT = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT, sumT)
         {
             double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
@@ -134,10 +133,11 @@ void IntegrationPhase::run(double dt) {
                     if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
                     else X[3 * n + d] += dt * V[3 * n + d];
                 }
-                // Every step, so that no run ends on a NaN it did not report
-                // (a few compares in a loop that waits for memory).
-                finiteT = finiteT & std::isfinite(V[3 * n]) & std::isfinite(V[3 * n + 1]) & std::isfinite(V[3 * n + 2]) &
-                          std::isfinite(X[3 * n]) & std::isfinite(X[3 * n + 1]) & std::isfinite(X[3 * n + 2]);
+                // Every step, so that no run ends on a NaN it did not report:
+                // the sum of the new positions and velocities is finite iff
+                // each of them is (no scene's coordinates sum near 1e308).
+                // Six additions; per-value isfinite tests cost the update 20 %.
+                sumT += (V[3 * n] + V[3 * n + 1] + V[3 * n + 2]) + (X[3 * n] + X[3 * n + 1] + X[3 * n + 2]);
                 if constexpr (SleepOn) {
                     const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
                     double& m = speed2[nodePiece[n]];
@@ -145,7 +145,7 @@ void IntegrationPhase::run(double dt) {
                 }
             }
         }
-        return std::array<double, 4>{ekT, egT, edT, finiteT ? 1.0 : 0.0};
+        return std::array<double, 4>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0};
     };
     // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
     const auto withFlag = [](bool on, auto&& next) {

@@ -166,13 +166,17 @@ void ObstaclePhase::run(double dt) {
                     if (body[k] == o.bodyId) slot = k;
                 // Went through it?  (Checked before the contact: a node that
                 // jumped past a thin obstacle is not touching it any more.)
+                // (Thin ones only for nodes that did not touch them last
+                // step: side memory holds those that did.)
                 if (through.node < 0 || node < through.node) {
-                    const Eigen::Vector3d vRelNode = v - o.velocityAt(x);
-                    const bool thin = slot < 0 && crossedThin(o, x - dt * vRelNode, x);
+                    const bool thinKind = o.kind == ObstacleKind::Facet || (o.kind == ObstacleKind::Wall && o.sense == 0);
+                    const bool thin = slot < 0 && thinKind && crossedThin(o, x - dt * (v - o.velocityAt(x)), x);
                     const double depth = depthBehind(o, x);
-                    if (thin || depth > extent[ip])
-                        through = Through{node, ip, io, thin, dt * vRelNode.norm(), depth, vRelNode.norm(), M[node],
+                    if (thin || depth > extent[ip]) {
+                        const double speed = (v - o.velocityAt(x)).norm();
+                        through = Through{node, ip, io, thin, dt * speed, depth, speed, M[node],
                                           W[s] * pairLaw(pairConsts[j], M[node]).kn};
+                    }
                 }
                 ObstacleHit hit;
                 if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
