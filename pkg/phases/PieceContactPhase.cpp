@@ -62,7 +62,10 @@ void PieceContactPhase::run(double dt) {
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
     std::fill(frozen_.begin(), frozen_.end(), 0);
-    if (np < 2 || !anyKindOn()) return;
+    if (np < 2 || !anyKindOn()) {  // no contacts: no overlap to refuse either
+        startChecked_.assign(np, 1);
+        return;
+    }
     // The lists the switched-on kinds declare (their rows' Registration bits).
     const unsigned lists = listsWanted();
     const bool triLists = lists & RegisterSurfaceTriangles, edgeLists = lists & RegisterFeatureEdges;
@@ -106,7 +109,10 @@ void PieceContactPhase::run(double dt) {
             frozen_[i] = all;
         }
     const bool any = !st_.pairs.empty();
-    if (!any) return;  // nothing touches (history lapses: it is only valid from the previous step)
+    if (!any) {  // nothing touches (history lapses: it is only valid from the previous step)
+        startChecked_.assign(np, 1);  // (nor overlaps)
+        return;
+    }
     // The contact law's material constants of each pair of pieces that can
     // touch (a log and roots each): once per step, not once per contact,
     // and once per pair of materials, which pieces share (a table when it
@@ -482,6 +488,7 @@ void PieceContactPhase::run(double dt) {
 
     broadSeconds_ = omp_get_wtime() - t0;
 
+    beginStartCheck();
     // The kinds of the table, in order (ContactKind.hpp).
     KindStep ks{dt, w_.settings.frictionOn, w_, *this, st_, st_.threadForce};
     for (Kind& k : kinds_) {
@@ -490,6 +497,7 @@ void PieceContactPhase::run(double dt) {
         k.contacts = k.kernel->run(ks);
         k.seconds = omp_get_wtime() - tk;
     }
+    finishStartCheck();
     const double tSum = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
     // (Under MPI the ghosts' too: their owners get them back, Domain.hpp.)
@@ -541,6 +549,7 @@ void PieceContactPhase::piecesAdded() {
     for (Kind& k : kinds_) k.kernel->piecesAdded(w_);
     frozen_.resize(w_.pieces.size(), 0);
     normalsFresh_.resize(w_.pieces.size(), 0);
+    startChecked_.resize(w_.pieces.size(), 0);
 }
 
 // The edge-edge partners' pieces, and the format of the history keys: states
@@ -571,6 +580,7 @@ void PieceContactPhase::stateLoaded() {
     std::fill(frozen_.begin(), frozen_.end(), 0);
     std::fill(normalsFresh_.begin(), normalsFresh_.end(), 0);
     st_.listValid = false;  // Verlet lists: rebuilt from the loaded positions
+    startChecked_.assign(w_.pieces.size(), 1);  // a restart, not a set-up: contacts go on as saved
 }
 
 }  // namespace qdem

@@ -83,6 +83,22 @@ private:
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
     std::vector<PairConst> matPairLaw_;  // per step: the law's constants per pair of materials (a, b)
     std::vector<uint8_t> matPairDone_;   // and which of them this step has computed
+
+    // A piece that starts inside another piece deeper than the contact can
+    // see is refused (PieceStartOverlap.cpp), once per piece: the first step
+    // after it is added.  A loaded state is not a set-up: its pieces count
+    // as checked.
+    std::vector<uint8_t> startChecked_;  // per piece
+    bool startPending_ = false;          // this step checks some piece
+    // Per thread: the pairs of pieces (lower id first) in which point-polygon
+    // found a node centre inside the other piece this step, while startPending_.
+    std::vector<std::vector<std::pair<int32_t, int32_t>>> threadStartSeen_;
+    // Before the kinds run: which pieces this step checks.
+    void beginStartCheck();
+    // After them: refuses (InputError) a pair with a new piece whose nodes lie
+    // deep inside the other (winding number) where point-polygon saw none
+    // inside: no contact pushes them apart.
+    void finishStartCheck();
 };
 
 }  // namespace qdem

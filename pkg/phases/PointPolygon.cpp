@@ -339,6 +339,15 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     }
                 }
 
+            if (startPending_)  // set-up check (PieceStartOverlap.cpp): a node centre inside another piece
+                for (int i = 0; i < nc; ++i) {
+                    if (!keep[i] || !cand[i].behind) continue;
+                    const int32_t pb = triPiece[cand[i].tri];
+                    if (startChecked_[pa] && startChecked_[pb]) continue;
+                    auto& seen = threadStartSeen_[omp_get_thread_num()];
+                    const std::pair<int32_t, int32_t> ab{std::min(pa, pb), std::max(pa, pb)};
+                    if (seen.empty() || seen.back() != ab) seen.push_back(ab);
+                }
             const double eps = 1e-12 * ma.radius;
             const uint32_t touches = selectTouches(A, cand, nc, keep, triPiece, eps, cosFeature);
 

@@ -182,3 +182,78 @@ def test_yade_obstacles_overlapping_a_new_piece_stop_the_run_with_the_fix(scene,
     with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d .*deepest by 0.03 m.*"
                                          r"start it at least 0.035 m higher" % bid):
         O.engines[1].stepOnce()
+
+
+# --- pieces started inside other pieces (core) ------------------------------
+
+def _twoCubes(overlap, size=0.4, cells=4, r=0.01, ori=None):
+    w = qdem.World()
+    mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=700, radius=r)
+    a = w.addPiece(qdem.boxMesh((size,) * 3, (cells,) * 3), mat, pos=(0, 0, 0))
+    b = w.addPiece(qdem.boxMesh((size,) * 3, (cells,) * 3), mat, pos=(size - overlap, 0.0, 0), ori=ori)
+    return w, a, b
+
+
+@pytest.mark.parametrize("overlap", [0.1, 0.3])
+def test_a_piece_started_inside_another_beyond_the_contacts_sight_is_refused(overlap):
+    """Two 0.4 m cubes of 0.1 m cells placed 10 or 30 cm into each other:
+    their faces meet along planes of nodes, no node centre lies behind a face
+    within the contact's reach, so nothing pushes them apart.  Before, they
+    stayed interpenetrated for good, without a word."""
+    w, a, b = _twoCubes(overlap)
+    before = w.core.pos.copy()
+    with pytest.raises(ValueError, match=r"piece [01] starts inside piece [01], deeper than the contact can see: "
+                                         r"node \d+ of piece [01] is 0.1 m inside.*Place them apart \(by at least "
+                                         r"0.12 m"):
+        w.core.step(1e-5, 1)
+    assert np.array_equal(w.core.pos, before)
+
+
+def test_pieces_started_interpenetrated_within_the_contacts_sight_separate():
+    """2 cm into each other: the contact sees the nodes inside and pushes the
+    cubes apart (a packing generated with overlaps relaxes; the energy they
+    leave with is the overlap's: test_hard_cases.py checks none is gained)."""
+    w, a, b = _twoCubes(0.02)
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 3000)
+    assert b.pos[:, 0].min() > a.pos[:, 0].max()
+
+
+def test_a_piece_started_wholly_inside_another_is_refused():
+    w = qdem.World()
+    mat = rubber(radius=R)
+    w.addPiece(qdem.boxMesh((0.6, 0.6, 0.6), (3, 3, 3)), mat)
+    w.addPiece(_cube(), mat, pos=(0.02, 0.01, 0.0))
+    with pytest.raises(ValueError, match=r"piece 1 starts inside piece 0, deeper than the contact can see"):
+        w.core.step(1e-6, 1)
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.01, 0.03])
+def test_pieces_touching_each_other_are_not_refused(gap):
+    """Faces that coincide (node centres on the other's surface), contact
+    zones that overlap by half the reach (0.02 m), or apart: accepted.  (With
+    their zones overlapping they are pushed apart: the contact law, not a
+    set-up mistake.)"""
+    w, a, b = _twoCubes(-gap)
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 200)
+    assert a.velocity()[0] <= 1e-12 and b.velocity()[0] >= -1e-12  # apart or at rest, never drawn in
+
+
+def test_a_piece_added_into_a_running_scene_is_checked_and_a_loaded_deep_contact_is_not(tmp_path):
+    w = qdem.World()
+    mat = rubber(radius=R, viscosity=50.0)
+    a = w.addPiece(_cube(), mat, pos=(0, 0, 0))
+    w.addPiece(_cube(), mat, pos=(L + 0.01, 0, 0), vel=(-30.0, 0, 0))     # a hard hit: contacts go deep
+    dt = 0.8 * w.stableDt()["combined"]
+    w.core.step(dt, 400)
+    path = str(tmp_path / "hit.qdem")
+    qdem.saveState(path, world=w)
+    w2 = qdem.World()
+    w2.addPiece(_cube(), mat, pos=(0, 0, 0))
+    w2.addPiece(_cube(), mat, pos=(L + 0.01, 0, 0), vel=(-30.0, 0, 0))
+    qdem.loadState(path, world=w2)
+    w2.core.step(dt, 5)                                                    # a restart: goes on
+    w2.addPiece(qdem.boxMesh((0.03, 0.03, 0.03), (2, 2, 2)), mat, pos=a.centroid())  # wholly inside piece 0
+    with pytest.raises(ValueError, match=r"piece 2 starts inside piece 0"):
+        w2.core.step(dt, 1)

@@ -1,0 +1,147 @@
+// A piece started inside another piece so deep that no contact sees it is
+// refused, as one started inside a wall, box or facet is
+// (ObstacleStartOverlap.cpp).  Pieces that start interpenetrated where the
+// contact search reaches them separate, without gaining energy
+// (doc/contacts.md §5, test_hard_cases.py): a packing generated with
+// overlaps relaxes, as YADE users expect.  But two 0.4 m cubes of 0.1 m
+// cells placed 10 or 30 cm into each other stayed interpenetrated for good:
+// their faces meet along planes of nodes, no node centre lies behind a face
+// within reach of it, and the contacts found later count as born deep.  A
+// piece wholly inside another is the same case.  Nothing was said.
+//
+// Checked once per piece, the first step after it is added.  Per pair of
+// neighbouring pieces with a new one: the surface nodes of each that lie
+// deepest inside the other's box (by more than the contact reach, so
+// touching pieces have none), at most kSamples, are tested by winding
+// number; nodes inside, in a pair where point-polygon found no node centre
+// inside the other piece this step, are refused.  A loaded state is a
+// restart, not a set-up: never refused.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+#include "../contact/Geometry.hpp"
+#include "../core/Errors.hpp"
+#include "../parallel/Domain.hpp"
+#include "PieceContactPhase.hpp"
+
+namespace qdem {
+
+namespace {
+
+// Winding number of the closed, outward-oriented triangle surface tris[t0..t1)
+// around x: 1 inside, 0 outside (sum of the triangles' solid angles over 4 pi;
+// Van Oosterom and Strackee, IEEE Trans. Biomed. Eng. 30(2), 1983).
+double windingNumber(const Eigen::Vector3d& x, const int32_t* tris, int32_t t0, int32_t t1, const double* X) {
+    double omega = 0;
+    for (int32_t t = t0; t < t1; ++t) {
+        const Eigen::Vector3d a = Eigen::Map<const Eigen::Vector3d>(X + 3 * tris[3 * t]) - x;
+        const Eigen::Vector3d b = Eigen::Map<const Eigen::Vector3d>(X + 3 * tris[3 * t + 1]) - x;
+        const Eigen::Vector3d c = Eigen::Map<const Eigen::Vector3d>(X + 3 * tris[3 * t + 2]) - x;
+        const double la = a.norm(), lb = b.norm(), lc = c.norm();
+        const double num = a.dot(b.cross(c));
+        const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        omega += 2 * std::atan2(num, den);
+    }
+    return omega / (4 * M_PI);
+}
+
+}  // namespace
+
+void PieceContactPhase::beginStartCheck() {
+    startChecked_.resize(w_.pieces.size(), 0);
+    startPending_ = false;
+    for (std::size_t i = 0; i < w_.pieces.size(); ++i) startPending_ = startPending_ || !startChecked_[i];
+    threadStartSeen_.resize(startPending_ ? omp_get_max_threads() : 0);
+    for (auto& v : threadStartSeen_) v.clear();
+}
+
+void PieceContactPhase::finishStartCheck() {
+    if (!startPending_) return;
+    startPending_ = false;
+    constexpr int kSamples = 16;
+    std::vector<std::pair<int32_t, int32_t>> seen;  // pairs point-polygon will push apart
+    for (const auto& v : threadStartSeen_) seen.insert(seen.end(), v.begin(), v.end());
+    std::sort(seen.begin(), seen.end());
+    const auto pushed = [&](int32_t a, int32_t b) {
+        return std::binary_search(seen.begin(), seen.end(), std::make_pair(std::min(a, b), std::max(a, b)));
+    };
+    struct Deep {
+        int32_t node = -1, pa = -1, pb = -1;
+        double depth = 0;
+        long count = 0;
+    };
+    const SurfaceIndex& S = w_.surface;
+    const double* X = w_.pos.data();
+    const Domain* dom = w_.domain.built();
+    const auto nq = static_cast<int32_t>(st_.pairs.size() / 2);
+    std::vector<Deep> deep(omp_get_max_threads());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int32_t q = 0; q < nq; ++q) {
+        const int32_t a = st_.pairs[2 * q], b = st_.pairs[2 * q + 1];
+        if ((startChecked_[a] && startChecked_[b]) || pushed(a, b)) continue;
+        const PieceInfo& pa = w_.pieces[a];
+        const double ra = w_.materials[pa.material].radius, rb = w_.materials[w_.pieces[b].material].radius;
+        double lo[3], hi[3];  // b's box (its nodes), less the reach
+        for (int d = 0; d < 3; ++d)
+            lo[d] = w_.bounds.lo[3 * b + d] + rb + (ra + rb), hi[d] = w_.bounds.hi[3 * b + d] - rb - (ra + rb);
+        std::pair<double, int32_t> top[kSamples];  // (depth in b's box, node), deepest first
+        int nTop = 0;
+        for (int32_t s = pa.surfBegin; s < pa.surfEnd; ++s) {
+            const int32_t n = w_.surfNodes[s];
+            if (dom && !dom->owns(n)) continue;
+            double inBox = INFINITY;
+            for (int d = 0; d < 3; ++d) inBox = std::min({inBox, X[3 * n + d] - lo[d], hi[d] - X[3 * n + d]});
+            if (!(inBox > 0)) continue;
+            if (nTop == kSamples && inBox <= top[nTop - 1].first) continue;
+            int k = nTop < kSamples ? nTop++ : nTop - 1;
+            for (; k > 0 && top[k - 1].first < inBox; --k) top[k] = top[k - 1];
+            top[k] = {inBox, n};
+        }
+        Deep& f = deep[omp_get_thread_num()];
+        for (int k = 0; k < nTop; ++k) {
+            const int32_t n = top[k].second;
+            const Eigen::Map<const Eigen::Vector3d> x(X + 3 * n);
+            if (!(std::fabs(windingNumber(x, S.tri.data(), S.pieceTriStart[b], S.pieceTriStart[b + 1], X)) > 0.5))
+                continue;
+            double depth = INFINITY;  // to b's surface
+            for (int32_t t = S.pieceTriStart[b]; t < S.pieceTriStart[b + 1]; ++t) {
+                const int32_t* c = &S.tri[3 * t];
+                depth = std::min(depth, (x - closestOnTriangle(x, Eigen::Map<const Eigen::Vector3d>(X + 3 * c[0]),
+                                                               Eigen::Map<const Eigen::Vector3d>(X + 3 * c[1]),
+                                                               Eigen::Map<const Eigen::Vector3d>(X + 3 * c[2]))
+                                                 .point)
+                                            .norm());
+            }
+            ++f.count;
+            if (f.node < 0 || depth > f.depth || (depth == f.depth && n < f.node))
+                f.node = n, f.pa = a, f.pb = b, f.depth = depth;
+        }
+    }
+    Deep found;
+    for (const Deep& t : deep) {
+        found.count += t.count;
+        if (t.node >= 0 && (found.node < 0 || t.depth > found.depth || (t.depth == found.depth && t.node < found.node)))
+            found.node = t.node, found.pa = t.pa, found.pb = t.pb, found.depth = t.depth;
+    }
+    std::fill(startChecked_.begin(), startChecked_.end(), 1);  // checked now (a refused set-up stops the script)
+    if (found.node < 0) return;
+    const double reach = w_.materials[w_.pieces[found.pa].material].radius +
+                         w_.materials[w_.pieces[found.pb].material].radius;
+    std::ostringstream m;
+    m.precision(3);
+    m << "piece " << found.pa << " starts inside piece " << found.pb << ", deeper than the contact can see: node "
+      << found.node - w_.pieces[found.pa].nodeBegin << " of piece " << found.pa << " is " << found.depth
+      << " m inside, and no node of either lies inside the other within the contact's reach of its surface, so "
+         "no contact would push them apart and they would stay one inside the other. Place them apart (by at "
+         "least "
+      << found.depth + reach << " m: that depth plus the contact reach " << reach
+      << " m), or overlapping by less than a cell, where the contact separates them";
+    throw InputError(m.str());
+}
+
+}  // namespace qdem
