@@ -304,3 +304,30 @@ def test_sphere_bounces_off_a_piece_that_is_not_dynamic(scene):
     predicted = _lawRebound(kn, O.bodies[sid].state.mass, slab.mass[node], mat.restitution)
     assert O.bodies[sid].state.vel[2] == pytest.approx(predicted, rel=0.02)
     assert np.array_equal(slab._nodes("pos"), x0) and slab.asleep and not slab.dynamic
+
+
+@pytest.mark.parametrize("speed", [5.0, 500.0])
+def test_a_sphere_too_fast_for_the_step_near_a_piece_stops_the_run(scene, speed):
+    """A 2 cm sphere at 500 m/s moves 9 cm a step, three times its contact
+    reach: before, it went through a 0.1 m plate (ending 1 m below it, still
+    falling) without a word.  Now the step in which it comes next to the piece
+    so fast stops, naming the step that would do; at 5 m/s it bounces."""
+    from yade import Vector3, utils
+    O = scene
+    mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=700, radius=0.01)
+    plate = qdem.addPiece(qdem.boxMesh((0.4, 0.4, 0.1), (4, 4, 1)), mat)
+    plate.blocked[:] = 7
+    sid = O.bodies.append(utils.sphere((0, 0, 0.3), 0.02))
+    O.bodies[sid].state.vel = Vector3(0, 0, -speed)
+    O.engines = _engines(gravity=(0, 0, 0))
+    O.dt = 0.5 * O.engines[3].stableTimeStep()
+    steps = int(0.6 / speed / O.dt) + 10
+    if speed > 100:
+        with pytest.raises(qdem.StabilityError, match=r"YADE sphere %d moves 0.09\d+ m per step \(500 m/s.* next to "
+                                                      r"piece 0, more than its contact reach 0.03 m.*Lower O.dt below "
+                                                      r"6e-05 s" % sid):
+            O.run(steps, True)
+        assert O.bodies[sid].state.pos[2] > 0.0           # stopped before it went through
+    else:
+        O.run(steps, True)
+        assert O.bodies[sid].state.vel[2] > 0             # bounced
