@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "BenchArgs.hpp"
 #include "BenchStats.hpp"
 #include "MachineLoad.hpp"
 #include "mesh/BoxMesh.hpp"
@@ -50,14 +51,6 @@ struct Options {
     bench::BusyRule rule;
     std::string label;
 };
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, ',');)
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
 
 [[noreturn]] void usage(const std::string& why) {
     std::fprintf(stderr,
@@ -93,23 +86,12 @@ Options parse(int argc, char** argv) {
         else if (a == "--repeats") o.repeats = positive(v, "--repeats");
         else if (a == "--cubes" || a == "--threads") {
             std::vector<int> xs;
-            for (const auto& s : split(v)) xs.push_back(positive(s, a.c_str()));
+            for (const auto& s : bench::splitList(v)) xs.push_back(positive(s, a.c_str()));
             if (xs.empty()) usage(a + " needs at least one value");
             (a == "--cubes" ? o.cubes : o.threads) = xs;
-        } else if (a == "--laws") {
-            o.laws.clear();
-            for (const auto& s : split(v)) {
-                if (s == "svk") o.laws.push_back(MaterialLaw::SaintVenantKirchhoff);
-                else if (s == "snh") o.laws.push_back(MaterialLaw::StableNeoHookean);
-                else usage("--laws: 'svk' or 'snh', got '" + s + "'");
-            }
-        } else if (a == "--modes") {
-            o.viscous.clear();
-            for (const auto& s : split(v)) {
-                if (s == "viscous" || s == "elastic") o.viscous.push_back(s == "viscous");
-                else usage("--modes: 'viscous' or 'elastic', got '" + s + "'");
-            }
-        } else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
+        } else if (a == "--laws") o.laws = bench::lawsFrom(v, usage);
+        else if (a == "--modes") o.viscous = bench::modesFrom(v, usage);
+        else if (a == "--max-others") o.rule.maxOthers = std::atof(v.c_str());
         else if (a == "--label") o.label = v;
         else usage("unknown option " + a);
     }
@@ -183,13 +165,11 @@ const char* shortName(MaterialLaw l) { return l == MaterialLaw::SaintVenantKirch
 
 int main(int argc, char** argv) {
     const Options o = parse(argc, argv);
-    char date[32];
-    const std::time_t now = std::time(nullptr);
-    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    const std::string date = bench::isoNow();
     std::printf("{\"benchmark\": \"bench_elements\", \"label\": \"%s\", \"date\": \"%s\", \"cpus\": %d, "
                 "\"repeats\": %d, \"busy_rule\": {\"max_other_cores\": %g}, "
                 "\"units\": \"ns per tet per step\", \"meshes\": [",
-                o.label.c_str(), date, omp_get_num_procs(), o.repeats, o.rule.maxOthers);
+                o.label.c_str(), date.c_str(), omp_get_num_procs(), o.repeats, o.rule.maxOthers);
     const std::size_t smallTets = 27 * 6144;
     for (std::size_t mi = 0; mi < o.cubes.size(); ++mi) {
         const int cubes = o.cubes[mi];

@@ -26,12 +26,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <ctime>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "BenchArgs.hpp"
 #include "BenchStats.hpp"
 #include "MachineLoad.hpp"
 #include "element/ElementKernel.hpp"
@@ -185,14 +184,6 @@ struct Options {
     std::exit(2);
 }
 
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, ',');)
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
-
 Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
@@ -201,21 +192,9 @@ Options parse(int argc, char** argv) {
         const std::string v = argv[++i];
         if (a == "--rounds") o.rounds = std::atoi(v.c_str());
         else if (a == "--passes") o.passes = std::atoi(v.c_str());
-        else if (a == "--laws") {
-            o.laws.clear();
-            for (const std::string& s : split(v)) {
-                if (s == "svk") o.laws.push_back(MaterialLaw::SaintVenantKirchhoff);
-                else if (s == "snh") o.laws.push_back(MaterialLaw::StableNeoHookean);
-                else usage("--laws: 'svk' or 'snh', got '" + s + "'");
-            }
-        } else if (a == "--modes") {
-            o.viscous.clear();
-            for (const std::string& s : split(v)) {
-                if (s == "viscous") o.viscous.push_back(true);
-                else if (s == "elastic") o.viscous.push_back(false);
-                else usage("--modes: 'viscous' or 'elastic', got '" + s + "'");
-            }
-        } else usage("unknown option " + a);
+        else if (a == "--laws") o.laws = bench::lawsFrom(v, usage);
+        else if (a == "--modes") o.viscous = bench::modesFrom(v, usage);
+        else usage("unknown option " + a);
     }
     if (o.rounds < 1 || o.passes < 1) usage("--rounds and --passes must be at least 1");
     if (o.laws.empty() || o.viscous.empty()) usage("--laws and --modes need at least one value");
@@ -248,14 +227,6 @@ void runCase(const Law& law, const Scene& s, Forces& buf, Case& c, int passes) {
     }
 }
 
-std::string isoNow() {
-    char date[32];
-    const std::time_t now = std::time(nullptr);
-    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-    return date;
-}
-
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -281,7 +252,7 @@ int main(int argc, char** argv) {
     }
     const double load1 = bench::loadAverage1();
     const Scene& s0 = *scenes[0];
-    std::printf("{\n  \"benchmark\": \"element_parts\",\n  \"date\": \"%s\",\n", isoNow().c_str());
+    std::printf("{\n  \"benchmark\": \"element_parts\",\n  \"date\": \"%s\",\n", bench::isoNow().c_str());
     std::printf("  \"tets\": %zu, \"nodes\": %zu, \"threads\": 1, \"rounds\": %d, \"passes_per_round\": %d,\n",
                 s0.w.nTets(), s0.w.nNodes(), o.rounds, o.passes);
     std::printf("  \"load1_before\": %.2f, \"load1_after\": %.2f,\n", load0, load1);
