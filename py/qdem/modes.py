@@ -47,39 +47,76 @@ def naturalFrequencies(mesh, material, count=6):
     """The ``count`` lowest non-zero angular frequencies [rad/s] of the free
     piece (mesh in any form addPiece takes; material a QdemMat), rigid modes
     left out, ascending."""
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise ValueError("naturalFrequencies: count=%r is invalid: give a whole number >= 1" % (count,))
     m = asMesh(mesh)
     lam, mu = lame(material)
     rows, cols, vals, lumped = _stiffness(m.nodes, m.tets.astype(np.int64), lam, mu)
     n = 3 * len(m.nodes)
     minv = 1.0 / np.sqrt(np.repeat(lumped * float(material.density), 3))
-    want = count + 6
+    # Solved in units of the largest diagonal entry of M^-1/2 K M^-1/2 (~ (c/h)^2):
+    # a 1 cm steel cube has omega^2 ~ 1e13, and a shift or a zero threshold in
+    # absolute units (the former sigma = -1) made shift-invert return rigid modes
+    # as elastic ones and negative omega^2.  In these units the rigid modes are
+    # zero to ~1e-13 and the lowest elastic one is ~(h/L)^2 >> 1e-9.
+    diag = np.zeros(n)
+    np.add.at(diag, rows[rows == cols], vals[rows == cols])
+    scale = float(np.max(diag * minv * minv))
+    if not np.isfinite(scale) or scale <= 0:
+        raise ValueError("naturalFrequencies: the stiffness is not finite and positive "
+                         "(young=%g, poisson=%g, density=%g): check the material"
+                         % (material.young, material.poisson, material.density))
+    zero = 1e-9
     if n <= 2000:
         K = np.zeros((n, n))
         np.add.at(K, (rows, cols), vals)
-        w2 = np.linalg.eigvalsh(minv[:, None] * K * minv[None, :])
+        w2 = np.linalg.eigvalsh(minv[:, None] * (K / scale) * minv[None, :])
     else:
         import scipy.sparse as sp
         import scipy.sparse.linalg as sla
-        K = sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsc()
+        K = sp.coo_matrix((vals / scale, (rows, cols)), shape=(n, n)).tocsc()
         A = sp.diags(minv) @ K @ sp.diags(minv)
-        w2 = sla.eigsh(A, k=min(want, n - 1), sigma=-1.0, which="LM", return_eigenvectors=False)
+        k = min(count + 6, n - 2)
+        while True:
+            # Shift-invert about a small negative shift: the eigenvalues nearest it
+            # are the lowest ones, rigid modes first, and A - sigma I is positive definite.
+            w2 = np.sort(sla.eigsh(A, k=k, sigma=-1e-6, which="LM", return_eigenvectors=False))
+            if np.count_nonzero(w2 > zero) >= count or k >= n - 2:
+                break
+            k = min(2 * k, n - 2)   # more rigid modes than six: a mesh of several parts
     w2 = np.sort(np.asarray(w2))
-    scale = max(abs(w2[-1]), 1e-300)
-    elastic = w2[w2 > 1e-9 * scale]
-    return np.sqrt(elastic[:count])
+    if w2[0] < -zero:
+        raise RuntimeError("naturalFrequencies: the eigen-solver returned omega^2 = %.3g < 0 "
+                           "(in units of %.3g): the mesh or the material is degenerate"
+                           % (w2[0], scale))
+    elastic = w2[w2 > zero]
+    if len(elastic) < count:
+        raise ValueError("naturalFrequencies: the mesh has %d elastic modes, %d asked for"
+                         % (len(elastic), count))
+    return np.sqrt(elastic[:count] * scale)
+
+
+def _modeIndex(mode):
+    if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or mode < 0:
+        raise ValueError("mode=%r is invalid: give 0 for the first elastic mode, 1 for the next, ..." % (mode,))
+    return int(mode)
 
 
 def viscosityForDamping(mesh, material, dampingRatio, mode=0):
     """The QdemMat.viscosity [Pa s] that gives elastic mode ``mode`` (0 = the
     first) of the free piece the damping ratio ``dampingRatio``:
     eta = mu * 2 xi / omega."""
-    omega = naturalFrequencies(mesh, material, mode + 1)[mode]
-    return lame(material)[1] * 2.0 * float(dampingRatio) / omega
+    xi = float(dampingRatio)
+    if not (xi >= 0 and np.isfinite(xi)):
+        raise ValueError("viscosityForDamping: dampingRatio=%r is invalid: give a finite number >= 0 "
+                         "(0.1 is a tenth of critical damping)" % (dampingRatio,))
+    omega = naturalFrequencies(mesh, material, _modeIndex(mode) + 1)[mode]
+    return lame(material)[1] * 2.0 * xi / omega
 
 
 def dampingRatio(mesh, material, mode=0):
     """Damping ratio beta*omega/2 of elastic mode ``mode`` with the material's viscosity."""
-    omega = naturalFrequencies(mesh, material, mode + 1)[mode]
+    omega = naturalFrequencies(mesh, material, _modeIndex(mode) + 1)[mode]
     return float(material.viscosity) / lame(material)[1] * omega / 2.0
 
 

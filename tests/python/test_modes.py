@@ -54,3 +54,48 @@ def test_viscosity_for_damping_gives_the_mode_its_damping_ratio():
     peaks = [amp[i * per // 2:(i + 1) * per // 2].max() for i in range(12)]
     rate = math.log(peaks[1] / peaks[-1]) / ((len(peaks) - 2) * 0.5 * 2 * math.pi / omega)
     assert rate == pytest.approx(xi * omega, rel=0.05)
+
+
+@pytest.mark.parametrize("size, young, density", [
+    (0.01, 2e11, 7800),    # 1 cm steel: omega^2 ~ 1e12
+    (0.004, 5e8, 700),     # 4 mm at the seed's modulus
+    (0.02, 1e10, 600),     # 2 cm wood
+    (30.0, 1e5, 2000),     # a 30 m soft block: omega ~ 1
+])
+def test_frequencies_scale_as_wave_speed_over_size_whatever_the_units(size, young, density):
+    """omega L / c depends on the mesh's shape alone.  The sparse solver (729 nodes,
+    2,187 DOF) once used an absolute shift and zero threshold: small stiff pieces got
+    rigid modes as elastic ones, a viscosity 1e8 too large, or an IndexError."""
+    mesh = qdem.boxMesh((1.0, 1.0, 1.0), (8, 8, 8))
+    ref = modes.naturalFrequencies(mesh, qdem.QdemMat(young=1e6, poisson=0.3, density=1000.0), 4)
+    refShape = ref / math.sqrt(1e6 / 1000.0)
+    mat = qdem.QdemMat(young=young, poisson=0.3, density=density)
+    scaled = qdem.Mesh(mesh.nodes * size, mesh.tets)
+    w = modes.naturalFrequencies(scaled, mat, 4)
+    assert w * size / math.sqrt(young / density) == pytest.approx(refShape, rel=1e-6)
+    lam, mu = modes.lame(mat)
+    assert modes.viscosityForDamping(scaled, mat, 0.1) == pytest.approx(mu * 0.2 / w[0], rel=1e-6)
+
+
+def test_two_separate_parts_have_twelve_rigid_modes_and_the_same_elastic_ones():
+    cube = qdem.boxMesh((1.0, 1.0, 1.0), (8, 8, 8))
+    n = len(cube.nodes)
+    two = qdem.Mesh(np.vstack([cube.nodes, cube.nodes + (3.0, 0, 0)]),
+                    np.vstack([cube.tets, cube.tets + n]))
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000.0)
+    one = modes.naturalFrequencies(cube, mat, 2)
+    both = modes.naturalFrequencies(two, mat, 4)
+    assert both == pytest.approx(np.repeat(one, 2), rel=1e-6)
+
+
+def test_bad_count_or_mode_is_refused():
+    mesh = qdem.boxMesh((1.0, 1.0, 1.0), (1, 1, 1))
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000.0)
+    with pytest.raises(ValueError, match="count"):
+        modes.naturalFrequencies(mesh, mat, 0)
+    with pytest.raises(ValueError, match="mode"):
+        modes.viscosityForDamping(mesh, mat, 0.1, mode=-1)
+    with pytest.raises(ValueError, match="elastic modes"):
+        modes.naturalFrequencies(mesh, mat, 1000)
+    with pytest.raises(ValueError, match="dampingRatio"):
+        modes.viscosityForDamping(mesh, mat, -0.1)
