@@ -20,7 +20,7 @@ from . import _core, lifecycle, mpyglue, parallel, setupcheck, yadeglue
 from .spheres import SphereCoupling
 from .attrs import Attr, AttrObject, WorldSetting, documented, worldSettings
 from .yadeclass import EngineMeta
-from .world import defaultWorld
+from .world import FollowsDefaultWorld
 
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 
@@ -32,13 +32,16 @@ ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "q
 
 
 @documented
-class QdemEngine(PyRunner, metaclass=EngineMeta):
+class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     """Steps the QDEM world each YADE iteration.  Keyword construction as for any
     YADE engine: ``QdemEngine(label='qe', progressPeriod=1000)``; ``world=`` picks
     a qdem.World other than qdem.defaultWorld().  Place it after ForceResetter
     (and after InsertionSortCollider/InteractionLoop when YADE spheres share the
     scene) and before NewtonIntegrator, which it reads gravity from; wrong
     orders are refused at the first step (doc/yade.md).
+
+    An engine without ``world=`` acts on the default world: kept across
+    ``O.reset()``, it steps the new scene's pieces with its own settings.
 
     ``engine.inverted`` counts inverted elements (volume ratio <= 0), checked
     every checkPeriod steps: ``now``, ``max`` (the largest count seen), ``time``
@@ -84,7 +87,7 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
             if k not in self._yadeAttrs and k not in known:
                 raise TypeError("QdemEngine: unknown keyword %r; known: world, label, dead, %s"
                                 % (k, ", ".join(known)))
-        self.world = world or defaultWorld()
+        self._setWorld(world)
         # A new engine starts its world from the declared defaults (as YADE engines
         # start from theirs), then takes the keywords; afterwards the world holds them.
         for k in known:
@@ -99,6 +102,10 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         # The command names the engine by an id that YADE saves with the scene:
         # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
         self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId
+        self._freshRunState()
+
+    def _freshRunState(self):
+        """What the engine learns of its scene while it runs (none of it a setting)."""
         self._checkedSetup = None
         self._warnedDamping = False
         self._runStart = None
@@ -116,6 +123,15 @@ class QdemEngine(PyRunner, metaclass=EngineMeta):
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
         self._mpy = None      # MpyCoupling under yade.mpy (mpyglue.py)
+
+    def _worldReplaced(self, old, new):
+        """O.reset() replaced the default world: the new one takes this engine's
+        settings (they live in the world), and the engine forgets the old scene."""
+        for k in AttrObject.attrNames.__func__(type(self)):
+            a = getattr(type(self), k)
+            if isinstance(a, WorldSetting):
+                setattr(new.core, a.decl["name"], getattr(old.core, a.decl["name"]))
+        self._freshRunState()
 
     def __repr__(self):
         return "<QdemEngine%s at %#x>" % (" %r" % self.label if self.label else "", id(self))

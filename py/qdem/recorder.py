@@ -10,7 +10,7 @@ from . import lifecycle, parallel
 from .attrs import Attr, AttrObject, documented
 from .stress import vonMises
 from .vtu import TENSOR6, writePvd, writeVtu
-from .world import defaultWorld
+from .world import FollowsDefaultWorld
 from .yadeclass import EngineMeta
 
 _STRESS_TO_PARAVIEW = [0, 1, 2, 5, 3, 4]  # core xx yy zz yz xz xy -> ParaView XX YY ZZ XY YZ XZ
@@ -63,7 +63,7 @@ def _period(v):
 
 
 @documented
-class VtkRecorder(PyRunner, metaclass=EngineMeta):
+class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     """Writes ``<fileBase>NNNNNN.vtu`` frames and keeps ``<fileBase>.pvd`` (open it
     in ParaView) up to date.  NNNNNN is the step count and the .pvd time the
     simulated time at the end of the step the frame shows (O.iter and O.time
@@ -91,11 +91,16 @@ class VtkRecorder(PyRunner, metaclass=EngineMeta):
                                 % (k, ", ".join(known)))
         # YADE calls it every step; it decides on the QDEM clock when a frame is due.
         PyRunner.iterPeriod.__set__(self, 1)
-        self.world = world or defaultWorld()
+        self._setWorld(world)
         self.frames = []
         self._last = None  # (step, time) of the last frame
         self.qdemId = qdemId or lifecycle.newId()
         self.command = "import qdem.recorder; qdem.recorder._record('%s')" % self.qdemId
+
+    def _worldReplaced(self, old, new):
+        """O.reset() replaced the default world: the new scene's frames start a new collection."""
+        self.frames = []
+        self._last = None
 
     def __repr__(self):
         return "<VtkRecorder%s at %#x>" % (" %r" % self.label if self.label else "", id(self))

@@ -93,6 +93,31 @@ def defaultWorld():
     return _default
 
 
+class FollowsDefaultWorld:
+    """Mixin of the engines (QdemEngine, VtkRecorder): ``world`` is the world
+    given as ``world=``, else the default world — the current one.  YADE
+    engines act on whatever scene is current, so an engine kept across
+    ``O.reset()`` (one list of engines reused for every run of a sweep) steps
+    the new scene's pieces, not the emptied world's; ``_worldReplaced(old,
+    new)`` carries the engine's settings over and starts its run state afresh."""
+
+    def _setWorld(self, world):
+        self._followsDefault = world is None
+        self._world = world or defaultWorld()
+
+    @property
+    def world(self):
+        """The qdem.World this engine acts on: the one given as world=, else
+        qdem.defaultWorld() (after O.reset(), the new one)."""
+        w = self._world
+        if self._followsDefault and w is not _default:
+            new = defaultWorld()
+            self._world = new
+            self._worldReplaced(w, new)
+            w = new
+        return w
+
+
 def reset():
     """Forget all pieces (call with O.reset())."""
     global _default

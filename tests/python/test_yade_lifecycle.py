@@ -141,6 +141,33 @@ def test_reset_empties_the_world_and_loading_a_plain_scene_too(scene, tmp_path):
     assert len(qdem.defaultWorld().pieces) == 0
 
 
+def test_engines_kept_across_reset_act_on_the_new_scene_with_their_settings(scene, tmp_path):
+    """A sweep reusing one list of engines: after O.reset() they step the new
+    pieces (they once stepped the emptied world: the new piece hung in the air)."""
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    engine = qdem.QdemEngine(damping=0.25, progressPeriod=0)
+    recorder = qdem.VtkRecorder(fileBase=str(tmp_path / "f-"), iterPeriod=50)
+    engines = [ForceResetter(), engine, recorder, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    for height in (1.0, 2.0):
+        O.reset()
+        p = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, height))
+        O.engines = engines
+        O.dt = 1e-4
+        O.run(100, True)
+        assert engine.world is qdem.defaultWorld() and recorder.world is qdem.defaultWorld()
+        assert engine.damping == 0.25 and qdem.defaultWorld().core.localDamping == 0.25
+        z = p.centroid()[2]  # the piece fell (local damping slows it: compared below)
+        assert z < height - 1e-4
+        assert [f[1] for f in recorder.frames] == ["f-%06d.vtu" % i for i in (0, 50, 100)]
+    O.reset()
+    p = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, 2.0))
+    O.engines = [ForceResetter(), qdem.QdemEngine(damping=0.25), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 1e-4
+    O.run(100, True)
+    assert p.centroid()[2] == z
+
+
 def test_scene_with_qdem_engines_but_no_state_is_refused(scene, tmp_path):
     O = scene
     from yade import ForceResetter, NewtonIntegrator, wrapper
