@@ -110,7 +110,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._warnedDamping = False
         self._runStart = None
         self._nBodies = -1
-        self._ids, self._states = [], None
+        self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
         self._dtChecked = None
         self._lastProgress = None
         #: Inverted elements (volume ratio <= 0), counted every checkPeriod: ``now`` (at the last
@@ -212,6 +212,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             return
         if len(O.bodies) != self._nBodies:
             obstacles, self._ids = yadeglue.scanObstacles(O)
+            self._obstacles = obstacles
+            self._signatures = [yadeglue.shapeSignature(O.bodies[i].shape) for i in self._ids]
             if self.spheres and self._spheres is None and yadeglue.hasSpheres(O):
                 self._spheres = SphereCoupling(self.world, int(self.sphereMask), float(self.sphereMargin))
             if self._spheres is not None:
@@ -221,10 +223,25 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             self._nBodies = len(O.bodies)
             self._dtChecked = None
         if self._ids:
-            states = yadeglue.obstacleStates(O, self._ids, self._states)
+            reshaped = []
+            states = yadeglue.obstacleStates(O, self._ids, self._states, self._signatures, reshaped)
             if states is None:  # a body was erased (O.bodies keeps its length): scan again
                 self._nBodies = -1
                 return self._syncObstacles()
+            if reshaped:
+                # A Box's extents or a Facet's vertices were changed by the script (or the
+                # body is another one now): those obstacles are rebuilt; contacts keep their history.
+                bodies = [O.bodies[self._ids[i]] for i in reshaped]
+                rebuilt, rebuiltIds = yadeglue.scanObstacles(O, bodies)
+                if rebuiltIds != [self._ids[i] for i in reshaped]:  # no longer an obstacle: scan all
+                    self._nBodies = -1
+                    return self._syncObstacles()
+                for i, o, b in zip(reshaped, rebuilt, bodies):
+                    self._obstacles[i] = o
+                    self._signatures[i] = yadeglue.shapeSignature(b.shape)
+                core.setObstacles(self._obstacles)
+                self._dtChecked = None
+                states = yadeglue.obstacleStates(O, self._ids, self._states)
             core.setObstacleStates(states)
 
     def _run(self):

@@ -12,12 +12,15 @@ collider has run (its ``numAction`` changed) or a proxy moved; the states of
 the listed spheres are read every step, and forces written back with
 ``O.forces`` for those in contact.  A scene whose spheres are all far away
 reads nothing but one counter per step."""
+import warnings
+
 import numpy as np
 
 from . import _core
 
 TAN = np.tan
 _PROXY_MASK_DEFAULT = -1
+_PROXY_LABEL = "qdemProxy"  # material label of the proxy bodies
 
 
 def _vertices(lo, hi):
@@ -55,6 +58,7 @@ class SphereCoupling:
         self.mask = mask
         self.margin = margin
         self.proxies = []        # YADE ids of the proxies, one per piece
+        self._bodies = []        # their Body objects (the same Python object while the body lives)
         self.proxyBox = []       # (lo, hi) each
         self.states = []         # YADE State objects of the listed spheres
         self.props = {}          # body id -> sphereProperties (cleared when bodies change)
@@ -90,17 +94,22 @@ class SphereCoupling:
         import yade
         glo, ghi, _ = self._grownBox(lo, hi)
         centre = 0.5 * (glo + ghi)
-        if i < len(self.proxies):
+        if i < len(self.proxies) and self.proxies[i] >= 0:
             b = O.bodies[self.proxies[i]]
         else:
             b = yade.Body()
-            b.material = yade.FrictMat(label="qdemProxy", density=0.0)
+            b.material = yade.FrictMat(label=_PROXY_LABEL, density=0.0)
             b.dynamic = False
             b.mask = self.mask
             b.shape = yade.Tetra()
             b.shape.wire = True
-            self.proxies.append(O.bodies.append(b))
-            self.proxyBox.append(None)
+            bid = O.bodies.append(b)
+            if i < len(self.proxies):
+                self.proxies[i], self._bodies[i] = bid, b
+            else:
+                self.proxies.append(bid)
+                self._bodies.append(b)
+                self.proxyBox.append(None)
         b.shape.v = [yade.Vector3(*v) for v in _vertices(glo, ghi)]
         b.state.pos = yade.Vector3(*centre)
         self.proxyBox[i] = (glo, ghi)
@@ -110,11 +119,46 @@ class SphereCoupling:
     def adopt(self, proxies, boxes):
         """Take over the proxy bodies of a loaded scene (O.load keeps them in O.bodies)."""
         self.proxies = [int(b) for b in proxies]
+        self._bodies = [None] * len(self.proxies)   # checked by _isProxy at the first step
         self.proxyBox = [(np.array(lo), np.array(hi)) for lo, hi in boxes]
         self._dirty = True  # lists read again; safe boxes recomputed at the first step
 
     def ownsBody(self, bid):
         return bid in self.proxies
+
+    def _isProxy(self, O, i):
+        """Is O.bodies[proxies[i]] still the proxy this coupling placed?"""
+        bid = self.proxies[i]
+        b = O.bodies[bid] if 0 <= bid < len(O.bodies) else None
+        if b is None:
+            return False
+        if b is self._bodies[i]:
+            return True
+        # Another Python object for the same body (a loaded scene), or another body
+        # at this id (O.bodies.clear() and new bodies appended).
+        mat = b.material
+        ok = (mat is not None and mat.label == _PROXY_LABEL and type(b.shape).__name__ == "Tetra"
+              and not b.dynamic)
+        if ok:
+            self._bodies[i] = b
+        return ok
+
+    def _replaceLostProxies(self, O):
+        """Proxies erased by the script (O.bodies.erase in a clean-up loop,
+        O.bodies.clear()) are placed again; until the collider has run, every
+        sphere is listed against every piece, so no contact is missed."""
+        lost = [i for i in range(len(self.proxies)) if not self._isProxy(O, i)]
+        if not lost:
+            return False
+        warnings.warn("QdemEngine: the proxy bodies %s (which find YADE spheres near QDEM pieces) were erased or "
+                      "replaced; placed them again. Exclude qe.proxyIds() from loops that erase bodies."
+                      % [self.proxies[i] for i in lost], stacklevel=3)
+        bounds = self.world.core.pieceBounds()
+        for i in lost:
+            self.proxies[i] = -1
+            self._placeProxy(O, i, bounds[i, :3], bounds[i, 3:])
+        self.props.clear()
+        return True
 
     # -- per step ------------------------------------------------------------------
     def beforeStep(self, O):
@@ -122,6 +166,13 @@ class SphereCoupling:
         core = self.world.core
         if self.collider is None:
             self._ensureCollider(O)
+        if self._replaceLostProxies(O):
+            self.listAll(O, withStates=True)
+            self._numAction = None
+            self._dirty = True
+            if self.states:
+                core.readSphereStates(self.states)
+            return
         if not core.piecesInside(self._safeLo, self._safeHi):
             self._moveProxies(O, core.pieceBounds())
         # The collider ran (new lists) or interactions were erased with their
@@ -188,9 +239,10 @@ class SphereCoupling:
         self.refreshes += 1
         self.version += 1
 
-    def listAll(self, O):
+    def listAll(self, O, withStates=False):
         """Lists every sphere of the scene against every piece (for a stable time
-        step that holds whichever spheres come near); the next step re-lists."""
+        step that holds whichever spheres come near, or, withStates, for the
+        steps before the collider has seen new proxies); the next step re-lists."""
         self._ensureCollider(O)
         for bid in range(len(O.bodies)):
             if bid not in self.props:
@@ -204,7 +256,7 @@ class SphereCoupling:
                                    props[:, 3], props[:, 4], props[:, 5],
                                    np.arange(0, n * np_ + 1, np_, dtype=np.int32),
                                    np.tile(np.arange(np_, dtype=np.int32), n))
-        self.states = []
+        self.states = [self.props[bid][1] for bid in ids] if withStates else []
         self._dirty = True
         self.version += 1
 

@@ -16,10 +16,11 @@ def findGravity(O):
     return (0.0, 0.0, 0.0)
 
 
-def scanObstacles(O):
-    """Core Obstacle objects for every Wall, Box and Facet body, and their ids."""
+def scanObstacles(O, bodies=None):
+    """Core Obstacle objects for every Wall, Box and Facet body (of ``bodies``,
+    default all of O.bodies), and their ids."""
     obstacles, ids = [], []
-    for b in O.bodies:
+    for b in (O.bodies if bodies is None else bodies):
         if b is None or b.shape is None:
             continue
         kind = KIND.get(type(b.shape).__name__)
@@ -48,13 +49,31 @@ def hasSpheres(O):
     return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)
 
 
-def obstacleStates(O, ids, out):
+def shapeSignature(shape):
+    """What the obstacle's core copy was built from (None: not an obstacle)."""
+    kind = KIND.get(type(shape).__name__) if shape is not None else None
+    if kind == 0:
+        return (0, int(shape.axis), int(shape.sense))
+    if kind == 1:
+        e = shape.extents
+        return (1, e[0], e[1], e[2])
+    if kind == 2:
+        return (2,) + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
+    return None
+
+
+def obstacleStates(O, ids, out, signatures=None, reshaped=None):
     """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies;
-    None when one of them was erased (scan again)."""
+    None when one of them was erased (scan again).  With ``signatures`` (one
+    shapeSignature per body), the index of each body whose shape changed since
+    (a Box's extents, a Facet's vertices, a body of another kind after
+    O.bodies.clear()) is appended to ``reshaped``."""
     for i, bid in enumerate(ids):
-        b = O.bodies[bid]
+        b = O.bodies[bid] if bid < len(O.bodies) else None
         if b is None:  # erased since the last scan
             return None
+        if signatures is not None and shapeSignature(b.shape) != signatures[i]:
+            reshaped.append(i)
         s = b.state
         p, q, v, w = s.pos, s.ori, s.vel, s.angVel
         axis, angle = q.toAxisAngle()

@@ -331,3 +331,79 @@ def test_a_sphere_too_fast_for_the_step_near_a_piece_stops_the_run(scene, speed)
     else:
         O.run(steps, True)
         assert O.bodies[sid].state.vel[2] > 0             # bounced
+
+
+PROXY_SCENE = """
+import warnings, numpy as np, qdem
+from yade import (O, utils, FrictMat, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGeom,
+                  Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys,
+                  Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
+def engines():
+    return [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]),
+            InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+                            [Ip2_FrictMat_FrictMat_FrictPhys()], [Law2_ScGeom_FrictPhys_CundallStrack()]),
+            qdem.QdemEngine(label="qe", damping=0.3), NewtonIntegrator(gravity=(0, 0, -9.81))]
+mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=500, radius=0.002)
+block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0, 0, 0.052))
+fm = O.materials.append(FrictMat(young=1e6, poisson=0.3, frictionAngle=0.5, density=2000))
+floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+ball = O.bodies.append(utils.sphere((0.01, 0, 0.12), 0.01, material=fm))
+O.engines = engines()
+O.dt = 0.5 * qe.stableDt()["combined"]
+O.run(200, True)
+"""
+
+
+def _yadeScript(tmp_path, code):
+    import os
+    import subprocess
+    import textwrap
+    path = tmp_path / "s.py"
+    path.write_text(textwrap.dedent(code))
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    return subprocess.run(["timeout", "300", "yade", "-n", "-x", str(path)], cwd=str(tmp_path), env=env,
+                          capture_output=True, text=True)
+
+
+def test_an_erased_proxy_is_placed_again_and_the_sphere_stays_on_the_piece(tmp_path):
+    """A clean-up loop that erases bodies may erase the proxy too: YADE aborted
+    (a null body in O.interactions.withBodyAll)."""
+    r = _yadeScript(tmp_path, PROXY_SCENE + """
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    for b in list(O.bodies):
+        if b.id in qe.proxyIds():
+            O.bodies.erase(b.id)
+    O.run(int(0.4 / O.dt), True)
+assert any("proxy bodies" in str(w.message) for w in caught), [str(w.message) for w in caught]
+z = O.bodies[ball].state.pos[2]
+assert 0.1 + 0.004 + 0.009 < z < 0.1 + 0.004 + 0.011, z   # resting on the block's top
+load = (block.totalMass + O.bodies[ball].state.mass) * 9.81
+assert abs(O.forces.f(floor)[2] + load) < 0.01 * load, (O.forces.f(floor)[2], load)
+print("OK")
+""")
+    assert r.returncode == 0 and "OK" in r.stdout, r.stdout[-2000:] + r.stderr[-2000:]
+
+
+def test_cleared_bodies_get_new_proxies_and_a_user_body_at_an_old_proxy_id_is_left_alone(tmp_path):
+    """After O.bodies.clear() the engine took a user's sphere, appended at the
+    old proxy id, for its proxy (teleported it into the piece), and a sphere
+    dropped on the piece fell through it."""
+    r = _yadeScript(tmp_path, PROXY_SCENE + """
+old = qe.proxyIds()
+O.bodies.clear()
+floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+ids = [O.bodies.append(utils.sphere((0.5 + 0.1 * k, 0, 0.01), 0.01, material=fm)) for k in range(3)]
+ball = O.bodies.append(utils.sphere((0.01, 0, 0.15), 0.01, material=fm))
+assert old[0] in ids
+with warnings.catch_warnings(record=True):
+    warnings.simplefilter("always")
+    O.run(int(0.5 / O.dt), True)
+assert not set(qe.proxyIds()) & set(ids)
+for k, i in enumerate(ids):
+    assert np.allclose(O.bodies[i].state.pos, (0.5 + 0.1 * k, 0, 0.01), atol=1e-4), O.bodies[i].state.pos
+z = O.bodies[ball].state.pos[2]
+assert 0.1 + 0.004 + 0.009 < z < 0.1 + 0.004 + 0.011, z
+print("OK")
+""")
+    assert r.returncode == 0 and "OK" in r.stdout, r.stdout[-2000:] + r.stderr[-2000:]

@@ -140,3 +140,30 @@ def test_block_on_facet_floor(scene):
     assert load == pytest.approx(-weight, rel=0.005)
     assert O.forces.f(a)[2] < 0 and O.forces.f(b)[2] < 0     # the diagonal splits the load
     assert block.centroid()[2] == pytest.approx(0.105, abs=2e-3)
+
+
+def test_a_box_or_facet_changed_by_the_script_is_followed(scene):
+    """Obstacles were read again only when the number of bodies changed: a box
+    made thinner mid-run, or facets lowered by editing their vertices, left the
+    block hovering on the old surface."""
+    from yade import Vector3, utils
+    O = scene
+    mat = rubber(viscosity=2000.0)
+    block = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat, pos=(0.3, 0, 0.105 + 0.005))
+    other = qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat, pos=(-0.3, 0, 0.05 + 0.005))
+    box = O.bodies.append(utils.box(center=(0.3, 0, 0), extents=(0.2, 0.2, 0.05), fixed=True))
+    f = [O.bodies.append(utils.facet([(-1, -1, 0), (1, -1, 0), (1, 1, 0)], fixed=True)),
+         O.bodies.append(utils.facet([(-1, -1, 0), (1, 1, 0), (-1, 1, 0)], fixed=True))]
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableDt()["combined"]
+    O.run(int(0.3 / O.dt), True)
+    assert block.centroid()[2] == pytest.approx(0.105, abs=2e-3)
+    assert other.centroid()[2] == pytest.approx(0.055, abs=2e-3)
+    O.bodies[box].shape.extents = Vector3(0.2, 0.2, 0.04)        # half-extents: top 1 cm lower
+    for i in f:                                                   # floor 1 cm lower
+        O.bodies[i].shape.vertices = [Vector3(v[0], v[1], v[2] - 0.01) for v in O.bodies[i].shape.vertices]
+    O.run(int(0.5 / O.dt), True)
+    assert block.centroid()[2] == pytest.approx(0.095, abs=2e-3)
+    assert other.centroid()[2] == pytest.approx(0.045, abs=2e-3)
+    weight = block.totalMass * 9.81
+    assert O.forces.f(box)[2] == pytest.approx(-weight, rel=0.01)
