@@ -246,6 +246,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
 
     def _run(self):
         core = self.world.core
+        if self.iterPeriod != 1:  # (read every step: set mid-run, it would slow QDEM's clock at once)
+            setupcheck.checkPeriods(self)
         if self._checkedSetup != O.iter:  # first step of a run, and every checkPeriod
             if self._checkedSetup is None or (self.checkPeriod and O.iter % self.checkPeriod == 0) \
                     or O.iter < (self._checkedSetup or 0):

@@ -11,6 +11,12 @@ Each of these runs without complaint in YADE and gives wrong physics:
 - two QdemEngines stepping one world: QDEM time runs at twice O.time;
 - no NewtonIntegrator: QDEM reads gravity from it (it would silently be 0)
   and YADE bodies would not move;
+- a GravityEngine (or CentralGravityEngine, AxialGravityEngine): QDEM
+  pieces feel NewtonIntegrator.gravity only, and would float;
+- the QdemEngine run every n-th step (iterPeriod, virtPeriod, realPeriod):
+  QDEM time would fall behind O.time;
+- a periodic cell (O.periodic = True): pieces and their contacts would not
+  wrap across it;
 - NewtonIntegrator.damping > 0 with QDEM pieces and dynamic YADE bodies:
   YADE bodies are damped and QDEM nodes are not (a warning: the momentum
   they exchange is no longer conserved)."""
@@ -27,6 +33,15 @@ def _kinds(O):
     return [type(e).__name__ for e in O.engines]
 
 
+def checkPeriods(engine):
+    """QDEM advances one O.dt each time it runs: it must run every step."""
+    if engine.iterPeriod != 1 or engine.virtPeriod > 0 or engine.realPeriod > 0:
+        raise SetupError("QdemEngine runs every step (iterPeriod=1): with iterPeriod=%d, virtPeriod=%g, "
+                         "realPeriod=%g QDEM time would fall behind O.time. Leave them at 1, 0, 0; to do less "
+                         "work, use progressPeriod, checkPeriod, or a VtkRecorder's iterPeriod."
+                         % (engine.iterPeriod, engine.virtPeriod, engine.realPeriod))
+
+
 def check(engine, O):
     engines = list(O.engines)
     kinds = [type(e).__name__ for e in engines]
@@ -34,6 +49,18 @@ def check(engine, O):
     if not mine:
         return  # stepped by hand (stepOnce) or from outside O.engines: nothing to order
     i = mine[0]
+    checkPeriods(engine)
+    if O.periodic:
+        raise SetupError("QdemEngine: the scene is periodic (O.periodic = True), and QDEM pieces and their "
+                         "contacts do not wrap across a periodic cell (a piece would leave it, a sphere crossing "
+                         "the boundary would pass through pieces). Use walls, boxes or facets as boundaries, "
+                         "or O.periodic = False.")
+    fields = [(k, n) for k, n in enumerate(kinds) if n in ("GravityEngine", "CentralGravityEngine",
+                                                            "AxialGravityEngine") and not engines[k].dead]
+    if fields:
+        raise SetupError("%s at O.engines[%d]: QDEM pieces feel the gravity of NewtonIntegrator only, so they would "
+                         "float while YADE bodies fall. Remove it and set NewtonIntegrator(gravity=...) instead "
+                         "(GravityEngine is deprecated in YADE for the same setting)." % (fields[0][1], fields[0][0]))
     newton = [k for k, n in enumerate(kinds) if n == "NewtonIntegrator"]
     if not newton:
         raise SetupError("QdemEngine: no NewtonIntegrator in O.engines. QDEM reads gravity from it and YADE "

@@ -219,6 +219,30 @@ def test_engine_order_mistakes_are_refused(scene, order, match):
     assert qdem.defaultWorld().core.iter == 0  # refused before any QDEM step
 
 
+def test_gravity_engine_periodic_cell_and_skipped_steps_are_refused(scene):
+    """Each ran silently: under a GravityEngine the piece floated while spheres fell; in
+    a periodic cell it left the cell and spheres crossing the boundary passed through
+    it; with iterPeriod=10 (set even mid-run) QDEM time ran at a tenth of O.time."""
+    O = scene
+    from yade import ForceResetter, GravityEngine, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), GravityEngine(gravity=(0, 0, -9.81)), qdem.QdemEngine(), NewtonIntegrator()]
+    O.dt = 1e-5
+    with pytest.raises(qdem.SetupError, match="GravityEngine at O.engines.1.*NewtonIntegrator.gravity"):
+        O.run(2, True)
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.periodic = True
+    O.cell.setBox(1, 1, 1)
+    with pytest.raises(qdem.SetupError, match="periodic"):
+        O.run(2, True)
+    O.periodic = False
+    O.run(3, True)
+    O.engines[1].iterPeriod = 10
+    with pytest.raises(qdem.SetupError, match="iterPeriod=10"):
+        O.run(20, True)
+    assert qdem.defaultWorld().core.iter == 3
+
+
 @pytest.mark.parametrize("gravity", [(0, 0, float("nan")), (0, float("inf"), -9.81)])
 def test_non_finite_gravity_is_refused_at_the_first_step(scene, gravity):
     O = scene
