@@ -52,6 +52,15 @@ struct StableDt {
     double combinedExplicit, combinedImplicit;
 };
 
+// An obstacle edge found crossing a piece's surface by World::obstacleEdgeCrossing.
+struct ObstacleEdgeCrossing {
+    int64_t count = 0;   // (edge, surface triangle) crossings
+    int obstacle = -1;   // the first one: obstacle index, its YADE body, the piece, where
+    int bodyId = -1;
+    int piece = -1;
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();
+};
+
 // Inverted elements found by World::countInverted.
 struct InversionCount {
     int64_t count = 0;            // elements with J <= 0
@@ -104,6 +113,10 @@ public:
     // volume ratio and the fix when an inverted element's law cannot push it
     // back (Saint-Venant-Kirchhoff); returns the count otherwise.
     InversionCount checkInverted() const;
+    // Box and Facet edges that cross a piece's surface triangles: an obstacle
+    // edge narrower than the node spacing passed between the nodes
+    // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.
+    ObstacleEdgeCrossing obstacleEdgeCrossing() const;
 
     // ---- restarts (Checkpoint.cpp) ---------------------------------------
     // The dynamic state (positions, velocities, contact histories, sleeping

@@ -152,6 +152,21 @@ void bindWorld(py::module_& m) {
             "Inverted elements (volume ratio <= 0) of the awake pieces: dict of count and the first one's piece, "
             "element and volumeRatio.  Raises StabilityError naming them when their law cannot push them back "
             "(saintVenantKirchhoff).")
+        .def(
+            "obstacleEdgeCrossing",
+            [](const World& w) {
+                const ObstacleEdgeCrossing r = w.obstacleEdgeCrossing();
+                py::dict d;
+                d["count"] = r.count;
+                d["obstacle"] = r.obstacle;
+                d["bodyId"] = r.bodyId;
+                d["piece"] = r.piece;
+                d["point"] = py::make_tuple(r.point[0], r.point[1], r.point[2]);
+                return d;
+            },
+            "Box and Facet edges crossing a piece's surface triangles (an edge narrower than the node spacing "
+            "passed between the nodes): dict of count and the first one's obstacle index, YADE bodyId, piece "
+            "and point.")
         .def("checkCurrentDt", &World::checkCurrentDt, py::arg("dt"),
              "Raise StabilityError when dt exceeds the stable step of the current (strained) shape.")
         .def("stableDt",

@@ -120,6 +120,10 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         #: law='saintVenantKirchhoff' an inversion stops the run with qdem.StabilityError.
         self.inverted = {"now": 0, "max": 0, "time": 0.0, "first": None}
         self._lastCheckTime = None
+        #: Box and Facet edge-triangle crossings found at the last check (an obstacle edge
+        #: that passed between a piece's surface nodes; a warning names the first).
+        self.edgeCrossings = 0
+        self._warnedEdges = set()
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
         self._mpy = None      # MpyCoupling under yade.mpy (mpyglue.py)
@@ -328,10 +332,36 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
+            if core.nObstacles and core.nPieces:
+                self._checkObstacleEdges(core)
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
             counts = parallel.summedCounts(core)  # (collective under MPI: every rank gets here)
             if parallel.isWriter():
                 self._progress(core, counts)
+
+    def _checkObstacleEdges(self, core):
+        """Warns (once per obstacle and piece) when a Box or Facet edge has passed
+        between a piece's surface nodes: pieces feel obstacles at their nodes
+        only, so such an edge cuts into the piece unresisted."""
+        c = core.obstacleEdgeCrossing()
+        self.edgeCrossings = c["count"]
+        if not c["count"]:
+            return
+        key = (c["bodyId"], c["piece"])
+        if key in self._warnedEdges:
+            return
+        self._warnedEdges.add(key)
+        if parallel.isWriter():
+            kind = ("wall", "box", "facet")[self._obstacles[c["obstacle"]].kind] \
+                if c["obstacle"] < len(self._obstacles) else "obstacle"
+            warnings.warn("QdemEngine: at step %d an edge of YADE body %d (%s) has passed between the surface nodes "
+                          "of piece %d, near %s (%d edge-triangle crossings in all). QDEM pieces feel obstacles at "
+                          "their nodes only (radius %g m), so an edge or corner narrower than the node spacing cuts "
+                          "into them unresisted, and the forces are wrong from here on. Refine the piece's mesh "
+                          "there, give it a larger radius, or make the obstacle wider than the node spacing "
+                          "(doc/hard_cases.md, 'Known limits')."
+                          % (core.iter, c["bodyId"], kind, c["piece"], tuple(round(x, 6) for x in c["point"]),
+                             c["count"], self.world.pieces[c["piece"]].material.radius), RuntimeWarning, stacklevel=3)
 
     def _checkInverted(self, core, dt):
         # Raises StabilityError (naming piece, element, volume ratio, fix) for a law that

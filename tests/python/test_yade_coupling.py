@@ -167,3 +167,49 @@ def test_a_box_or_facet_changed_by_the_script_is_followed(scene):
     assert other.centroid()[2] == pytest.approx(0.045, abs=2e-3)
     weight = block.totalMass * 9.81
     assert O.forces.f(box)[2] == pytest.approx(-weight, rel=0.01)
+
+
+@pytest.mark.parametrize("kind", ["box", "facet"])
+def test_an_obstacle_edge_passing_between_nodes_is_reported(scene, kind):
+    """A 2 mm ridge under a block meshed at 25 mm: nodes alone feel obstacles, so
+    the ridge went into the block with no force and no word."""
+    import warnings
+    from yade import Vector3, utils
+    O = scene
+    mat = rubber(young=1e6, viscosity=50.0)
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.1), (8, 8, 4)), mat, pos=(0, 0.0125, 0.16))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    if kind == "box":
+        ridge = O.bodies.append(utils.box((0, 0, 0.05), (0.3, 0.001, 0.05), fixed=True))
+    else:
+        ridge = O.bodies.append(utils.facet([Vector3(-0.3, 0, 0.1), Vector3(0.3, 0, 0.1), Vector3(0, -0.05, 0)],
+                                            fixed=True))
+    O.engines = _engines()
+    qe = O.engines[1]
+    O.dt = 0.8 * qe.stableDt()["combined"]
+    with pytest.warns(RuntimeWarning, match="edge of YADE body %d \\(%s\\) has passed between the surface nodes "
+                                            "of piece 0" % (ridge, kind)):
+        O.run(int(0.15 / O.dt), True)
+    assert qe.edgeCrossings > 0
+
+
+def test_blocks_resting_across_box_and_facet_edges_are_not_reported(scene):
+    """Edges under a resting piece (a box's rim under an overhang, a facet floor's
+    diagonal) stay r below its surface: no crossing."""
+    import warnings
+    from yade import utils
+    O = scene
+    mat = rubber(viscosity=2000.0)
+    over = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.1), (4, 4, 2)), mat, pos=(0.4, 0, 0.1 + 0.05 + 0.005))
+    onFacets = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.1), (4, 4, 2)), mat, pos=(-0.4, 0, 0.05 + 0.005))
+    O.bodies.append(utils.box((0.35, 0, 0.05), (0.05, 0.3, 0.05), fixed=True))   # rim under the block's middle
+    O.bodies.append(utils.facet([(-1, -1, 0), (1, -1, 0), (1, 1, 0)], fixed=True))
+    O.bodies.append(utils.facet([(-1, -1, 0), (1, 1, 0), (-1, 1, 0)], fixed=True))
+    O.engines = _engines()
+    qe = O.engines[1]
+    O.dt = 0.8 * qe.stableDt()["combined"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        O.run(int(0.2 / O.dt), True)
+    assert qe.edgeCrossings == 0
+    assert onFacets.centroid()[2] == pytest.approx(0.055, abs=2e-3)
