@@ -15,10 +15,21 @@ class Piece:
     is the index in the mesh you passed of solver node ``i``."""
 
     def __init__(self, world, pid, material, originalNodeIds):
-        self.world, self.id, self.material = world, pid, material
+        self.world, self.id, self._material = world, pid, material
         self.originalNodeIds = originalNodeIds
         n0, n1, t0, t1 = world.core.pieceRanges(pid)
         self.nodeSlice, self.tetSlice = slice(n0, n1), slice(t0, t1)
+
+    @property
+    def material(self):
+        """The QdemMat the piece was added with (fixed: the world has compiled it in)."""
+        return self._material
+
+    @material.setter
+    def material(self, value):
+        raise AttributeError("Piece.material is fixed when the piece is added (the assignment would be ignored). "
+                             "Add the mesh again with the other material: qdem.addPiece(mesh, newMaterial, ...), "
+                             "or start from a new QdemMat before addPiece.")
 
     # -- views -----------------------------------------------------------------
     def _nodes(self, name):

@@ -279,6 +279,10 @@ def test_material_edit_after_add_piece_is_refused():
     with pytest.raises(ValueError, match="cannot change young after addPiece"):
         mat.young = 3e7
     assert mat.young == 2e7
+    piece = w.pieces[0]
+    with pytest.raises(AttributeError, match="Piece.material is fixed"):
+        piece.material = rubber(young=1e5)   # was silently ignored
+    assert piece.material is mat
 
 
 def test_help_dict_and_stable_time_step_like_yade(scene):
