@@ -1,0 +1,101 @@
+"""Wrong arguments get a clear error naming the argument and what it must be,
+before anything is added or written (never a bare NumPy/pybind error, a
+half-added piece, a silently changed value or a broken output file)."""
+import numpy as np
+import pytest
+
+import qdem
+
+from conftest import rubber
+
+
+def _cube():
+    return qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2))
+
+
+def _untouched(w):
+    assert w.core.nPieces == 0 and w.core.nNodes == 0 and w.pieces == []
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(vel=(0, -1)), ["vel", "3 numbers"]),
+    (dict(vel=(1, 2, 3, 4)), ["vel", "3 numbers"]),
+    (dict(vel="abc"), ["vel", "3 numbers"]),
+    (dict(vel=None), ["vel", "3 numbers"]),
+    (dict(vel=(0, float("nan"), 0)), ["vel", "not finite"]),
+    (dict(angVel=(1, 2, 3, 4)), ["angVel", "3 numbers"]),
+    (dict(angVel=(0, 0)), ["angVel", "3 numbers"]),
+    (dict(angVel=("a", 0, 0)), ["angVel", "3 numbers"]),
+    (dict(angVel=(0, 0, float("inf"))), ["angVel", "not finite"]),
+    (dict(pos="xyz"), ["pos", "3 numbers"]),
+    (dict(pos=(1, 2)), ["pos", "3 numbers"]),
+    (dict(pos=(1, float("nan"), 2)), ["pos", "not finite"]),
+    (dict(ori="z"), ["ori", "Quaternion"]),
+    (dict(ori=(1, 0, 0, 0)), ["ori", "Quaternion"]),
+    (dict(ori=((0, 1), 0.5)), ["axis", "3 numbers"]),
+    (dict(ori=((0, float("nan"), 1), 0.5)), ["axis", "not finite"]),
+    (dict(ori=((0, 0, 1), "half")), ["angle", "number"]),
+    (dict(ori=((0, 0, 1), float("inf"))), ["angle", "not finite"]),
+    (dict(ori=(0.5, (0, 0, 1))), ["axis first"]),
+    (dict(ori=((0, 0, 0), 0.5)), ["axis", "non-zero"]),
+    (dict(ori=np.eye(3) * 1.0000001), ["not a rotation"]),
+    (dict(ori=np.eye(3) * (1 + 1e-6)), ["not a rotation"]),
+    (dict(ori=np.diag([1.0, 1, -1])), ["reflection"]),
+])
+def test_addpiece_refuses_bad_arguments_before_adding_anything(kw, words):
+    """Before: vel=(0, -1) or angVel of 4 numbers raised NumPy's 'cannot reshape'
+    after the piece was in the compiled world: a hidden piece that interacted."""
+    w = qdem.World()
+    mat = rubber()
+    with pytest.raises(ValueError) as e:
+        qdem.addPiece(_cube(), mat, world=w, **kw)
+    for word in words:
+        assert word in str(e.value)
+    assert "addPiece" in str(e.value)
+    _untouched(w)
+    mat.young = 2e7  # not locked by the refused call
+    qdem.addPiece(_cube(), mat, world=w)  # the world still works
+    assert w.core.nPieces == 1 and len(w.pieces) == 1
+
+
+def test_quaternion_zero_or_nan_is_refused():
+    from yade import Quaternion
+    w = qdem.World()
+    with pytest.raises(ValueError, match="Quaternion.*zero norm"):
+        qdem.addPiece(_cube(), rubber(), ori=Quaternion(0, 0, 0, 0), world=w)
+    with pytest.raises(ValueError, match="ori \\(Quaternion\\).*not finite"):
+        qdem.addPiece(_cube(), rubber(), ori=Quaternion(float("nan"), 0, 0, 1), world=w)
+    _untouched(w)
+    # a non-unit quaternion is normalised: a quarter turn about z
+    p = qdem.addPiece(_cube(), rubber(), ori=Quaternion(2, 0, 0, 2), world=w)
+    q = qdem.addPiece(_cube(), rubber(), pos=(1, 0, 0), ori=((0, 0, 1), np.pi / 2), world=w)
+    assert np.allclose(np.asarray(p.pos) + (1, 0, 0), np.asarray(q.pos), atol=1e-12)
+
+
+def test_orientation_as_list_equals_tuple_and_matrix():
+    w = qdem.World()
+    a = qdem.addPiece(_cube(), rubber(), ori=((0, 0, 1), 0.5), world=w)
+    b = qdem.addPiece(_cube(), rubber(), ori=[(0, 0, 1), 0.5], world=w)
+    c = qdem.addPiece(_cube(), rubber(), ori=[[0, 0, 1], 0.5], world=w)
+    R = qdem.world.rotationMatrix(((0, 0, 1), 0.5))
+    d = qdem.addPiece(_cube(), rubber(), ori=R.tolist(), world=w)
+    for p in (b, c, d):
+        assert np.allclose(np.asarray(a.pos), np.asarray(p.pos), atol=1e-14)
+
+
+def test_refused_mesh_does_not_lock_its_material_or_leave_nodes():
+    """Before: a mesh with an unused node was refused after the compiled world
+    had grown its node arrays (a hidden node) and the material stayed locked."""
+    w = qdem.World()
+    m = _cube()
+    mat = rubber()
+    with pytest.raises(ValueError, match="belongs to no tetrahedron"):
+        qdem.addPiece(qdem.Mesh(np.vstack([m.nodes, [[5, 5, 5]]]), m.tets), mat, world=w)
+    _untouched(w)
+    with pytest.raises(ValueError, match="inverted"):
+        qdem.addPiece(m.scaled(-1), mat, world=w)
+    _untouched(w)
+    mat.young = 3e7  # still editable
+    p = qdem.addPiece(m, mat, world=w)
+    assert w.core.nNodes == len(p.pos) == m.nNodes
+    assert w.stableDt()["elastic"] > 0
