@@ -124,21 +124,69 @@ def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     return Mesh(nodes, tets, check=False)
 
 
+# Volume cells of meshio other than linear tetrahedra (meshio's CellBlock.dim
+# says 3 for them; this is the fallback for meshio versions without it).
+_VOLUME_PREFIXES = ("tetra", "hexahedron", "wedge", "pyramid", "polyhedron", "VTK_LAGRANGE_TETRAHEDRON",
+                    "VTK_LAGRANGE_HEXAHEDRON", "VTK_LAGRANGE_WEDGE", "VTK_LAGRANGE_PYRAMID")
+
+
+def _isVolumeCell(block):
+    dim = getattr(block, "dim", None)
+    if dim is not None:
+        return dim == 3
+    return block.type.startswith(_VOLUME_PREFIXES)
+
+
+def _scaleFactor(scale, who):
+    """scale as a float or 3 floats, each finite and > 0."""
+    try:
+        s = np.asarray(scale, dtype=float) if not isinstance(scale, (str, bytes, bool)) else None
+    except (TypeError, ValueError):
+        s = None
+    if s is None or s.shape not in ((), (3,)) or not np.all(np.isfinite(s)) or not np.all(s > 0):
+        raise ValueError("%s: scale must be a finite number > 0 (or 3 of them, one per axis), got %r"
+                         % (who, scale))
+    return s
+
+
 def loadMesh(path, fixOrientation=False, scale=1.0):
     """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
-    Only tetra cells are used.  fixOrientation=True flips tets written with the
-    opposite orientation convention instead of rejecting them."""
+    Linear tetrahedra (meshio's 'tetra') make the piece; lower-dimensional
+    cells (boundary triangles, lines, vertices: gmsh's tags) are ignored.  A
+    file holding other volume cells (hexahedra, wedges, pyramids, quadratic
+    'tetra10' ...) is refused rather than loaded in part: re-mesh it into
+    linear tetrahedra.  fixOrientation=True flips tets written with the
+    opposite orientation convention instead of rejecting them.  scale (a
+    number or 3) multiplies the coordinates (0.001 for a file in mm)."""
+    scale = _scaleFactor(scale, "loadMesh")
     if not os.path.exists(path):
         raise ValueError("loadMesh: no such file: %s" % path)
     m = _meshioRead(path, "loadMesh")
+    other = {}
+    for c in m.cells:
+        if c.type != "tetra" and _isVolumeCell(c):
+            other[c.type] = other.get(c.type, 0) + len(c.data)
+    if other:
+        raise ValueError("loadMesh: %s holds volume cells that are not linear tetrahedra: %s%s. QDEM uses "
+                         "linear 4-node tetrahedra only, and loading the tetrahedra alone would drop part of "
+                         "the body. Re-mesh into linear tetrahedra (gmsh: -3 with Mesh.ElementOrder = 1 and "
+                         "no Mesh.RecombineAll / recombined or extruded layers; or mesh the closed surface "
+                         "with qdem.meshSurface)"
+                         % (path, ", ".join("%d %s" % (n, t) for t, n in sorted(other.items())),
+                            " (and %d linear tetra)" % sum(len(c.data) for c in m.cells if c.type == "tetra")
+                            if any(c.type == "tetra" for c in m.cells) else ""))
     blocks = [c.data for c in m.cells if c.type == "tetra"]
     if not blocks:
-        raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s)"
+        raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s); a surface or 2-D mesh has no "
+                         "volume: mesh the solid into linear tetrahedra (gmsh -3, or qdem.meshSurface for a "
+                         "closed surface)"
                          % (path, ", ".join(sorted({c.type for c in m.cells})) or "none"))
+    points = np.asarray(m.points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError("loadMesh: %s has %d-dimensional points (x, y only); a QDEM piece needs 3-D "
+                         "coordinates (x, y, z)" % (path, points.shape[1] if points.ndim == 2 else 0))
     tets = np.concatenate(blocks).astype(np.int64)
-    nodes = np.asarray(m.points, dtype=float)[:, :3] * scale
-    if nodes.shape[1] != 3:
-        raise ValueError("loadMesh: %s has %d-dimensional points; need 3D" % (path, nodes.shape[1]))
+    nodes = points * scale
     if tets.min() < 0 or tets.max() >= len(nodes):
         raise ValueError("loadMesh: %s refers to nodes outside 0..%d" % (path, len(nodes) - 1))
     used = np.unique(tets)
@@ -146,6 +194,12 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
         remap = -np.ones(len(nodes), dtype=np.int64)
         remap[used] = np.arange(len(used))
         nodes, tets = nodes[used], remap[tets]
+    if np.all(np.isfinite(nodes)):
+        flat = [k for k in range(3) if np.ptp(nodes[:, k]) == 0]
+        if flat:
+            raise ValueError("loadMesh: every node of %s has %s = %g: the mesh is flat (a 2-D mesh written "
+                             "with x, y only?) and its tetrahedra have no volume; a QDEM piece needs a 3-D "
+                             "tetrahedral mesh" % (path, "xyz"[flat[0]], nodes[0, flat[0]]))
     tets = tets.astype(np.int32)
     if fixOrientation:
         tets, _ = _core.orientPositive(nodes, tets)
@@ -157,6 +211,7 @@ def loadSurface(path, scale=1.0):
     returns (vertices (V,3), triangles (F,3)), duplicate STL vertices merged."""
     if not os.path.exists(path):
         raise ValueError("loadSurface: no such file: %s" % path)
+    scale = _scaleFactor(scale, "loadSurface")
     m = _meshioRead(path, "loadSurface")
     tris = [c.data for c in m.cells if c.type == "triangle"]
     if not tris:

@@ -99,3 +99,73 @@ def test_refused_mesh_does_not_lock_its_material_or_leave_nodes():
     p = qdem.addPiece(m, mat, world=w)
     assert w.core.nNodes == len(p.pos) == m.nNodes
     assert w.stableDt()["elastic"] > 0
+
+
+def _hexBar(path):
+    """A 2 m long bar: the unit tet cube [-.5,.5]^3 and one hexahedron beside it."""
+    import meshio
+    b = qdem.boxMesh((1, 1, 1), (2, 2, 2))
+    N, T = b.nodes, b.tets
+    h = np.array([[.5, -.5, -.5], [1.5, -.5, -.5], [1.5, .5, -.5], [.5, .5, -.5],
+                  [.5, -.5, .5], [1.5, -.5, .5], [1.5, .5, .5], [.5, .5, .5]])
+    idx = []
+    for k, p in enumerate(h):
+        d = np.linalg.norm(N - p, axis=1)
+        idx.append(int(d.argmin()) if d.min() < 1e-12 else len(N) + k)
+    return meshio.Mesh(np.vstack([N, h]), [("tetra", T), ("hexahedron", np.array([idx]))])
+
+
+def test_loadmesh_refuses_volume_cells_that_are_not_linear_tets(tmp_path):
+    """Before: the hexahedron (or wedge, pyramid) was dropped silently: half the body."""
+    import meshio
+    m = _hexBar(tmp_path)
+    m.write(str(tmp_path / "mixed.vtu"))
+    with pytest.raises(ValueError, match=r"1 hexahedron \(and 48 linear tetra\).*Re-mesh into linear tetrahedra"):
+        qdem.loadMesh(str(tmp_path / "mixed.vtu"))
+    m2 = meshio.Mesh(m.points, [("hexahedron", m.cells[1].data), ("tetra", m.cells[0].data),
+                                ("wedge", np.array([[0, 1, 2, 3, 4, 5]])), ("pyramid", np.array([[0, 1, 2, 3, 4]]))])
+    m2.write(str(tmp_path / "mixed.msh"), file_format="gmsh22")
+    with pytest.raises(ValueError, match="1 hexahedron, 1 pyramid, 1 wedge.*gmsh"):
+        qdem.loadMesh(str(tmp_path / "mixed.msh"))
+    # quadratic tetrahedra: named, with the fix (ElementOrder 1)
+    b = qdem.boxMesh((1, 1, 1), (1, 1, 1))
+    P, mid = list(map(tuple, b.nodes)), {}
+
+    def midp(a, c):
+        k = (min(a, c), max(a, c))
+        if k not in mid:
+            mid[k] = len(P)
+            P.append(tuple((b.nodes[a] + b.nodes[c]) / 2))
+        return mid[k]
+    T10 = [list(t) + [midp(t[0], t[1]), midp(t[1], t[2]), midp(t[0], t[2]), midp(t[0], t[3]), midp(t[1], t[3]),
+                      midp(t[2], t[3])] for t in b.tets]
+    meshio.Mesh(np.array(P), [("tetra10", np.array(T10))]).write(str(tmp_path / "quad.vtu"))
+    with pytest.raises(ValueError, match=r"6 tetra10.*ElementOrder = 1"):
+        qdem.loadMesh(str(tmp_path / "quad.vtu"))
+
+
+def test_loadmesh_ignores_boundary_cells_and_refuses_flat_meshes(tmp_path):
+    import meshio
+    b = qdem.boxMesh((1, 1, 1), (2, 2, 2))
+    meshio.Mesh(b.nodes, [("tetra", b.tets), ("triangle", np.array([[0, 1, 2]])), ("line", np.array([[0, 1]])),
+                          ("vertex", np.array([[0]]))]).write(str(tmp_path / "tags.vtu"))
+    assert qdem.loadMesh(str(tmp_path / "tags.vtu")).nTets == b.nTets
+    # a 2-D mesh: tets whose points have x, y only (written with z = 0)
+    meshio.Mesh(b.nodes[:, :2], [("tetra", b.tets)]).write(str(tmp_path / "flat.vtu"))
+    with pytest.raises(ValueError, match="every node .* has z = 0: the mesh is flat"):
+        qdem.loadMesh(str(tmp_path / "flat.vtu"))
+    meshio.Mesh(np.array([[0, 0], [1, 0], [0, 1.0]]), [("triangle", np.array([[0, 1, 2]]))]).write(
+        str(tmp_path / "tri2d.vtu"))
+    with pytest.raises(ValueError, match="no tetrahedra .*triangle.*no volume"):
+        qdem.loadMesh(str(tmp_path / "tri2d.vtu"))
+
+
+@pytest.mark.parametrize("scale", [0, -1, float("nan"), "1", (1, 1), (1, 1, -2), True])
+def test_loadmesh_refuses_bad_scale(tmp_path, scale):
+    """Before: scale=-1 said 'inverted, use fixOrientation', scale=0 'zero volume'."""
+    import meshio
+    b = qdem.boxMesh((1, 1, 1), (2, 2, 2))
+    meshio.Mesh(b.nodes, [("tetra", b.tets)]).write(str(tmp_path / "b.vtu"))
+    with pytest.raises(ValueError, match="scale must be a finite number > 0"):
+        qdem.loadMesh(str(tmp_path / "b.vtu"), scale=scale)
+    assert np.allclose(qdem.loadMesh(str(tmp_path / "b.vtu"), scale=(1, 1, 2)).bounds()[1], (.5, .5, 1))
