@@ -239,7 +239,26 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
                                           np.ascontiguousarray(tris, dtype=np.int32),
                                           float(cellSize), float(facetDistance), int(seed),
                                           float(surfaceSize) if surfaceSize else -1.0)
-    return Mesh(nodes, tets)
+    try:
+        return Mesh(nodes, tets)
+    except ValueError as e:
+        if "non-manifold" not in str(e):
+            raise
+        # Mesh_3 merges the opposite faces of a body thinner than its cells:
+        # say so instead of leaving the user with a node number.
+        v = np.asarray(verts, dtype=float)[np.asarray(tris, dtype=np.int64)]
+        cross = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        area = 0.5 * np.linalg.norm(cross, axis=1).sum()
+        volume = abs(np.einsum("ij,ij->i", v[:, 0] - v.reshape(-1, 3).mean(0), cross).sum()) / 6.0
+        skin = float(surfaceSize) if surfaceSize else float(cellSize)
+        thickness = 2.0 * volume / area if area > 0 else 0.0
+        if thickness < skin:
+            raise ValueError("meshSurface: %s. The body is about %.3g thick (2 x volume / surface area) against "
+                             "%s %.3g: Mesh_3 merged its opposite faces. Use a cellSize (and surfaceSize) of at "
+                             "most about 2 x the thickness, here <= %.3g"
+                             % (e, thickness, "surfaceSize" if surfaceSize else "cellSize", skin,
+                                2.0 * thickness)) from None
+        raise
 
 
 def asMesh(obj):

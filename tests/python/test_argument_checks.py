@@ -169,3 +169,27 @@ def test_loadmesh_refuses_bad_scale(tmp_path, scale):
     with pytest.raises(ValueError, match="scale must be a finite number > 0"):
         qdem.loadMesh(str(tmp_path / "b.vtu"), scale=scale)
     assert np.allclose(qdem.loadMesh(str(tmp_path / "b.vtu"), scale=(1, 1, 2)).bounds()[1], (.5, .5, 1))
+
+
+_CUBE_V = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+_CUBE_F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                    [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+
+
+@pytest.mark.skipif(not getattr(qdem._core, "haveCgal", False), reason="built without CGAL")
+def test_meshsurface_refuses_a_plate_thinner_than_its_cells_at_once():
+    """Before: a 1 x 1 x 0.001 plate with cellSize 0.1 ran two minutes in CGAL and
+    then reported a non-manifold node."""
+    import time
+    t0 = time.time()
+    with pytest.raises(ValueError, match=r"too thin for cellSize 0.1: it is about 0.000998\d* thick.*<= 0.001996"):
+        qdem.meshSurface((_CUBE_V * (1, 1, 1e-3), _CUBE_F), 0.1)
+    with pytest.raises(ValueError, match=r"too thin for surfaceSize 0.1"):
+        qdem.meshSurface((_CUBE_V * (1, 1, 1e-3), _CUBE_F), 0.01, surfaceSize=0.1)
+    assert time.time() - t0 < 5
+    # a plate in the range CGAL still fails on: the error says why
+    with pytest.raises(ValueError, match=r"non-manifold.*about 0.0327\d* thick .*against cellSize 0.1"):
+        qdem.meshSurface((_CUBE_V * (1, 1, 0.035), _CUBE_F), 0.1)
+    # thick enough, and a body smaller than one cell, still mesh
+    assert qdem.meshSurface((_CUBE_V * (1, 1, 0.05), _CUBE_F), 0.1).nTets > 0
+    assert abs(qdem.meshSurface((_CUBE_V, _CUBE_F), 10).volumes().sum() - 1) < 1e-12
