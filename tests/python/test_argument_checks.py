@@ -1,6 +1,8 @@
 """Wrong arguments get a clear error naming the argument and what it must be,
 before anything is added or written (never a bare NumPy/pybind error, a
 half-added piece, a silently changed value or a broken output file)."""
+import os
+
 import numpy as np
 import pytest
 
@@ -193,3 +195,69 @@ def test_meshsurface_refuses_a_plate_thinner_than_its_cells_at_once():
     # thick enough, and a body smaller than one cell, still mesh
     assert qdem.meshSurface((_CUBE_V * (1, 1, 0.05), _CUBE_F), 0.1).nTets > 0
     assert abs(qdem.meshSurface((_CUBE_V, _CUBE_F), 10).volumes().sum() - 1) < 1e-12
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(progressPeriod=-1), "progressPeriod=-1 is invalid: must be an integer >= 0 (0 = silent)"),
+    (dict(progressPeriod=0.5), "progressPeriod=0.5 is invalid: must be an integer"),
+    (dict(checkPeriod=-5), "checkPeriod=-5 is invalid: must be an integer >= 0 (0 = never)"),
+    (dict(checkPeriod=2.5), "checkPeriod=2.5 is invalid: must be an integer"),
+    (dict(checkPeriod="x"), "checkPeriod='x' is invalid: must be an integer"),
+    (dict(threads=-1), "threads=-1 is invalid: must be an integer >= 0"),
+    (dict(threads=2.5), "threads=2.5 is invalid: must be an integer"),
+    (dict(threads=True), "threads=True is invalid: must be an integer"),
+    (dict(gatherPeriod="1"), "gatherPeriod='1' is invalid: must be an integer >= 0"),
+    (dict(sphereMask=1.5), "sphereMask=1.5 is invalid: must be an integer"),
+    (dict(sphereMargin="0.1"), "sphereMargin='0.1' is invalid: must be a number in [0.01, 10]"),
+    (dict(couple="no"), "couple='no' is invalid: must be True or False"),
+    (dict(checkDt="False"), "checkDt='False' is invalid: must be True or False"),
+    (dict(spheres=2), "spheres=2 is invalid: must be True or False"),
+    (dict(friction="off"), "friction='off' is invalid: must be True or False"),
+    (dict(pointPolygon=None), "pointPolygon=None is invalid: must be True or False"),
+    (dict(damping="0.1"), "damping='0.1' is invalid"),
+])
+def test_engine_settings_are_checked_at_assignment(kw, words):
+    """Before: progressPeriod=-1 printed every step, checkPeriod='x' raised a raw
+    TypeError at step 100, couple='no' counted as True."""
+    with pytest.raises(ValueError) as e:
+        qdem.QdemEngine(**kw)
+    assert words in str(e.value)
+    e = qdem.QdemEngine()
+    (k, v), = kw.items()
+    before = getattr(e, k)
+    with pytest.raises(ValueError):
+        setattr(e, k, v)
+    assert getattr(e, k) == before
+
+
+def test_engine_settings_take_numpy_and_yade_style_values():
+    e = qdem.QdemEngine(checkPeriod=np.int64(50), threads=np.int32(1), progressPeriod=1000.0, couple=0,
+                        checkDt=np.bool_(True), sphereMask=np.int64(-1), damping=np.float32(0.25))
+    assert (e.checkPeriod, e.threads, e.progressPeriod, e.couple, e.checkDt, e.sphereMask) == (50, 1, 1000, False,
+                                                                                                True, -1)
+    assert all(type(getattr(e, k)) is int for k in ("checkPeriod", "threads", "progressPeriod", "sphereMask"))
+    assert type(e.couple) is bool and e.damping == 0.25
+    h = qdem.QdemEngine.__doc__
+    assert "checkPeriod (= 100)" in h and "couple (= True)" in h and "progressPeriod (= 0)" in h
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(young="1e6"), "young='1e6' is invalid: must be a number > 0"),
+    (dict(young=True), "young=True is invalid: must be a number > 0"),
+    (dict(poisson="0.3"), "poisson='0.3' is invalid: must be a number in (-1, 0.5)"),
+    (dict(restitution=False), "restitution=False is invalid: must be a number in (0, 1]"),
+    (dict(density=[1000]), "density=[1000] is invalid: must be a number > 0"),
+    (dict(law=["stableNeoHookean"]), "law=['stableNeoHookean'] is invalid: must be one of"),
+])
+def test_material_refuses_strings_and_bools(kw, words):
+    """Before: young='1e6' raised a raw TypeError, young=True made E = 1 Pa."""
+    with pytest.raises(ValueError) as e:
+        qdem.QdemMat(**kw)
+    assert words in str(e.value)
+
+
+def test_material_keeps_numpy_numbers_as_floats():
+    import json
+    m = qdem.QdemMat(young=np.float32(1e6), density=np.int64(1000), poisson=0.25)
+    assert type(m.young) is float and type(m.density) is float and m.young == 1e6
+    json.dumps(m.dict())  # what O.save stores
