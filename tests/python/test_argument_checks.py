@@ -197,6 +197,71 @@ def test_meshsurface_refuses_a_plate_thinner_than_its_cells_at_once():
     assert abs(qdem.meshSurface((_CUBE_V, _CUBE_F), 10).volumes().sum() - 1) < 1e-12
 
 
+def _recordedScene(O, fileBase, steps=10):
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(_cube(), rubber(viscosity=1.0))
+    rec = qdem.VtkRecorder(fileBase=fileBase, iterPeriod=np.int64(5))
+    O.engines = [ForceResetter(), qdem.QdemEngine(), rec, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    O.run(steps, True)
+    return rec
+
+
+def test_recorder_pvd_escapes_xml_characters(scene, tmp_path):
+    """Before: fileBase 'a&b<c"d-' wrote file="a&b<c"d-000000.vtu" into the .pvd: broken XML."""
+    import xml.etree.ElementTree as ET
+    rec = _recordedScene(scene, str(tmp_path / "a&b<c\"d'e-"))
+    assert rec.pvdPath() == str(tmp_path / "a&b<c\"d'e.pvd")
+    root = ET.parse(rec.pvdPath()).getroot()
+    files = [d.get("file") for d in root.iter("DataSet")]
+    assert files == ["a&b<c\"d'e-%06d.vtu" % i for i in (0, 5, 10)]
+    for f in files:
+        assert os.path.isfile(tmp_path / f)
+
+
+def test_recorder_directory_filebase_gets_a_visible_pvd(scene, tmp_path):
+    """Before: fileBase 'out/run/' kept its collection in a hidden 'out/run/.pvd'."""
+    rec = _recordedScene(scene, str(tmp_path / "run") + "/")
+    assert sorted(os.listdir(tmp_path / "run")) == ["000000.vtu", "000005.vtu", "000010.vtu", "frames.pvd"]
+    assert rec.pvdPath() == str(tmp_path / "run" / "frames.pvd")
+
+
+def test_recorder_reports_an_unwritable_filebase(scene, tmp_path):
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(OSError, match=r"VtkRecorder: cannot write the frame .*fileBase="):
+        _recordedScene(scene, str(tmp_path / "afile" / "x-"))
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(fileBase=5), "fileBase=5 is invalid: must be a path prefix"),
+    (dict(fileBase=None), "fileBase=None is invalid: must be a path prefix"),
+    (dict(fileBase=""), "fileBase='' is invalid: must not be empty"),
+    (dict(iterPeriod=-1), "iterPeriod=-1 is invalid: must be an integer >= 0"),
+    (dict(iterPeriod=2.5), "iterPeriod=2.5 is invalid: must be an integer"),
+    (dict(iterPeriod=True), "iterPeriod=True is invalid: must be an integer"),
+    (dict(iterPeriod="10"), "iterPeriod='10' is invalid: must be an integer"),
+    (dict(virtPeriod=float("inf")), "virtPeriod=inf is invalid: must be a number >= 0"),
+    (dict(virtPeriod="0.1"), "virtPeriod='0.1' is invalid: must be a number >= 0"),
+])
+def test_recorder_settings_are_checked_at_construction(kw, words):
+    """Before: fileBase=5 was accepted and failed at the first step."""
+    with pytest.raises(ValueError) as e:
+        qdem.VtkRecorder(**kw)
+    assert words in str(e.value)
+
+
+def test_recorder_takes_numpy_numbers_as_plain_ones(tmp_path):
+    """Before: iterPeriod=np.int64(10) was refused ('must be a number >= 0')."""
+    import json
+    import pathlib
+    r = qdem.VtkRecorder(fileBase=pathlib.Path(tmp_path) / "f-", iterPeriod=np.int64(10),
+                         virtPeriod=np.float32(0.5))
+    assert r.iterPeriod == 10 and type(r.iterPeriod) is int
+    assert type(r.virtPeriod) is float and r.fileBase == str(tmp_path / "f-")
+    assert qdem.VtkRecorder(iterPeriod=20.0).iterPeriod == 20
+    json.dumps(r.dict())  # what O.save stores
+
+
 @pytest.mark.parametrize("kw, words", [
     (dict(progressPeriod=-1), "progressPeriod=-1 is invalid: must be an integer >= 0 (0 = silent)"),
     (dict(progressPeriod=0.5), "progressPeriod=0.5 is invalid: must be an integer"),
