@@ -37,9 +37,16 @@ int World::addPiece(const TetMesh& mesh, int material) {
                              6.0;
             for (int k = 0; k < 4; ++k) m[c[k]] += mat.density * V / 4.0;
         }
-        for (std::size_t i = 0; i < m.size(); ++i)
-            if (!(m[i] > 0))
+        std::vector<char> used(mesh.nNodes(), 0);
+        for (const int32_t v : mesh.tets) used[v] = 1;
+        for (std::size_t i = 0; i < m.size(); ++i) {
+            if (!used[i])
                 throw InputError(cat("addPiece: node ", i, " belongs to no tetrahedron (zero mass); remove unused nodes"));
+            if (!(m[i] > 0) || !std::isfinite(m[i]))
+                throw InputError(cat("addPiece: node ", i, " gets mass ", m[i], " (density ", mat.density,
+                                     " times its tetrahedra's volume): coordinates or density out of floating "
+                                     "point range; give the mesh in metres and the density in kg/m^3"));
+        }
     }
 
     PieceInfo p;

@@ -1,6 +1,7 @@
 """Tetrahedral meshes for QDEM pieces: structured boxes, mesh files read by
 meshio (gmsh .msh, .vtu, medit .mesh, ...) and closed triangle surfaces
 (OFF/STL/OBJ) meshed with CGAL Mesh_3."""
+import numbers
 import os
 
 import numpy as np
@@ -33,7 +34,13 @@ class Mesh:
     a non-manifold surface raise ValueError naming the problem."""
 
     def __init__(self, nodes, tets, check=True):
-        nodes = np.ascontiguousarray(nodes, dtype=np.float64)
+        raw = np.asarray(nodes)
+        if np.iscomplexobj(raw):
+            raise ValueError("Mesh: nodes must hold real coordinates, got dtype %s" % raw.dtype)
+        try:
+            nodes = np.ascontiguousarray(raw, dtype=np.float64)
+        except (TypeError, ValueError) as e:
+            raise ValueError("Mesh: nodes must be numbers of shape (N, 3): %s" % e) from None
         tets = np.asarray(tets)
         if nodes.ndim != 2 or nodes.shape[1] != 3:
             raise ValueError("Mesh: nodes must have shape (N, 3), got %s" % (nodes.shape,))
@@ -43,6 +50,14 @@ class Mesh:
             raise ValueError("Mesh: tets must hold integer node indices, got dtype %s" % tets.dtype)
         if len(nodes) >= 2**31 - 1:
             raise ValueError("Mesh: too many nodes for 32-bit indices")
+        if tets.dtype != np.int32 and tets.size:
+            # astype(int32) would wrap 2**32 + 5 to node 5: refuse out-of-range indices first
+            bad = np.flatnonzero(((tets < 0) | (tets >= len(nodes))).any(axis=1))
+            if len(bad):
+                t = int(bad[0])
+                v = next(int(x) for x in tets[t] if x < 0 or x >= len(nodes))
+                raise ValueError("Mesh: tetrahedron %d refers to node %d but the mesh has %d nodes (indices run "
+                                 "from 0)" % (t, v, len(nodes)))
         self.nodes = nodes
         self.tets = np.ascontiguousarray(tets, dtype=np.int32)
         if check:
@@ -117,11 +132,60 @@ def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     (though equal odd counts keep each face's mass centre at its centre by
     the half-turn symmetry).  Offsets of the bottom face's mass centre for
     2..9 cells: doc/hard_cases.md.  Prefer even counts for drop tests."""
-    size = np.broadcast_to(np.asarray(size, dtype=float), (3,))
-    cells = np.broadcast_to(np.asarray(cells, dtype=int), (3,))
-    nodes, tets = _core.boxMesh(int(cells[0]), int(cells[1]), int(cells[2]),
-                                float(size[0]), float(size[1]), float(size[2]), int(tetsPerCell))
+    size = _threeNumbers(size, "size", "a finite number > 0 or 3 of them (x, y, z) [m]")
+    if not np.all(np.isfinite(size) & (size > 0)):
+        raise ValueError("boxMesh: size must be a finite number > 0 or 3 of them (x, y, z) [m], got %s"
+                         % "x".join("%g" % v for v in size))
+    cells = _threeNumbers(cells, "cells", "an integer >= 1 or 3 of them (cells along x, y, z)", integral=True)
+    if not np.all(cells >= 1):
+        raise ValueError("boxMesh: cells must be integers >= 1, got %s" % "x".join("%d" % c for c in cells))
+    if not (_isInteger(tetsPerCell) and int(tetsPerCell) in (5, 6, 12)):
+        raise ValueError("boxMesh: tetsPerCell must be 5, 6 or 12, got %r" % (tetsPerCell,))
+    tetsPerCell = int(tetsPerCell)
+    nx, ny, nz = (int(c) for c in cells)
+    nNodes = (nx + 1) * (ny + 1) * (nz + 1) + (nx * ny * nz if tetsPerCell == 12 else 0)
+    nTets = nx * ny * nz * tetsPerCell
+    if max(nNodes, nTets) > 2**31 - 2:
+        raise ValueError("boxMesh: cells=%dx%dx%d with tetsPerCell=%d gives %d nodes and %d tetrahedra, beyond the "
+                         "32-bit indices QDEM uses (2^31 - 1); use fewer cells" % (nx, ny, nz, tetsPerCell, nNodes,
+                                                                                nTets))
+    cellVolume = float(size[0] / nx) * float(size[1] / ny) * float(size[2] / nz)  # Python floats: inf, no warning
+    if not (np.isfinite(cellVolume) and cellVolume / tetsPerCell > 1e-290 and cellVolume < 1e290):
+        raise ValueError("boxMesh: size %s with cells %dx%dx%d gives cells of volume %g, beyond the range of "
+                         "floating point volumes and masses; give the size in metres"
+                         % ("x".join("%g" % v for v in size), nx, ny, nz, cellVolume))
+    nodes, tets = _core.boxMesh(nx, ny, nz, float(size[0]), float(size[1]), float(size[2]), tetsPerCell)
     return Mesh(nodes, tets, check=False)
+
+
+def _isInteger(v):
+    """An int, a NumPy integer or a float with no fraction; not a bool."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        return False
+    return bool(np.isfinite(float(v))) and float(v).is_integer()
+
+
+def _threeNumbers(value, name, what, integral=False):
+    """boxMesh's size / cells: one number (the same along x, y, z) or three."""
+    vals = None
+    if not isinstance(value, (str, bytes)):
+        try:
+            a = np.asarray(value, dtype=object)
+            if a.ndim == 0:
+                a = np.array([value] * 3, dtype=object)
+            if a.shape == (3,) and all(isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+                                       for v in a):
+                vals = a
+        except (TypeError, ValueError):
+            vals = None
+    if vals is None:
+        raise ValueError("boxMesh: %s must be %s, got %r" % (name, what, value))
+    if integral:
+        if not all(_isInteger(v) for v in vals):
+            raise ValueError("boxMesh: %s must be %s, got %r (no fractions: a count is not rounded)"
+                             % (name, what, value))
+        return np.array([int(v) for v in vals], dtype=object)
+    return np.array([float(v) for v in vals], dtype=float)
 
 
 # Volume cells of meshio other than linear tetrahedra (meshio's CellBlock.dim

@@ -326,3 +326,59 @@ def test_material_keeps_numpy_numbers_as_floats():
     m = qdem.QdemMat(young=np.float32(1e6), density=np.int64(1000), poisson=0.25)
     assert type(m.young) is float and type(m.density) is float and m.young == 1e6
     json.dumps(m.dict())  # what O.save stores
+
+
+@pytest.mark.parametrize("args, words", [
+    (((1, 1, 1), (2.7, 2, 2)), "cells must be an integer >= 1 or 3 of them"),
+    (((1, 1, 1), (2, 2, 2), 6.9), "tetsPerCell must be 5, 6 or 12, got 6.9"),
+    (((1, 1, 1), (2, 2, 2), True), "tetsPerCell must be 5, 6 or 12"),
+    (((1, 1, 1), (True, 2, 2)), "cells must be an integer"),
+    (((1, 1, 1), "222"), "cells must be an integer"),
+    (((1, 1, 1), (0, 2, 2)), "cells must be integers >= 1, got 0x2x2"),
+    (((float("inf"), 1, 1), (2, 2, 2)), "size must be a finite number > 0"),
+    (((float("nan"), 1, 1), (2, 2, 2)), "size must be a finite number > 0"),
+    (((-1, 1, 1), (2, 2, 2)), "size must be a finite number > 0"),
+    (((1, 1), (2, 2, 2)), "size must be a finite number > 0 or 3 of them"),
+    (("1", 1, 1), "size must be"),
+    (((1e300,) * 3, (2, 2, 2)), "cells of volume inf, beyond the range"),
+    (((1e-300,) * 3, (2, 2, 2)), "cells of volume 0, beyond the range"),
+    (((1, 1, 1), (2**31, 1, 1)), "beyond the 32-bit indices"),
+    (((1, 1, 1), (2**32 + 2, 1, 1)), "beyond the 32-bit indices"),
+    (((1, 1, 1), (1300, 1300, 1300)), "beyond the 32-bit indices"),
+])
+def test_boxmesh_checks_its_arguments(args, words):
+    """Before: cells=2.7 and tetsPerCell=6.9 were truncated silently, size inf gave
+    infinite nodes, 1e300 NaN volumes, 2**31 cells a raw pybind TypeError."""
+    with pytest.raises(ValueError) as e:
+        qdem.boxMesh(*args)
+    assert words in str(e.value) and "boxMesh" in str(e.value)
+
+
+def test_boxmesh_takes_integral_and_numpy_counts():
+    a = qdem.boxMesh((1, 1, 1), (2, 2, 2), 6)
+    for cells, tpc in (((2.0, 2, 2), 6.0), (np.array([2, 2, 2]), np.int64(6)), (2, 6), (np.int32(2), 6)):
+        b = qdem.boxMesh(np.array([1.0, 1, 1]), cells, tpc)
+        assert np.array_equal(a.nodes, b.nodes) and np.array_equal(a.tets, b.tets)
+    assert qdem.boxMesh(2.0, 1).bounds()[1].tolist() == [1, 1, 1]
+
+
+def test_mesh_refuses_indices_that_would_wrap_to_32_bits():
+    """Before: tets + 2**32 (int64) wrapped through astype(int32) back onto valid nodes."""
+    m = _cube()
+    for tets in (m.tets.astype(np.int64) + 2**32, m.tets.astype(np.uint64) + 2**31):
+        with pytest.raises(ValueError, match=r"tetrahedron 0 refers to node \d{10} but the mesh has 27 nodes"):
+            qdem.Mesh(m.nodes, tets)
+        with pytest.raises(ValueError, match="refers to node"):
+            qdem.Mesh(m.nodes, tets, check=False)
+    assert qdem.Mesh(m.nodes, m.tets.astype(np.uint64)).nTets == m.nTets
+    with pytest.raises(ValueError, match="real coordinates"):
+        qdem.Mesh(m.nodes.astype(complex), m.tets)
+
+
+def test_mesh_out_of_floating_point_range_is_named():
+    """Before: a mesh in units 1e200 times too large was refused as 'node 0 belongs to no tetrahedron'."""
+    m = _cube()
+    w = qdem.World()
+    with pytest.raises(ValueError, match="node 0 gets mass .*out of floating point range"):
+        qdem.addPiece(qdem.Mesh(m.nodes * 1e200, m.tets, check=False), rubber(), world=w)
+    _untouched(w)
