@@ -1,6 +1,7 @@
 #include "BoxMesh.hpp"
 
 #include <array>
+#include <cmath>
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
@@ -115,10 +116,17 @@ void twelveCell(TetMesh& m, const Grid& g, int i, int j, int k, int32_t centre) 
 TetMesh boxMesh(int nx, int ny, int nz, double lx, double ly, double lz, int tetsPerCell) {
     if (nx < 1 || ny < 1 || nz < 1)
         throw InputError(cat("boxMesh: cell counts must be >= 1, got ", nx, "x", ny, "x", nz));
-    if (!(lx > 0 && ly > 0 && lz > 0))
-        throw InputError(cat("boxMesh: sizes must be > 0, got ", lx, "x", ly, "x", lz));
+    if (!(lx > 0 && ly > 0 && lz > 0) || !std::isfinite(lx) || !std::isfinite(ly) || !std::isfinite(lz))
+        throw InputError(cat("boxMesh: sizes must be finite and > 0, got ", lx, "x", ly, "x", lz));
     if (tetsPerCell != 5 && tetsPerCell != 6 && tetsPerCell != 12)
         throw InputError(cat("boxMesh: tetsPerCell must be 5, 6 or 12, got ", tetsPerCell));
+    {  // node ids are int32 (and Grid::id computes in int)
+        const double cells = double(nx) * ny * nz;
+        const double nodes = double(nx + 1.0) * (ny + 1.0) * (nz + 1.0) + (tetsPerCell == 12 ? cells : 0.0);
+        if (nodes > 2147483646.0 || cells * tetsPerCell > 2147483646.0)
+            throw InputError(cat("boxMesh: ", nx, "x", ny, "x", nz, " cells give ", nodes, " nodes and ",
+                                 cells * tetsPerCell, " tetrahedra, beyond 32-bit indices; use fewer cells"));
+    }
     const Grid g{nx, ny, nz};
     TetMesh m;
     const std::size_t nGrid = static_cast<std::size_t>(nx + 1) * (ny + 1) * (nz + 1);

@@ -48,12 +48,20 @@ constexpr double kFeatureAngleDeg = 60.0;
 // estimate below is about twice the real count, and CGAL needs about 0.45 kB
 // and 70 us per tet (unit cube, cellSize 0.025: 276k tets, 120 MB, 20 s).
 constexpr double kMaxEstimatedTets = 2.0e7;
+// A body thinner than about 0.4 surface cells comes out of Mesh_3 with its
+// opposite faces merged (a non-manifold mesh, after minutes for a large
+// plate): refused at once below this fraction of the surface cell size.  The
+// thickness is estimated as 2 x volume / area (a plate's thickness; half a
+// rod's diameter; a third of a cube's side).
+constexpr double kMinThicknessPerCell = 0.2;
 
 struct Validated {
     std::vector<Point> points;                     // used vertices only
     std::vector<int32_t> inputIndex;               // input index of each point
     std::vector<std::array<std::size_t, 3>> tris;  // into points, input order
     double volume = 0;                             // enclosed volume (absolute)
+    double area = 0;                               // surface area
+    double extent = 0;                             // largest side of the bounding box
 };
 
 void checkArguments(const std::vector<double>& vertices, const std::vector<int32_t>& triangles, double cellSize,
@@ -228,6 +236,12 @@ Polyhedron makePolyhedron(Validated& s) {
         vol6 += a * CGAL::cross_product(b, d);
     }
     s.volume = std::fabs(vol6) / 6.0;
+    s.area = 0;
+    for (const auto& c : s.tris)
+        s.area += std::sqrt(CGAL::cross_product(s.points[c[1]] - s.points[c[0]], s.points[c[2]] - s.points[c[0]])
+                                .squared_length()) /
+                  2.0;
+    s.extent = std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(), box.zmax() - box.zmin()});
     return poly;
 }
 
@@ -278,6 +292,14 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
         Polyhedron poly = makePolyhedron(soup);
         if (!(soup.volume > 0))
             throw InputError("meshClosedSurface: the surface encloses no volume");
+        const double thickness = 2.0 * soup.volume / soup.area;
+        if (thickness < kMinThicknessPerCell * skin && soup.extent > skin)
+            throw InputError(cat("meshClosedSurface: the body is too thin for ",
+                                 surfaceSize > 0 ? "surfaceSize " : "cellSize ", skin, ": it is about ", thickness,
+                                 " thick (2 x volume / surface area), and tetrahedra of that size cannot fit "
+                                 "between its opposite faces (Mesh_3 would merge them into a non-manifold mesh). "
+                                 "Use a cellSize (and surfaceSize) of at most about 2 x the thickness, here <= ",
+                                 2.0 * thickness, ", or mesh a plate as qdem.boxMesh with one or more cells across"));
         // A regular tet of circumradius R has volume 8 R^3 / (9 sqrt 3); four
         // times that density is about twice what Mesh_3 really produces.
         const double estimate = 4.0 * soup.volume / (0.513 * std::pow(std::min(cellSize, skin), 3));

@@ -25,6 +25,29 @@ int World::addPiece(const TetMesh& mesh, int material) {
     checkMesh(mesh);
     checkOnePart(mesh);  // parts of one piece would pass through each other
     const Material& mat = materials[material];
+    // Every node needs mass: checked before anything changes, so that a
+    // refused mesh leaves the world as it was (no hidden nodes).
+    {
+        std::vector<double> m(mesh.nNodes(), 0.0);
+        for (std::size_t e = 0; e < mesh.nTets(); ++e) {
+            const int32_t* c = &mesh.tets[4 * e];
+            const double V = edgeMatrix(&mesh.nodes[3 * c[0]], &mesh.nodes[3 * c[1]], &mesh.nodes[3 * c[2]],
+                                        &mesh.nodes[3 * c[3]])
+                                 .determinant() /
+                             6.0;
+            for (int k = 0; k < 4; ++k) m[c[k]] += mat.density * V / 4.0;
+        }
+        std::vector<char> used(mesh.nNodes(), 0);
+        for (const int32_t v : mesh.tets) used[v] = 1;
+        for (std::size_t i = 0; i < m.size(); ++i) {
+            if (!used[i])
+                throw InputError(cat("addPiece: node ", i, " belongs to no tetrahedron (zero mass); remove unused nodes"));
+            if (!(m[i] > 0) || !std::isfinite(m[i]))
+                throw InputError(cat("addPiece: node ", i, " gets mass ", m[i], " (density ", mat.density,
+                                     " times its tetrahedra's volume): coordinates or density out of floating "
+                                     "point range; give the mesh in metres and the density in kg/m^3"));
+        }
+    }
 
     PieceInfo p;
     p.material = material;
@@ -76,9 +99,6 @@ int World::addPiece(const TetMesh& mesh, int material) {
         p.volume += V;
     }
     p.mass = mat.density * p.volume;
-    for (int32_t i = 0; i < nn; ++i)
-        if (!(mass[n0 + i] > 0))
-            throw InputError(cat("addPiece: node ", i, " belongs to no tetrahedron (zero mass); remove unused nodes"));
 
     // Surface in global ids.
     for (auto& v : s.triangles) v += n0;

@@ -8,6 +8,7 @@
 
 #include "Arrays.hpp"
 #include "core/Errors.hpp"
+#include "core/Format.hpp"
 #include "world/World.hpp"
 
 namespace py = pybind11;
@@ -103,6 +104,17 @@ void bindWorld(py::module_& m) {
                 return w.addPiece(mesh, material);
             },
             py::arg("nodes"), py::arg("tets"), py::arg("material"))
+        .def(
+            "removeLastMaterial",
+            [](World& w) {
+                if (w.materials.empty()) throw InputError("removeLastMaterial: the world has no material");
+                const int last = static_cast<int>(w.materials.size()) - 1;
+                for (const auto& p : w.pieces)
+                    if (p.material == last)
+                        throw InputError(cat("removeLastMaterial: material ", last, " is used by a piece"));
+                w.materials.pop_back();
+            },
+            "Forget the last material added, when no piece uses it (addPiece undoing a refused piece).")
         .def("setObstacles", &World::setObstacles)
         .def(
             "setObstacleStates",

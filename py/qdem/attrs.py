@@ -1,12 +1,21 @@
 """YADE-style attribute classes: keyword construction, a docstring per attribute,
 and a clear error for an unknown keyword (YADE users expect ``FrictMat(young=...)``)."""
+import numbers
+
+import numpy as np
 
 
 class Attr:
-    """One documented attribute: default value, docstring, optional validator."""
+    """One documented attribute: default value, docstring, optional validator
+    (``check(value)`` returns None or what the value must be) and conversion
+    applied to an accepted value (``convert``: e.g. int, so that a NumPy
+    integer is kept as a plain int, which json and YADE's saves take).  A
+    validator made by ``integer``, ``number`` or ``boolean`` brings its own
+    conversion."""
 
-    def __init__(self, default, doc, check=None):
+    def __init__(self, default, doc, check=None, convert=None):
         self.default, self.doc, self.check = default, doc, check
+        self.convert = convert if convert is not None else getattr(check, "convert", None)
         self.name = None
 
     def __set_name__(self, owner, name):
@@ -23,6 +32,8 @@ class Attr:
             msg = self.check(value)
             if msg:
                 raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, msg))
+            if self.convert is not None:
+                value = self.convert(value)
         obj.__dict__[self.name] = value
 
 
@@ -77,20 +88,70 @@ class AttrObject:
         return "%s(%s)" % (type(self).__name__, ", ".join("%s=%r" % kv for kv in self.dict().items()))
 
 
-def positive(v):
-    return None if _isnum(v) and v > 0 else "must be a number > 0"
-
-
-def nonNegative(v):
-    return None if _isnum(v) and v >= 0 else "must be a number >= 0"
-
-
 def _isnum(v):
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
+    """A finite real number: int, float or a NumPy scalar of them; not a bool,
+    a string (float('1e6') would pass), a complex number or an array."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
         return False
+    f = float(v)
     return f == f and abs(f) != float("inf")
+
+
+def _isint(v):
+    """An integer: int or NumPy integer, or a float with no fraction (10.0); not a bool."""
+    return _isnum(v) and float(v).is_integer()
+
+
+def number(lo=None, hi=None, loOpen=False, hiOpen=False):
+    """Validator of a finite real number in [lo, hi] (open ends with loOpen /
+    hiOpen; None: unbounded); the value is kept as a float."""
+    def check(v):
+        if _isnum(v):
+            f = float(v)
+            if ((lo is None or (f > lo if loOpen else f >= lo)) and (hi is None or (f < hi if hiOpen else f <= hi))):
+                return None
+        return "must be a number" + _range(lo, hi, loOpen, hiOpen)
+    check.convert = float
+    return check
+
+
+def integer(lo=None, hi=None, extra=""):
+    """Validator of an integer in [lo, hi] (int, NumPy integer or a float with
+    no fraction; not a bool); the value is kept as an int.  ``extra``: what
+    the values mean, appended to the message."""
+    def check(v):
+        if _isint(v) and (lo is None or v >= lo) and (hi is None or v <= hi):
+            return None
+        return "must be an integer" + _range(lo, hi, False, False) + extra
+    check.convert = int
+    return check
+
+
+def _range(lo, hi, loOpen, hiOpen):
+    def f(x):
+        return str(x) if isinstance(x, int) else "%g" % x
+    if lo is not None and hi is not None:
+        return " in %s%s, %s%s" % ("(" if loOpen else "[", f(lo), f(hi), ")" if hiOpen else "]")
+    if lo is not None:
+        return " %s %s" % (">" if loOpen else ">=", f(lo))
+    if hi is not None:
+        return " %s %s" % ("<" if hiOpen else "<=", f(hi))
+    return ""
+
+
+def boolean(v):
+    """Validator of a flag: True or False (NumPy bools and the integers 0 and 1
+    too, as YADE scripts write them); a string such as 'no' is refused, as
+    it would count as True."""
+    if isinstance(v, (bool, np.bool_)) or (isinstance(v, numbers.Integral) and v in (0, 1)):
+        return None
+    return "must be True or False"
+
+
+boolean.convert = bool
+
+positive = number(0, loOpen=True)
+nonNegative = number(0)
 
 
 class WorldSetting(Attr):
@@ -130,6 +191,9 @@ class WorldSetting(Attr):
                 raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, d["rule"]))
             value = float(value)
         else:
+            msg = boolean(value)
+            if msg:
+                raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, msg))
             value = bool(value)
         setattr(obj.world.core, d["name"], value)
 

@@ -18,7 +18,7 @@ from yade import O, PyRunner
 
 from . import _core, lifecycle, mpyglue, parallel, setupcheck, yadeglue
 from .spheres import SphereCoupling
-from .attrs import Attr, AttrObject, WorldSetting, documented, worldSettings
+from .attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
 from .yadeclass import EngineMeta
 from .world import FollowsDefaultWorld
 
@@ -50,28 +50,31 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     back (law='saintVenantKirchhoff') stops the run with qdem.StabilityError."""
 
     couple = Attr(True, "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again "
-                        "whenever the number of bodies changes).")
+                        "whenever the number of bodies changes).", boolean)
     checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
-                         "(raises qdem.StabilityError naming the limit).")
+                         "(raises qdem.StabilityError naming the limit).", boolean)
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
                             "checkDt) check that O.dt is below the stable step of the current, strained "
                             "shape (0 = never).  Non-finite positions and velocities are caught every "
-                            "step regardless: the step that meets one raises qdem.StabilityError.")
-    progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).")
+                            "step regardless: the step that meets one raises qdem.StabilityError.",
+                        integer(0, extra=" (0 = never)"))
+    progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).",
+                          integer(0, extra=" (0 = silent)"))
     threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
-                      "own count either way.")
+                      "own count either way.", integer(0, extra=" (0 = YADE's own count)"))
     spheres = Attr(True, "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): "
-                         "needs an InsertionSortCollider in O.engines, before this engine.")
+                         "needs an InsertionSortCollider in O.engines, before this engine.", boolean)
     sphereMask = Attr(-1, "groupMask of the proxy bodies that find spheres near pieces: only spheres "
-                          "whose mask shares a bit with it touch QDEM pieces (-1 = all).")
+                          "whose mask shares a bit with it touch QDEM pieces (-1 = all).",
+                      integer(-2**31, 2**31 - 1, extra=" (a YADE groupMask; -1 = all)"))
     gatherPeriod = Attr(1, "Under MPI (doc/parallel.md): every this many steps every rank learns every node's "
                            "position, velocity and force, so that scripts, recorders and checks read them as "
                            "serially (0 = only before checks).  Larger is faster; piece arrays read between "
                            "gathers raise an error instead of giving stale values.  No effect on one process.",
-                        lambda v: None if v >= 0 else "must be >= 0")
+                        integer(0, extra=" (0 = only before checks)"))
     sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
                              "larger = fewer proxy moves (each forces a collider run), more spheres read.",
-                        lambda v: None if 0.01 <= v <= 10 else "must lie in [0.01, 10]")
+                        number(0.01, 10))
     # The world settings (viscosity, damping, friction, contact kinds, sleeping, ...):
     # declared once in pkg/world/Settings.hpp; read and written on the world directly.
     worldSettings(locals())

@@ -1,29 +1,15 @@
 """QdemMat: the material of deformable QDEM pieces (defaults: seed paper, Table 1)."""
-from .attrs import Attr, AttrObject, positive, nonNegative
+from .attrs import Attr, AttrObject, number, positive, nonNegative
 
-
-def _poisson(v):
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return "must be a number"
-    return None if -1.0 < v < 0.5 else "must lie in (-1, 0.5)"
-
+_poisson = number(-1.0, 0.5, loOpen=True, hiOpen=True)
+_restitution = number(0.0, 1.0, loOpen=True)
 
 # Elastic laws of the elements (pkg/element/laws/, doc/formulation.md "Material laws").
 LAWS = {"stableNeoHookean": 0, "saintVenantKirchhoff": 1}
 
 
 def _law(v):
-    return None if v in LAWS else "must be one of %s" % ", ".join(repr(k) for k in LAWS)
-
-
-def _restitution(v):
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return "must be a number"
-    return None if 0.0 < v <= 1.0 else "must lie in (0, 1]"
+    return None if isinstance(v, str) and v in LAWS else "must be one of %s" % ", ".join(repr(k) for k in LAWS)
 
 
 class QdemMat(AttrObject):

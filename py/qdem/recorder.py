@@ -7,7 +7,7 @@ import numpy as np
 from yade import PyRunner
 
 from . import lifecycle, parallel
-from .attrs import Attr, AttrObject, documented
+from .attrs import Attr, AttrObject, documented, integer, number
 from .stress import vonMises
 from .vtu import TENSOR6, writePvd, writeVtu
 from .world import FollowsDefaultWorld
@@ -58,8 +58,18 @@ def writeFrame(world, path):
              componentNames={"stress": TENSOR6, "displacement": "XYZ", "deformation": "XYZ", "velocity": "XYZ"})
 
 
-def _period(v):
-    return None if isinstance(v, (int, float)) and v >= 0 and math.isfinite(v) else "must be a number >= 0"
+def _fileBase(v):
+    if not isinstance(v, (str, os.PathLike)) or isinstance(os.fspath(v), bytes):
+        return "must be a path prefix (a string such as 'out/qdem-'), not %s" % type(v).__name__
+    if not os.fspath(v):
+        return ("must not be empty: it prefixes the frame files (an empty one writes bare step numbers into the "
+                "current directory); use e.g. 'out/qdem-' or 'frames/'")
+    if "\0" in os.fspath(v):
+        return "must not contain a NUL character"
+    return None
+
+
+_fileBase.convert = os.fspath
 
 
 @documented
@@ -72,10 +82,12 @@ class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     written before the first step.  ``frames`` lists (time, file) so far."""
 
     fileBase = Attr("out/qdem-", "Path prefix of the frames; the .pvd collection is fileBase + '.pvd', "
-                                 "a trailing '-', '_' or '.' dropped (out/qdem-000100.vtu, out/qdem.pvd).")
+                                 "a trailing '-', '_' or '.' dropped (out/qdem-000100.vtu, out/qdem.pvd); "
+                                 "a directory ('out/run/') gets out/run/000100.vtu and out/run/frames.pvd.",
+                    _fileBase)
     iterPeriod = Attr(1000, "A frame every this many steps (at step counts that are multiples of it); "
-                            "0 = none by step count.", _period)
-    virtPeriod = Attr(0.0, "A frame every this much simulated time [s] (0 = none by time).", _period)
+                            "0 = none by step count.", integer(0, extra=" (0 = none by step count)"))
+    virtPeriod = Attr(0.0, "A frame every this much simulated time [s] (0 = none by time).", number(0))
 
     _public = ("record", "pvdPath", "dict")
     _yadeAttrs = ("label", "dead")
@@ -143,9 +155,14 @@ class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.gatherAll()  # collective: every rank records at the same steps
         if parallel.isWriter():
             d = os.path.dirname(self.fileBase)
-            if d:
-                os.makedirs(d, exist_ok=True)
-            writeFrame(self.world, path)
+            try:
+                if d:
+                    os.makedirs(d, exist_ok=True)
+                writeFrame(self.world, path)
+            except OSError as e:  # a file where the directory should be, no permission, disk full
+                raise type(e)(e.errno, "VtkRecorder: cannot write the frame %s (fileBase=%r): %s; choose a "
+                                       "fileBase in a directory you can write to"
+                              % (path, self.fileBase, e.strerror or e)) from None
         self.frames = [f for f in self.frames if f[1] != os.path.basename(path)]  # a rewritten step replaces its frame
         self.frames.append((core.time, os.path.basename(path)))
         self._last = (core.iter, core.time)
@@ -155,6 +172,8 @@ class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     def pvdPath(self):
         """The ParaView collection: fileBase + '.pvd' (trailing '-', '_' or '.' dropped)."""
         base = self.fileBase[:-1] if self.fileBase.endswith((".", "-", "_")) else self.fileBase
+        if not os.path.basename(base):  # a directory: out/run/ -> out/run/frames.pvd, not a hidden out/run/.pvd
+            base = os.path.join(base, "frames")
         return base + ".pvd"
 
 

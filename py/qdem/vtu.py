@@ -6,6 +6,7 @@ name and renamed, so an interrupted run never leaves a truncated frame.
 Symmetric tensors carry six components named in ParaView's order (XX, YY, ZZ,
 XY, YZ, XZ), so its Tensor filters and component menus show the right ones."""
 import os
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -99,6 +100,7 @@ def readVtu(path):
 
 def writePvd(path, frames):
     """Write a ParaView collection: frames = [(time, relative vtu path), ...]."""
-    rows = "".join('<DataSet timestep="%.17g" part="0" file="%s"/>\n' % (t, f) for t, f in frames)
+    # quoteattr: a file name with &, <, " or ' would otherwise break the XML
+    rows = "".join('<DataSet timestep="%.17g" part="0" file=%s/>\n' % (t, quoteattr(f)) for t, f in frames)
     atomicWrite(path, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n<Collection>\n'
                       + rows + "</Collection>\n</VTKFile>\n")

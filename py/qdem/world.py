@@ -9,25 +9,84 @@ from .mesh import asMesh
 from .piece import Piece
 
 
+def _finiteVector(who, name, value, n=3, what="3 numbers (x, y, z)"):
+    """``value`` as a float array of ``n`` finite numbers, else a ValueError
+    naming the argument and what it must be (a Vector3, tuple, list or array)."""
+    if isinstance(value, (str, bytes)) or value is None or isinstance(value, bool):
+        arr = None
+    else:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            arr = None
+    if arr is None or arr.shape != (n,):
+        raise ValueError("%s: %s must be %s, got %r" % (who, name, what, value))
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("%s: %s=%s is not finite" % (who, name, tuple(arr.tolist())))
+    return arr
+
+
+def _finiteNumber(who, name, value):
+    if isinstance(value, (str, bytes, bool)) or np.ndim(value) != 0:
+        raise ValueError("%s: %s must be a number, got %r" % (who, name, value))
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError("%s: %s must be a number, got %r" % (who, name, value)) from None
+    if not math.isfinite(v):
+        raise ValueError("%s: %s=%r is not finite" % (who, name, v))
+    return v
+
+
+_ORI_FORMS = "a YADE Quaternion, an (axis, angle) pair such as ((0, 0, 1), 0.5) or a proper 3x3 rotation matrix"
+
+
 def rotationMatrix(ori):
-    """3x3 rotation from None, a YADE Quaternion, an (axis, angle) pair or a 3x3 matrix."""
+    """3x3 rotation from None, a YADE Quaternion (normalised), an (axis, angle)
+    pair (tuple or list; the axis need not be a unit vector) or a 3x3 rotation
+    matrix (orthonormal to 1e-9, determinant +1)."""
+    who = "addPiece"
     if ori is None:
         return np.eye(3)
     if hasattr(ori, "toAxisAngle"):  # YADE / minieigen Quaternion
-        axis, angle = ori.toAxisAngle()
+        q = _finiteVector(who, "ori (Quaternion)", [ori[k] for k in range(4)], 4, "a finite Quaternion")
+        if not np.linalg.norm(q) > 0:
+            raise ValueError("%s: ori=Quaternion(0,0,0,0) is no rotation (zero norm); use Quaternion.Identity or "
+                             "ori=None for none" % who)
+        axis, angle = ori.normalized().toAxisAngle()
         return _axisAngle(np.array([axis[0], axis[1], axis[2]], dtype=float), float(angle))
-    if isinstance(ori, tuple) and len(ori) == 2 and np.ndim(ori[1]) == 0:
-        return _axisAngle(np.asarray(ori[0], dtype=float), float(ori[1]))
-    R = np.asarray(ori, dtype=float)
-    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
-        raise ValueError("ori must be a Quaternion, (axis, angle) or a proper 3x3 rotation matrix")
+    if isinstance(ori, (str, bytes)):
+        raise ValueError("%s: ori must be %s, got %r" % (who, _ORI_FORMS, ori))
+    if isinstance(ori, (tuple, list)) and len(ori) == 2:
+        axisArg, angleArg = ori
+        if np.ndim(axisArg) == 0 and np.ndim(angleArg) == 1:
+            raise ValueError("%s: ori=(axis, angle) takes the axis first, got %r; write ori=(%r, %r)"
+                             % (who, ori, angleArg, axisArg))
+        axis = _finiteVector(who, "ori's axis", axisArg, 3, "3 numbers (ori=(axis, angle))")
+        angle = _finiteNumber(who, "ori's angle", angleArg)
+        return _axisAngle(axis, angle)
+    try:
+        R = np.asarray(ori, dtype=float)
+    except (TypeError, ValueError):
+        R = None
+    if R is None or R.shape != (3, 3):
+        raise ValueError("%s: ori must be %s, got %r" % (who, _ORI_FORMS, ori))
+    if not np.all(np.isfinite(R)):
+        raise ValueError("%s: ori: the rotation matrix is not finite" % who)
+    err = float(np.abs(R @ R.T - np.eye(3)).max())
+    if not err <= 1e-9:
+        raise ValueError("%s: ori: the 3x3 matrix is not a rotation (R R^T differs from the identity by %.3g; "
+                         "it must be orthonormal to 1e-9, no scaling)" % (who, err))
+    if np.linalg.det(R) < 0:
+        raise ValueError("%s: ori: the 3x3 matrix is a reflection (determinant -1), not a rotation; a mirrored "
+                         "piece would be inside out" % who)
     return R
 
 
 def _axisAngle(axis, angle):
     n = np.linalg.norm(axis)
     if not n > 0:
-        raise ValueError("ori: rotation axis must be non-zero")
+        raise ValueError("addPiece: ori's rotation axis must be non-zero")
     k = axis / n
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
@@ -53,15 +112,16 @@ class World:
         """Add a deformable piece: ``mesh`` (Mesh, (nodes, tets) or file) is placed
         with its origin at ``pos`` and rotated by ``ori``; it starts with rigid
         velocity ``vel`` + ``angVel`` x (x - pos).  Returns a Piece."""
+        # Every argument is checked before anything is added: a refused call
+        # leaves the world (and the material) as they were.
         mesh = asMesh(mesh)
         material = material if material is not None else QdemMat()
         if not isinstance(material, QdemMat):
             raise ValueError("addPiece: material must be a qdem.QdemMat, got %r" % type(material).__name__)
         R = rotationMatrix(ori)
-        pos = np.asarray(pos, dtype=float).reshape(3)
-        for name, val in (("vel", vel), ("angVel", angVel)):
-            if not np.all(np.isfinite(np.asarray(val, dtype=float))):
-                raise ValueError("addPiece: %s=%s is not finite" % (name, tuple(np.ravel(val))))
+        pos = _finiteVector("addPiece", "pos", pos)
+        vel = _finiteVector("addPiece", "vel", vel)
+        angVel = _finiteVector("addPiece", "angVel", angVel)
         nodes, tets = mesh.nodes, mesh.tets
         oldOf = np.arange(len(nodes), dtype=np.int32)
         if reorder:
@@ -69,9 +129,19 @@ class World:
         x = nodes @ R.T + pos
         if not np.all(np.isfinite(x)):
             raise ValueError("addPiece: pos/ori give non-finite node coordinates")
-        pid = self.core.addPiece(x, tets, self.materialIndex(material))
+        v = vel + np.cross(angVel, x - pos)
+        newMaterial = id(material) not in self._materialIndex
+        wasInUse = material.__dict__.get("_inUse", False)
+        index = self.materialIndex(material)
+        try:
+            pid = self.core.addPiece(x, tets, index)
+        except BaseException:
+            if newMaterial:  # the material was registered for this piece alone: forget it
+                del self._materialIndex[id(material)]
+                self.core.removeLastMaterial()
+                material._inUse = wasInUse
+            raise
         p = Piece(self, pid, material, oldOf)
-        v = np.asarray(vel, dtype=float).reshape(3) + np.cross(np.asarray(angVel, dtype=float).reshape(3), x - pos)
         p.vel[:] = v
         self.pieces.append(p)
         return p
