@@ -1,5 +1,7 @@
 """Reading YADE's scene: rigid obstacles (Wall, Box, Facet), gravity, O.forces.
 Only this module touches YADE objects, so the rest of qdem runs without YADE."""
+import math
+
 import numpy as np
 
 from . import _core
@@ -16,6 +18,20 @@ def findGravity(O):
     return (0.0, 0.0, 0.0)
 
 
+def _friction(b):
+    """Coulomb coefficient of body b's material: tan(frictionAngle), as YADE's
+    FrictPhys; -1 (none: the piece's frictionWall alone) for a material without one."""
+    angle = getattr(b.material, "frictionAngle", None)
+    if angle is None:
+        return -1.0
+    angle = float(angle)
+    if not (0.0 <= angle < 0.5 * math.pi):
+        raise ValueError("YADE body %d (%s): its material's frictionAngle = %r rad is not in [0, pi/2): "
+                         "give it the angle in radians, e.g. math.atan(0.5) for a coefficient of 0.5"
+                         % (b.id, type(b.shape).__name__, angle))
+    return math.tan(angle)
+
+
 def scanObstacles(O):
     """Core Obstacle objects for every Wall, Box and Facet body, and their ids."""
     obstacles, ids = [], []
@@ -30,6 +46,7 @@ def scanObstacles(O):
         o.bodyId = b.id
         young = getattr(b.material, "young", None)
         o.young = float(young) if young else 0.0
+        o.friction = _friction(b)
         if kind == 0:
             o.axis, o.sense = int(b.shape.axis), int(b.shape.sense)
         elif kind == 1:
