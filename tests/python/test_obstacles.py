@@ -80,3 +80,51 @@ def test_a_bad_friction_angle_is_refused_naming_the_body(scene):
     with pytest.raises(ValueError, match=r"YADE body %d \(Wall\): its material's frictionAngle = 2.0 rad is not "
                                          r"in \[0, pi/2\)" % bid):
         O.engines[1].stableTimeStep()
+
+
+# --- a facet beside a piece is not inside it ------------------------------------
+
+def _fence(O, gap):
+    """A 0.2 x 0.2 x 0.05 m slab on a floor under a vertical facet (a fence in the
+    plane x = 0.024, between two columns of nodes) whose lower edge is gap above
+    the slab's top (gap < 0: in the slab)."""
+    from yade import Vector3, utils
+    slab = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.05), (8, 8, 2)), rubber(young=1e6, viscosity=50.0),
+                         pos=(0, 0, 0.025 + 0.005))
+    floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
+    z = 0.055 + gap
+    fence = O.bodies.append(utils.facet([Vector3(0.024, -0.3, z), Vector3(0.024, 0.3, z), Vector3(0.024, 0, 0.4)],
+                                        fixed=True))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableTimeStep()
+    return slab, floor, fence
+
+
+def test_a_facet_whose_edge_hangs_just_above_a_piece_is_not_refused(scene):
+    """Its lower edge 3 mm (< r = 5 mm) above the slab: the nodes beyond its
+    plane are below the triangle, not behind it (it was refused as "58 of its
+    194 surface nodes are past its surface, the deepest by 0.0927 m").  The
+    edge is within the contact reach of the top nodes next to it: it presses
+    the slab onto the floor, which carries that and the weight, and holds it
+    by friction against the edge's sideways push."""
+    O = scene
+    slab, floor, fence = _fence(O, 0.003)
+    c0 = slab.centroid()
+    O.run(int(0.3 / O.dt), True)
+    weight = slab.totalMass * 9.81
+    onFloor, onFence = np.array(O.forces.f(floor)), np.array(O.forces.f(fence))
+    assert onFence[2] > weight                                   # pressed down: a contact, not a refusal
+    assert -onFloor[2] == pytest.approx(weight + onFence[2], rel=0.02)
+    assert onFloor[0] == pytest.approx(-onFence[0], rel=0.05)
+    assert np.linalg.norm(slab.centroid() - c0) < 1e-3 and np.abs(slab.vel).max() < 0.01
+
+
+@pytest.mark.parametrize("gap", [-0.003, -0.03])
+def test_a_facet_cutting_into_a_piece_is_still_refused(scene, gap):
+    """The same fence with its edge 3 mm or 3 cm inside the slab: the top nodes
+    beyond x = 0.024 are behind the triangle."""
+    O = scene
+    fence = _fence(O, gap)[2]
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d \(facet\): \d+ of its 194 "
+                                         r"surface nodes are past its surface, the deepest by 0.076 m" % fence):
+        O.engines[1].stepOnce()
