@@ -32,6 +32,26 @@ def _friction(b):
     return math.tan(angle)
 
 
+def _mobility(O, b):
+    """(1/mass, 1/smallest moment of inertia, arm offset) of what YADE moves when body
+    b is pushed: zeros for a fixed body; a term only for free translations or
+    rotations (blockedDOFs); inf for a free one of zero mass or inertia; a clump
+    member's clump, with the distance from the member to the clump's centre."""
+    mover = O.bodies[b.clumpId] if b.isClumpMember else b
+    if mover is None or not mover.dynamic:
+        return 0.0, 0.0, 0.0
+    s = mover.state
+    blocked = s.blockedDOFs
+    invMass = invInertia = 0.0
+    if any(c not in blocked for c in "xyz"):
+        invMass = 1.0 / s.mass if s.mass > 0 else math.inf
+    if any(c not in blocked for c in "XYZ"):
+        inertia = min(s.inertia)
+        invInertia = 1.0 / inertia if inertia > 0 else math.inf
+    arm = float((b.state.pos - s.pos).norm()) if mover is not b else 0.0
+    return invMass, invInertia, arm
+
+
 def scanObstacles(O):
     """Core Obstacle objects for every Wall, Box and Facet body, and their ids."""
     obstacles, ids = [], []
@@ -47,6 +67,7 @@ def scanObstacles(O):
         young = getattr(b.material, "young", None)
         o.young = float(young) if young else 0.0
         o.friction = _friction(b)
+        o.invMass, o.invInertia, o.armOffset = _mobility(O, b)
         if kind == 0:
             o.axis, o.sense = int(b.shape.axis), int(b.shape.sense)
         elif kind == 1:

@@ -128,3 +128,93 @@ def test_a_facet_cutting_into_a_piece_is_still_refused(scene, gap):
     with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d \(facet\): \d+ of its 194 "
                                          r"surface nodes are past its surface, the deepest by 0.076 m" % fence):
         O.engines[1].stepOnce()
+
+
+# --- a dynamic obstacle's mass in the stable step ---------------------------------
+
+def _boxOnBlock(O, rho):
+    """A 0.1 x 0.1 x 0.02 m dynamic YADE box of density rho (2 g at 10 kg/m^3)
+    released 2 mm above a 0.2 x 0.2 x 0.1 m block on the floor."""
+    from yade import FrictMat, utils
+    bm = O.materials.append(FrictMat(young=1e9, poisson=0.3, frictionAngle=0.5, density=rho))
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.1), (4, 4, 2)), rubber(young=1e6, viscosity=100.0),
+                          pos=(0, 0, 0.055))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    box = O.bodies.append(utils.box((0, 0, 0.105 + 0.005 + 0.01 + 0.002), (0.05, 0.05, 0.01), material=bm,
+                                    fixed=False))
+    O.engines = _engines()
+    return block, box
+
+
+def _boxEnergy(O, box):
+    s = O.bodies[box].state
+    w, inertia = np.array(s.angVel), np.array(s.inertia)     # (principal; the box barely turns)
+    return 0.5 * s.mass * s.vel.squaredNorm() + 0.5 * (inertia * w) @ w + s.mass * 9.81 * s.pos[2]
+
+
+@pytest.mark.parametrize("rho", [10.0, 1000.0])
+def test_a_light_dynamic_box_dropped_on_a_block_gains_no_energy(scene, rho):
+    """The stable step counts the box's mass on the node springs: with O.dt =
+    0.8 stableTimeStep() it lands and rests.  (A 2 g box was kicked to 4.9 m/s
+    in one step, 800 times its energy: the dashpots sized for the nodes' mass,
+    and O.dt 30 times the box's limit.)"""
+    O = scene
+    block, box = _boxOnBlock(O, rho)
+    limit = O.engines[1].stableDt()
+    assert "dynamic box (YADE body %d, mass %g kg" % (box, O.bodies[box].state.mass) in limit["limitedBy"]
+    assert limit["obstacle"] == limit["combined"]
+    O.dt = 0.8 * O.engines[1].stableTimeStep()
+    e0 = _boxEnergy(O, box)
+    vmax = 0.0
+    for _ in range(30):
+        O.run(int(0.005 / O.dt), True)
+        vmax = max(vmax, O.bodies[box].state.vel.norm())
+        assert _boxEnergy(O, box) <= e0 + 1e-9
+    assert vmax < 0.25                                           # free fall from 2 mm: 0.2 m/s
+    assert O.bodies[box].state.vel.norm() < 0.01                 # at rest on the block
+    assert O.bodies[box].state.pos[2] == pytest.approx(0.105 + 0.005 + 0.01, abs=1e-3)
+
+
+def test_an_O_dt_above_a_dynamic_box_limit_is_refused_naming_it_and_the_fix(scene):
+    O = scene
+    block, box = _boxOnBlock(O, 10.0)
+    limit = O.engines[1].stableTimeStep()
+    O.dt = 1.05 * limit
+    with pytest.raises(qdem.StabilityError, match=r"O.dt=.* exceeds the stable time step .*limited by the dynamic "
+                                                  r"box \(YADE body %d, mass 0.002 kg.*Lower O.dt, make the body "
+                                                  r"heavier, or fix it \(fixed=True" % box):
+        O.engines[1].stepOnce()
+
+
+def test_a_dynamic_facet_without_mass_is_refused(scene):
+    """utils.facet(..., fixed=False) has no mass: YADE would give it an infinite
+    acceleration (NaN) at its first touch."""
+    from yade import utils
+    O = scene
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, 0.3))
+    f = O.bodies.append(utils.facet([(-1, -1, 0), (1, -1, 0), (0, 1, 0)], fixed=False))
+    O.engines = _engines()
+    assert O.engines[1].stableTimeStep() == 0
+    O.dt = 1e-6
+    with pytest.raises(qdem.StabilityError, match=r"dynamic facet \(YADE body %d, mass 0 kg.*give the body a "
+                                                  r"mass and moment of inertia" % f):
+        O.engines[1].stepOnce()
+
+
+def test_a_dynamic_obstacle_pressed_on_more_springs_than_foreseen_stops_the_run():
+    """Each step checks the springs actually on a dynamic obstacle: a 1 g box
+    pressed 3 mm into a cube on every side it touches, stepped at 100 times its
+    limit, is named with the step that would do."""
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (4, 4, 4)), rubber(radius=0.005))
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId, o.halfExtents = 1, 7, (0.1, 0.1, 0.01)
+    o.invMass, o.invInertia = 1000.0, 0.0
+    w.core.setObstacles([o])
+    w.core.setObstacleStates(np.array([[0, 0, 0.05 + 0.01 + 0.002, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]], dtype=float))
+    limit = w.stableDt()["obstacle"]
+    assert 0 < limit < w.stableDt()["elastic"]
+    w.core.step(0.5 * limit, 1)                                  # below it: steps
+    with pytest.raises(qdem.StabilityError, match=r"the dynamic box \(YADE body 7, mass 0.001 kg\) is touched by "
+                                                  r"25 surface nodes: .* stable time step .* below O.dt"):
+        w.core.step(100 * limit, 1)
