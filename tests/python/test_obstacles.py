@@ -218,3 +218,24 @@ def test_a_dynamic_obstacle_pressed_on_more_springs_than_foreseen_stops_the_run(
     with pytest.raises(qdem.StabilityError, match=r"the dynamic box \(YADE body 7, mass 0.001 kg\) is touched by "
                                                   r"25 surface nodes: .* stable time step .* below O.dt"):
         w.core.step(100 * limit, 1)
+
+
+def test_what_yade_moves_is_what_the_limit_counts(scene):
+    """A fixed body and one with every DOF blocked do not move: no limit.  Free
+    translations only: 1/m alone.  A clump member: its clump's mass and
+    inertia, and its distance from the clump's centre."""
+    from yade import utils
+    from qdem import yadeglue
+    O = scene
+    ids = [O.bodies.append(utils.box((0.3 * i, 0, 1), (0.05, 0.05, 0.01), fixed=(i == 0))) for i in range(4)]
+    O.bodies[ids[1]].state.blockedDOFs = "xyzXYZ"
+    O.bodies[ids[2]].state.blockedDOFs = "XYZ"
+    clump = O.bodies.clump([ids[3], O.bodies.append(utils.box((1.3, 0, 1), (0.05, 0.05, 0.01)))])
+    obstacles = {o.bodyId: o for o in yadeglue.scanObstacles(O)[0]}
+    m, cs = O.bodies[ids[2]].state.mass, O.bodies[clump].state
+    assert (obstacles[ids[0]].invMass, obstacles[ids[0]].invInertia) == (0, 0)
+    assert (obstacles[ids[1]].invMass, obstacles[ids[1]].invInertia) == (0, 0)
+    assert (obstacles[ids[2]].invMass, obstacles[ids[2]].invInertia) == (pytest.approx(1 / m), 0)
+    o = obstacles[ids[3]]
+    assert o.invMass == pytest.approx(1 / cs.mass) and o.invInertia == pytest.approx(1 / min(cs.inertia))
+    assert o.armOffset == pytest.approx((O.bodies[ids[3]].state.pos - cs.pos).norm())
