@@ -1,7 +1,9 @@
 #include "Obstacle.hpp"
 
 #include "Geometry.hpp"
+#include "../core/Format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -41,6 +43,29 @@ void Obstacle::updateDerived() {
             hi = worldVerts[0].cwiseMax(worldVerts[1]).cwiseMax(worldVerts[2]);
             break;
     }
+}
+
+std::string describeDynamic(const Obstacle& o) {
+    const char* kind = o.kind == ObstacleKind::Wall ? "wall" : o.kind == ObstacleKind::Box ? "box" : "facet";
+    std::string what;
+    if (o.invMass > 0) what = cat("mass ", 1 / o.invMass, " kg");
+    else what = "translations blocked";
+    if (o.invInertia > 0) what += cat(", smallest moment of inertia ", 1 / o.invInertia, " kg m^2");
+    if (o.armOffset > 0) what += cat(", in a clump whose centre is ", o.armOffset, " m away");
+    return cat(kind, " (YADE body ", o.bodyId, ", ", what, ")");
+}
+
+double Obstacle::extentRadius() const {
+    switch (kind) {
+        case ObstacleKind::Wall: return std::numeric_limits<double>::infinity();
+        case ObstacleKind::Box: return halfExtents.norm();
+        case ObstacleKind::Facet: {
+            double r = 0;
+            for (const auto& v : localVerts) r = std::max(r, v.norm());
+            return r;
+        }
+    }
+    return std::numeric_limits<double>::infinity();
 }
 
 bool crossedThin(const Obstacle& o, const Vector3d& from, const Vector3d& to) {

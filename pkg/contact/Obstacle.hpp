@@ -3,6 +3,7 @@
 // YADE every step; their reactions are summed here and handed back to YADE
 // through O.forces.
 #pragma once
+#include <string>
 #include <vector>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -17,6 +18,13 @@ struct Obstacle {
     double young = 0;     // the body material's Young modulus; <= 0 means rigid
     double friction = -1; // its Coulomb coefficient (the contact takes the smaller of it and the
                           // piece's frictionWall, ContactModel.hpp); < 0: none, frictionWall alone
+    // How YADE moves the body under the reactions (set by scanObstacles, not
+    // part of the signature): 1/mass when a translation is free, 1/(smallest
+    // principal moment of inertia) when a rotation is free; both 0 for a
+    // fixed body (Body.dynamic false, or every DOF blocked); infinite for a
+    // free DOF of zero mass or inertia.  For a clump member, its clump's, and
+    // armOffset the distance from the member's position to the clump's.
+    double invMass = 0, invInertia = 0, armOffset = 0;
     int axis = 2;         // Wall: normal axis 0/1/2
     int sense = 0;        // Wall: 0 both sides, +1 positive side only, -1 negative side only
     Eigen::Vector3d halfExtents = Eigen::Vector3d::Zero();  // Box
@@ -39,8 +47,22 @@ struct Obstacle {
     Eigen::Vector3d reactionTorque = Eigen::Vector3d::Zero();
 
     void updateDerived();
+    // Does YADE move it under the reactions (StableDt.cpp, ObstaclePhase.cpp)?
+    bool dynamic() const { return invMass > 0 || invInertia > 0; }
+    // Largest distance from pos to a point of its surface (infinite for a wall).
+    double extentRadius() const;
+    // sum of 1/m and r^2/I for a contact force applied at distance r from pos:
+    // the largest acceleration per unit force it gets there (r measured
+    // from the clump's centre for a clump member).
+    double mobilityAt(double r) const {
+        const double arm = r + armOffset;
+        return invMass + (invInertia > 0 ? invInertia * arm * arm : 0.0);
+    }
     Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return vel + angVel.cross(p - pos); }
 };
+
+// "box (YADE body 3, mass 0.002 kg)": a dynamic obstacle in error messages.
+std::string describeDynamic(const Obstacle& o);
 
 // Did a point that moved from `from` to `to` (relative to the obstacle)
 // pass through a thin obstacle's surface: the plane of a two-sided wall, or

@@ -108,6 +108,12 @@ void ObstaclePhase::run(double dt) {
     double* slotShear = slotShear_.data();
     int8_t* slotSide = slotSide_.data();
     double* Fc = w_.contacts.force.data();
+    // Dynamic obstacles: the springs on each (piece, obstacle) pair, per
+    // thread (checkDynamicObstacles).
+    bool anyDynamic = false;
+    for (const Obstacle& o : w_.obstacles) anyDynamic = anyDynamic || o.dynamic();
+    const std::size_t dynStride = anyDynamic ? kDyn * nPairs + 8 : 0;
+    threadDynamic_.assign(static_cast<std::size_t>(nth) * dynStride, 0.0);
     const double regVelocity = w_.settings.frictionRegVelocity;
     const bool frictionOn = w_.settings.frictionOn;
 
@@ -132,6 +138,7 @@ void ObstaclePhase::run(double dt) {
         Through& through = threadThrough_[th];
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
+        double* dyn = anyDynamic ? threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr;
         // Halves of the surface nodes, as the contact sums and the
         // integration split them: each thread meets the force lines it will
         // touch again.  (Chunks dealt round-robin balanced scenes whose floor
@@ -183,10 +190,16 @@ void ObstaclePhase::run(double dt) {
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
                 // Springs scaled by the node's share of the surface area
                 // (surfWeight, World.hpp); the dashpots keep their damping ratio.
-                const PairLaw law = pairLaw(pairConsts[j], M[node]);
+                // Their mass is the node's, reduced with a dynamic obstacle's
+                // at the contact point (1/g: its mobility there), as for two
+                // pieces or a sphere: a node's dashpot on a 2 g box kicked it.
+                // (The regularised friction's implicit drag too.)
+                const double g = o.dynamic() ? o.mobilityAt((hit.point - o.pos).norm()) : 0.0;
+                const double mEff = g > 0 ? M[node] / (1 + M[node] * g) : M[node];
+                const PairLaw law = pairLaw(pairConsts[j], mEff);
                 const double wa = W[s], swa = std::sqrt(wa);
                 const double mu = law.mu;
-                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, regVelocity, M[node]};
+                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, regVelocity, mEff};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
                 const Eigen::Vector3d vo = o.velocityAt(hit.point);
@@ -200,6 +213,17 @@ void ObstaclePhase::run(double dt) {
                 ++nWall;
                 fNode += r.force;
                 double* R = react + 6 * j;
+                if (dyn && o.dynamic()) {
+                    // Its springs and dashpots on the obstacle's mobility at the
+                    // contact point, and on the node's mass.
+                    const double k = std::max(cp.kn, cp.kt), c = std::max(cp.cn, cp.ct);
+                    double* D = dyn + kDyn * j;
+                    D[0] += g * k;
+                    D[1] += g * c;
+                    D[2] = std::max(D[2], k / M[node]);
+                    D[3] = std::max(D[3], c / M[node]);
+                    D[4] += 1;
+                }
                 const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
                 for (int d = 0; d < 3; ++d) {
                     R[d] -= r.force[d];
@@ -226,6 +250,7 @@ void ObstaclePhase::run(double dt) {
     for (const Through& t : threadThrough_)
         if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
     if (first) reportThrough(*first, dt);
+    if (anyDynamic) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)
@@ -240,6 +265,39 @@ void ObstaclePhase::run(double dt) {
         w_.energy.contactDamping += eDamp;
         w_.energy.friction += eSlip;
         w_.energy.boundaryWork += eBound;
+    }
+}
+
+void ObstaclePhase::checkDynamicObstacles(double dt, std::size_t stride) const {
+    const std::size_t nPairs = pieceObstacles_.size();
+    const int nth = static_cast<int>(threadDynamic_.size() / stride);
+    std::vector<double> sum(kDyn * w_.obstacles.size(), 0.0);
+    for (int th = 0; th < nth; ++th)
+        for (std::size_t j = 0; j < nPairs; ++j) {
+            const double* D = &threadDynamic_[th * stride + kDyn * j];
+            double* S = &sum[kDyn * pieceObstacles_[j]];
+            S[0] += D[0], S[1] += D[1], S[4] += D[4];
+            S[2] = std::max(S[2], D[2]);
+            S[3] = std::max(S[3], D[3]);
+        }
+    for (std::size_t i = 0; i < w_.obstacles.size(); ++i) {
+        const double* S = &sum[kDyn * i];
+        if (S[4] == 0) continue;
+        // As World::dynamicObstacleLimit, on the springs that act now.
+        const double w2 = S[0] + S[2];
+        const double limit =
+            std::isfinite(w2) ? leapfrogLimit(std::sqrt(w2), (S[1] + S[3]) / (2 * std::sqrt(w2))) : 0.0;
+        if (limit >= dt) continue;
+        const Obstacle& o = w_.obstacles[i];
+        throw StabilityError(cat(
+            "QDEM: during step ", w_.iter + 1, " the dynamic ", describeDynamic(o), " is touched by ", S[4],
+            " surface nodes: their contact springs and dashpots on its mass make its stable time step ", limit,
+            " s, below O.dt = ", dt, " s (a light body on stiff springs is launched; the limit before the run ",
+            "counted fewer nodes, or none of a body that was fixed then). Lower O.dt below ", limit, " s, ",
+            std::isfinite(o.invMass) && std::isfinite(o.invInertia)
+                ? "make the body heavier"
+                : "give the body a mass and moment of inertia (b.state.mass, b.state.inertia)",
+            ", or fix it (fixed=True, or b.dynamic = False)."));
     }
 }
 

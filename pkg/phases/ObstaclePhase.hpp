@@ -82,6 +82,14 @@ private:
         double travel = 0, depth = 0, speed = 0, mass = 0, kn = 0;
     };
     [[noreturn]] void reportThrough(const Through& t, double dt) const;
+    // Refuses (StabilityError) a dynamic obstacle whose contact springs this
+    // step make its stable step shorter than dt (World::dynamicObstacleLimit
+    // bounds them before the run).  Per (piece, obstacle) pair and thread,
+    // kDyn numbers: sum of g k, sum of g c (g: the obstacle's mobility at
+    // the contact point), largest k/m and c/m of a node, the contacts.
+    static constexpr int kDyn = 5;
+    void checkDynamicObstacles(double dt, std::size_t stride) const;
+    std::vector<double> threadDynamic_;
     std::vector<Through> threadThrough_;  // per thread: its first
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
 

@@ -8,11 +8,15 @@
 // the obstacles the piece can reach.  Contacts that grow during the run are
 // the contact law's business, and a loaded state keeps its contacts: both are
 // never refused here.  A piece resting on an obstacle overlaps it by less than
-// the particle radius (its node centres are outside): it passes.
+// the particle radius (its node centres are outside): it passes.  For a facet
+// "past its surface" means behind the triangle (the foot of the node's
+// perpendicular on its plane inside it), on the other side from the piece's
+// centroid: a facet hanging beside or above a piece is not inside it.
 #include <cmath>
 #include <limits>
 #include <sstream>
 
+#include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "ObstaclePhase.hpp"
 
@@ -57,14 +61,32 @@ void ObstaclePhase::checkStartOverlaps() {
             Eigen::Vector3d normal = Eigen::Vector3d::Zero();
             for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
                 const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * w_.surfNodes[s]]);
-                ObstacleHit hit;
-                if (!touchObstacle(o, x, r, side, hit)) continue;
-                const double d = hit.overlap - r;
+                double d;
+                Eigen::Vector3d nd;
+                if (o.kind == ObstacleKind::Facet) {
+                    // Past the triangle itself: on the far side of its plane
+                    // with the foot of the perpendicular inside it.  (Not its
+                    // plane: a node beside or below the triangle's edge, on the
+                    // plane's far side, is not inside anything; one within r of
+                    // the edge is an ordinary contact.  A fence whose lower edge
+                    // hung 3 mm above a slab was refused as 58 nodes 9 cm deep.)
+                    const TriPoint tp = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
+                    if (tp.feature != TriFeature::Face) continue;
+                    const Eigen::Vector3d nf =
+                        (o.worldVerts[1] - o.worldVerts[0]).cross(o.worldVerts[2] - o.worldVerts[0]).normalized();
+                    d = -side * nf.dot(x - tp.point);
+                    nd = side * nf;
+                } else {
+                    ObstacleHit hit;
+                    if (!touchObstacle(o, x, r, side, hit)) continue;
+                    d = hit.overlap - r;
+                    nd = hit.normal;
+                }
                 if (!(d > 1e-9 * r)) continue;
                 ++nPast;
                 if (d > depth) {
                     depth = d;
-                    normal = hit.normal;
+                    normal = nd;
                 }
             }
             if (nPast == 0) continue;

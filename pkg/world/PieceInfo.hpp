@@ -18,6 +18,12 @@ struct PieceInfo {
     // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
     // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.
     double minSurfaceMassPerWeight = 0;
+    // Largest m_i / w_i (the softest-damped contact per unit stiffness, for
+    // the dashpots on a dynamic obstacle) and the mean reference surface area
+    // per surface node [m^2] (w_i = 1): a dynamic obstacle's stable step.
+    double maxSurfaceMassPerWeight = 0;
+    double minSurfaceWeight = 0;
+    double meanSurfaceShare = 0;
 };
 
 }  // namespace qdem

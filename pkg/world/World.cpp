@@ -122,7 +122,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     double shareSum = 0;
     for (const int32_t v : s.nodes) shareSum += share[v - n0];
     const double meanShare = shareSum / static_cast<double>(s.nodes.size());
-    double mmin = std::numeric_limits<double>::infinity(), mwmin = mmin;
+    double mmin = std::numeric_limits<double>::infinity(), mwmin = mmin, mwmax = 0, wmin = mmin;
     for (std::size_t i = 0; i < s.nodes.size(); ++i) {
         surfNodes[p.surfBegin + i] = s.nodes[i];
         mmin = std::min(mmin, mass[s.nodes[i]]);
@@ -131,10 +131,15 @@ int World::addPiece(const TetMesh& mesh, int material) {
         const double w = share[s.nodes[i] - n0] / meanShare;
         surfWeight[p.surfBegin + i] = w;
         mwmin = std::min(mwmin, mass[s.nodes[i]] / w);
+        mwmax = std::max(mwmax, mass[s.nodes[i]] / w);
+        wmin = std::min(wmin, w);
     }
     p.surfEnd = static_cast<int32_t>(surfNodes.size());
     p.minSurfaceNodeMass = mmin;
     p.minSurfaceMassPerWeight = mwmin;
+    p.maxSurfaceMassPerWeight = mwmax;
+    p.minSurfaceWeight = wmin;
+    p.meanSurfaceShare = meanShare;
     p.surface = std::move(s);
 
     pieces.push_back(std::move(p));
@@ -153,6 +158,10 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
             throw InputError(cat("obstacle ", o.bodyId, ": wall axis must be 0, 1 or 2, got ", o.axis));
         if (o.kind == ObstacleKind::Box && !(o.halfExtents.minCoeff() >= 0))
             throw InputError(cat("obstacle ", o.bodyId, ": box extents must be >= 0"));
+        if (!(o.invMass >= 0) || !(o.invInertia >= 0) || !(o.armOffset >= 0) || !std::isfinite(o.armOffset))
+            throw InputError(cat("obstacle ", o.bodyId, ": invMass, invInertia must be >= 0 (infinite: a free DOF ",
+                                 "of zero mass), armOffset finite and >= 0; got ", o.invMass, ", ", o.invInertia,
+                                 ", ", o.armOffset));
     }
     const std::vector<double> sig = obstacleSignature(obs);
     const bool same = sleepPhase_.obstaclesSet(sig, obstacleSignature(obstacles));  // false: all woken

@@ -9,6 +9,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -50,6 +51,11 @@ struct StableDt {
     // The combined step with the viscous force integrated explicitly, and
     // implicitly (settings.viscousIntegration): `combined` is one of them.
     double combinedExplicit, combinedImplicit;
+    // The stiffest dynamic YADE obstacle (a Box, Facet or Wall YADE moves) on
+    // the contact springs that can act on it, and its index in obstacles (-1:
+    // none): already in contact and combined.
+    double obstacle = std::numeric_limits<double>::infinity();
+    int obstacleIndex = -1;
 };
 
 // An obstacle edge found crossing a piece's surface by World::obstacleEdgeCrossing.
@@ -322,6 +328,9 @@ private:
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
+    // Stable step of a dynamic obstacle on the node springs that can act on
+    // it at once (infinite for a fixed one): StableDt.cpp.
+    double dynamicObstacleLimit(const Obstacle& o) const;
 
     Energy energyTotal_;
     long gatheredIter_ = -1;  // the step gatherAll() last made every node current at

@@ -68,6 +68,9 @@ void bindWorld(py::module_& m) {
         .def_readwrite("bodyId", &Obstacle::bodyId)
         .def_readwrite("young", &Obstacle::young)
         .def_readwrite("friction", &Obstacle::friction)
+        .def_readwrite("invMass", &Obstacle::invMass)
+        .def_readwrite("invInertia", &Obstacle::invInertia)
+        .def_readwrite("armOffset", &Obstacle::armOffset)
         .def_readwrite("axis", &Obstacle::axis)
         .def_readwrite("sense", &Obstacle::sense)
         .def_readwrite("halfExtents", &Obstacle::halfExtents)
@@ -192,6 +195,7 @@ void bindWorld(py::module_& m) {
                  d["combinedExplicit"] = s.combinedExplicit;
                  d["combinedImplicit"] = s.combinedImplicit;
                  d["limitedBy"] = s.limitedBy;
+                 d["obstacle"] = s.obstacle;  // the stiffest dynamic YADE obstacle's (inf: none)
                  return d;
              })
         .def("stress",

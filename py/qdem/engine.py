@@ -220,7 +220,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         if len(O.bodies) != self._nBodies:
             obstacles, self._ids = yadeglue.scanObstacles(O)
             self._obstacles = obstacles
-            self._signatures = [yadeglue.shapeSignature(O.bodies[i].shape) for i in self._ids]
+            self._signatures = [yadeglue.bodySignature(O.bodies[i]) for i in self._ids]
             if self.spheres and self._spheres is None and yadeglue.hasSpheres(O):
                 self._spheres = SphereCoupling(self.world, int(self.sphereMask), float(self.sphereMargin))
             if self._spheres is not None:
@@ -236,8 +236,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                 self._nBodies = -1
                 return self._syncObstacles()
             if reshaped:
-                # A Box's extents or a Facet's vertices were changed by the script (or the
-                # body is another one now): those obstacles are rebuilt; contacts keep their history.
+                # A Box's extents or a Facet's vertices were changed by the script, a body was
+                # made dynamic or fixed (its mass enters the stable step and the dashpots), or
+                # the body is another one now: those obstacles are rebuilt; contacts keep their history.
                 bodies = [O.bodies[self._ids[i]] for i in reshaped]
                 rebuilt, rebuiltIds = yadeglue.scanObstacles(O, bodies)
                 if rebuiltIds != [self._ids[i] for i in reshaped]:  # no longer an obstacle: scan all
@@ -245,7 +246,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                     return self._syncObstacles()
                 for i, o, b in zip(reshaped, rebuilt, bodies):
                     self._obstacles[i] = o
-                    self._signatures[i] = yadeglue.shapeSignature(b.shape)
+                    self._signatures[i] = yadeglue.bodySignature(b)
                 core.setObstacles(self._obstacles)
                 self._dtChecked = None
                 states = yadeglue.obstacleStates(O, self._ids, self._states)

@@ -26,7 +26,8 @@ class QdemMat(AttrObject):
                             "stress is (eta/mu) times the elastic stress of the strain rate "
                             "(doc/formulation.md). 0 = purely elastic.", nonNegative)
     frictionPiece = Attr(0.1, "Coulomb kinetic friction coefficient against other QDEM pieces.", nonNegative)
-    frictionWall = Attr(0.5, "Coulomb kinetic friction coefficient against YADE walls, boxes and facets.",
+    frictionWall = Attr(0.5, "Coulomb kinetic friction coefficient against YADE walls, boxes and facets "
+                        "(the smaller of it and tan(frictionAngle) of the body's material acts, as in YADE).",
                         nonNegative)
     radius = Attr(0.04, "Radius of the surface particles [m]: contacts start when a node comes within "
                         "this distance of a wall (2x of another piece's surface). Sets the contact "

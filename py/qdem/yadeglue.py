@@ -1,5 +1,7 @@
 """Reading YADE's scene: rigid obstacles (Wall, Box, Facet), gravity, O.forces.
 Only this module touches YADE objects, so the rest of qdem runs without YADE."""
+import math
+
 import numpy as np
 
 from . import _core
@@ -14,6 +16,40 @@ def findGravity(O):
             g = e.gravity
             return (g[0], g[1], g[2])
     return (0.0, 0.0, 0.0)
+
+
+def _friction(b):
+    """Coulomb coefficient of body b's material: tan(frictionAngle), as YADE's
+    FrictPhys; -1 (none: the piece's frictionWall alone) for a material without one."""
+    angle = getattr(b.material, "frictionAngle", None)
+    if angle is None:
+        return -1.0
+    angle = float(angle)
+    if not (0.0 <= angle < 0.5 * math.pi):
+        raise ValueError("YADE body %d (%s): its material's frictionAngle = %r rad is not in [0, pi/2): "
+                         "give it the angle in radians, e.g. math.atan(0.5) for a coefficient of 0.5"
+                         % (b.id, type(b.shape).__name__, angle))
+    return math.tan(angle)
+
+
+def _mobility(O, b):
+    """(1/mass, 1/smallest moment of inertia, arm offset) of what YADE moves when body
+    b is pushed: zeros for a fixed body; a term only for free translations or
+    rotations (blockedDOFs); inf for a free one of zero mass or inertia; a clump
+    member's clump, with the distance from the member to the clump's centre."""
+    mover = O.bodies[b.clumpId] if b.isClumpMember else b
+    if mover is None or not mover.dynamic:
+        return 0.0, 0.0, 0.0
+    s = mover.state
+    blocked = s.blockedDOFs
+    invMass = invInertia = 0.0
+    if any(c not in blocked for c in "xyz"):
+        invMass = 1.0 / s.mass if s.mass > 0 else math.inf
+    if any(c not in blocked for c in "XYZ"):
+        inertia = min(s.inertia)
+        invInertia = 1.0 / inertia if inertia > 0 else math.inf
+    arm = float((b.state.pos - s.pos).norm()) if mover is not b else 0.0
+    return invMass, invInertia, arm
 
 
 def scanObstacles(O, bodies=None):
@@ -31,6 +67,8 @@ def scanObstacles(O, bodies=None):
         o.bodyId = b.id
         young = getattr(b.material, "young", None)
         o.young = float(young) if young else 0.0
+        o.friction = _friction(b)
+        o.invMass, o.invInertia, o.armOffset = _mobility(O, b)
         if kind == 0:
             o.axis, o.sense = int(b.shape.axis), int(b.shape.sense)
         elif kind == 1:
@@ -49,30 +87,32 @@ def hasSpheres(O):
     return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)
 
 
-def shapeSignature(shape):
-    """What the obstacle's core copy was built from (None: not an obstacle)."""
+def bodySignature(b):
+    """What the obstacle's core copy was built from: its shape and whether YADE
+    moves it (None: not an obstacle)."""
+    shape = b.shape
     kind = KIND.get(type(shape).__name__) if shape is not None else None
     if kind == 0:
-        return (0, int(shape.axis), int(shape.sense))
+        return (0, int(shape.axis), int(shape.sense), b.dynamic)
     if kind == 1:
         e = shape.extents
-        return (1, e[0], e[1], e[2])
+        return (1, e[0], e[1], e[2], b.dynamic)
     if kind == 2:
-        return (2,) + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
+        return (2, b.dynamic) + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
     return None
 
 
 def obstacleStates(O, ids, out, signatures=None, reshaped=None):
     """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies;
     None when one of them was erased (scan again).  With ``signatures`` (one
-    shapeSignature per body), the index of each body whose shape changed since
+    bodySignature per body), the index of each body whose shape changed since
     (a Box's extents, a Facet's vertices, a body of another kind after
-    O.bodies.clear()) is appended to ``reshaped``."""
+    O.bodies.clear()) or that was made dynamic or fixed is appended to ``reshaped``."""
     for i, bid in enumerate(ids):
         b = O.bodies[bid] if bid < len(O.bodies) else None
         if b is None:  # erased since the last scan
             return None
-        if signatures is not None and shapeSignature(b.shape) != signatures[i]:
+        if signatures is not None and bodySignature(b) != signatures[i]:
             reshaped.append(i)
         s = b.state
         p, q, v, w = s.pos, s.ori, s.vel, s.angVel
