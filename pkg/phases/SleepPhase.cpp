@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../world/ContactForces.hpp"
 #include "../world/WorldState.hpp"
 #include "IntegrationPhase.hpp"
 #include "ObstaclePhase.hpp"
@@ -168,6 +169,41 @@ void SleepPhase::run(double dt) {
         return false;
     };
     auto nearSphere = [&](std::size_t p) { return p < w_.spheres.pieceUsed.size() && w_.spheres.pieceUsed[p]; };
+    auto candidate = [&](std::size_t p) {
+        return !asleep_[p] && pieceSpeed2_[p] < v2 && slowFor_[p] >= w_.settings.sleepTime && !fastNeighbour(p) &&
+               !movingObstacle(p) && !nearSphere(p);
+    };
+    // Slow is not at rest: a piece let go in the air, or at the top of a throw,
+    // is slow for sleepVelocity / g seconds, and one driven slowly through its
+    // blocked DOFs is slow for good.  A candidate sleeps only when something
+    // holds it (a contact force on it this step, a blocked DOF, or no gravity)
+    // and none of its blocked DOFs is driven.  Flags summed over the ranks: the
+    // candidates are the same on every rank, so is the reduction.
+    bool anyCandidate = false;
+    for (std::size_t p = 0; p < np && !anyCandidate; ++p) anyCandidate = candidate(p);
+    if (anyCandidate) {
+        restFlags_.assign(2 * np, 0.0);  // per piece: held up, driven
+        const bool noGravity = w_.gravity.squaredNorm() == 0;
+        for (std::size_t p = 0; p < np; ++p) {
+            if (!candidate(p)) continue;
+            const PieceInfo& info = w_.pieces[p];
+            bool held = noGravity, driven = false;
+            if (!held && w_.contacts.active)
+                for (int32_t s = info.surfBegin; s < info.surfEnd && !held; ++s) {
+                    const double* f = &w_.contacts.force[3 * w_.surfNodes[s]];
+                    held = f[0] != 0 || f[1] != 0 || f[2] != 0;
+                }
+            for (int32_t n = info.nodeBegin; n < info.nodeEnd && !driven; ++n) {
+                const uint8_t b = w_.blocked[n];
+                if (!b) continue;
+                held = true;
+                for (int d = 0; d < 3; ++d) driven = driven || ((b >> d) & 1 && w_.vel[3 * n + d] != 0);
+            }
+            restFlags_[2 * p] = held ? 1.0 : 0.0;
+            restFlags_[2 * p + 1] = driven ? 1.0 : 0.0;
+        }
+        if (Domain* dom = w_.domain.built()) dom->comm().allreduceMax(restFlags_.data(), static_cast<int>(2 * np));
+    }
     bool changed = false;
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
@@ -175,8 +211,7 @@ void SleepPhase::run(double dt) {
                 wakeOne(p);
                 changed = true;
             }
-        } else if (pieceSpeed2_[p] < v2 && slowFor_[p] >= w_.settings.sleepTime && !fastNeighbour(p) && !movingObstacle(p) &&
-                   !nearSphere(p)) {
+        } else if (anyCandidate && candidate(p) && restFlags_[2 * p] > 0 && restFlags_[2 * p + 1] == 0) {
             putToSleep(p);
             changed = true;
         }

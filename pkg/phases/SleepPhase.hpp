@@ -23,6 +23,7 @@
 namespace qdem {
 
 class ObstaclePhase;
+class ContactForces;
 class PieceContactPhase;
 class IntegrationPhase;
 
@@ -34,6 +35,7 @@ public:
         const Column<double>& pos;
         Column<double>& vel;                    // zeroed when a piece falls asleep
         const Column<double>& mass;
+        const Column<uint8_t>& blocked;         // prescribed DOFs: a piece driven through them stays awake
         const Column<int32_t>& surfNodes;
         const std::vector<PieceInfo>& pieces;
         const std::vector<Obstacle>& obstacles;
@@ -46,6 +48,7 @@ public:
         const ObstaclePhase& obstacleContacts;  // what a piece pushed on obstacles, which it can reach
         PieceContactPhase& pieceContacts;       // neighbour pieces, Verlet lists; told of sleep changes
         const IntegrationPhase& integration;    // the pieces' largest node speeds
+        const ContactForces& contacts;          // whether anything holds a piece up
     };
     explicit SleepPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "sleep"; }
@@ -105,6 +108,7 @@ private:
     std::vector<uint8_t> asleep_;
     std::vector<double> slowFor_;      // time all its nodes have been slower than sleepVelocity [s]
     std::vector<double> pieceSpeed2_;  // largest squared node speed in the last step
+    std::vector<double> restFlags_;    // per candidate piece: something holds it up, a blocked DOF drives it
     std::vector<uint8_t> held_;        // not dynamic (asleep until made dynamic)
     std::vector<double> sleepMoved2_;
     std::vector<std::vector<double>> frozenReaction_;

@@ -308,11 +308,11 @@ private:
                                                     .pieces = pieces, .materials = materials,
                                                     .settings = settings, .iter = iter,
                                                     .sleeping = sleepPhase_, .domain = {domain_}}}};
-    SleepPhase sleepPhase_{{.pos = pos, .vel = vel, .mass = mass, .surfNodes = surfNodes, .pieces = pieces,
-                            .obstacles = obstacles, .spheres = spheres, .settings = settings, .gravity = gravity,
-                            .domain = {domain_}, .energy = energy, .bounds = bounds_,
+    SleepPhase sleepPhase_{{.pos = pos, .vel = vel, .mass = mass, .blocked = blocked, .surfNodes = surfNodes,
+                            .pieces = pieces, .obstacles = obstacles, .spheres = spheres, .settings = settings,
+                            .gravity = gravity, .domain = {domain_}, .energy = energy, .bounds = bounds_,
                             .obstacleContacts = obstaclePhase_, .pieceContacts = pieceContactPhase_,
-                            .integration = integrationPhase_}};
+                            .integration = integrationPhase_, .contacts = contactForces_}};
     // In the order of the step; Checkpoint.cpp, addPiece and report() visit
     // them (a fixed array: report() is called every step from Python).
     const std::array<Phase*, 6> phases_{&obstaclePhase_,    &pieceContactPhase_, &spherePhase_,

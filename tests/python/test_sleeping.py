@@ -174,7 +174,42 @@ def test_a_moving_piece_never_sleeps_even_with_zero_sleep_time():
     w.core.step(dt, 1)
     assert not b.asleep
     w.core.step(dt, 200)
-    assert not b.asleep and rest.asleep
+    assert not b.asleep
+    # The block at rest sleeps once the floor carries it; the one in flight not while it flies.
+    assert _stepUntil(w, dt, lambda: rest.asleep, 400)
+    assert b.centroid()[2] > 0.2 and not b.asleep
+
+
+def test_slow_is_not_at_rest_a_piece_in_the_air_or_driven_through_blocked_dofs_stays_awake():
+    """A piece let go in the air is slower than sleepVelocity for sleepVelocity / g
+    seconds, one at the top of a throw too, and one pulled slowly through blocked
+    DOFs for good: each fell asleep (hanging in the air, the pull erased)."""
+    w = _world(True)
+    w.core.sleepVelocity = 0.3          # 0.3 / g = 31 ms > sleepTime (10 ms)
+    mat = rubber(**MAT)
+    hanging = _block(w, mat, z=1.0)
+    thrown = _block(w, mat, x=1.0, z=1.0, vel=(0, 0, 0.5))
+    _floor(w)
+    dt = _dt(w)
+    steps = int(0.2 / dt)
+    w.core.step(dt, steps)
+    t = steps * dt
+    assert not hanging.asleep and not thrown.asleep
+    assert hanging.centroid()[2] == pytest.approx(1.0 - 0.5 * 9.81 * t * t, rel=1e-3)
+    assert thrown.centroid()[2] == pytest.approx(1.0 + 0.5 * t - 0.5 * 9.81 * t * t, rel=1e-3)
+    # No gravity: a free block pulled at 5 mm/s on one face (sleepVelocity 1 cm/s).
+    w = qdem.World()
+    w.core.sleepVelocity, w.core.sleepTime = 0.01, 0.01
+    p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), mat)
+    face = np.asarray(p.pos)[:, 0] > 0.0499
+    p.blocked[face] = 7
+    p.vel[face] = (0.005, 0, 0)
+    dt = _dt(w)
+    steps = int(0.2 / dt)
+    w.core.step(dt, steps)
+    assert not p.asleep
+    assert np.asarray(p.pos)[face, 0].mean() == pytest.approx(0.05 + 0.005 * steps * dt, rel=1e-6)
+    assert p.centroid()[0] > 0.0005   # the rest of the block follows
 
 
 def test_sleeping_is_off_by_default_and_checks_its_settings():
