@@ -42,8 +42,15 @@ double dampingRatioFromRestitution(double e) {
 }
 
 double leapfrogLimit(double omega, double xi) {
+    // A NaN frequency or damping (a material at the edge of the doubles: density
+    // 1e-300, viscosity 1e300) must refuse every step, never pass as "no limit".
+    if (std::isnan(omega) || std::isnan(xi)) return 0.0;
     if (omega <= 0) return std::numeric_limits<double>::infinity();
-    return 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+    if (std::isinf(omega) || std::isinf(xi)) return xi == -std::numeric_limits<double>::infinity() && !std::isinf(omega)
+                                                          ? std::numeric_limits<double>::infinity() : 0.0;
+    if (xi < 1e3) return 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+    // sqrt(1 + xi^2) - xi cancels (and xi^2 overflows past 1e154): the same number as 1 / (hypot(1, xi) + xi).
+    return 2.0 / omega / (std::hypot(1.0, xi) + xi);
 }
 
 }  // namespace qdem

@@ -356,7 +356,7 @@ StableDt World::stableDt() const {
 void World::checkDt(double dt) const {
     const StableDt s = stableDt();
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
-    if (dt > s.combined && s.obstacleIndex >= 0 && s.obstacle <= s.combined) {
+    if (!(dt <= s.combined) && s.obstacleIndex >= 0 && s.obstacle <= s.combined) {
         const Obstacle& o = obstacles[s.obstacleIndex];
         throw StabilityError(cat(
             "QDEM: O.dt=", dt, " s exceeds the stable time step ", s.combined, " s by a factor ", dt / s.combined,
@@ -368,7 +368,7 @@ void World::checkDt(double dt) const {
                 : "make the body heavier",
             ", or fix it (fixed=True, or b.dynamic = False)."));
     }
-    if (dt > s.combined)
+    if (!(dt <= s.combined))  // (a NaN limit refuses too)
         throw StabilityError(cat("QDEM: O.dt=", dt, " s exceeds the stable time step ", s.combined,
                                  " s by a factor ", dt / s.combined, " (limited by ", s.limitedBy,
                                  "; elastic limit ", s.elastic, " s, with viscosity ", s.viscous,

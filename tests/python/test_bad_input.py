@@ -237,3 +237,17 @@ def test_non_finite_initial_velocity_and_time_step():
             w.core.checkDt(dt)
         with pytest.raises(qdem.StabilityError, match="positive"):
             w.core.checkCurrentDt(dt)
+
+
+@pytest.mark.parametrize("kw", [dict(density=1e-300), dict(viscosity=1e300), dict(young=1e300)])
+def test_materials_at_the_edge_of_the_doubles_get_a_finite_limit_that_refuses_dt(kw):
+    """The leapfrog limit 2/w (sqrt(1 + xi^2) - xi) overflowed or cancelled: density
+    1e-300 gave a combined limit of inf (any O.dt passed), viscosity 1e300 inf too."""
+    args = dict(young=1e6, poisson=0.3, density=1000.0, viscosity=10.0, radius=0.005)
+    args.update(kw)
+    w = qdem.World()
+    w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat(**args))
+    sd = w.stableDt()
+    assert 0 <= sd["combined"] < 1e-100
+    with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+        w.core.checkDt(1e-6)
