@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../world/ContactForces.hpp"
 #include "../world/WorldState.hpp"
 #include "IntegrationPhase.hpp"
 #include "ObstaclePhase.hpp"
@@ -175,35 +174,44 @@ void SleepPhase::run(double dt) {
     };
     // Slow is not at rest: a piece let go in the air, or at the top of a throw,
     // is slow for sleepVelocity / g seconds, and one driven slowly through its
-    // blocked DOFs is slow for good.  A candidate sleeps only when something
-    // holds it (a contact force on it this step, a blocked DOF, or no gravity)
-    // and none of its blocked DOFs is driven.  Flags summed over the ranks: the
-    // candidates are the same on every rank, so is the reduction.
+    // blocked DOFs is slow for good.  A candidate sleeps only when it is held:
+    // the net force on it (gravity, contacts, external; its internal forces
+    // cancel) is below half its weight, or a blocked DOF holds it; and none of
+    // its blocked DOFs is driven (a non-zero velocity there).  Under MPI each
+    // rank sums its owned nodes and the sums go through the fixed-shape tree,
+    // so every rank decides alike (the candidates are the same everywhere).
     bool anyCandidate = false;
     for (std::size_t p = 0; p < np && !anyCandidate; ++p) anyCandidate = candidate(p);
     if (anyCandidate) {
-        restFlags_.assign(2 * np, 0.0);  // per piece: held up, driven
-        const bool noGravity = w_.gravity.squaredNorm() == 0;
+        restSums_.assign(6 * np, 0.0);  // per piece: net force (3), sum of |F| (1); then blocked, driven flags
+        Domain* dom = w_.domain.built();
         for (std::size_t p = 0; p < np; ++p) {
             if (!candidate(p)) continue;
             const PieceInfo& info = w_.pieces[p];
-            bool held = noGravity, driven = false;
-            if (!held && w_.contacts.active)
-                for (int32_t s = info.surfBegin; s < info.surfEnd && !held; ++s) {
-                    const double* f = &w_.contacts.force[3 * w_.surfNodes[s]];
-                    held = f[0] != 0 || f[1] != 0 || f[2] != 0;
-                }
-            for (int32_t n = info.nodeBegin; n < info.nodeEnd && !driven; ++n) {
-                const uint8_t b = w_.blocked[n];
-                if (!b) continue;
-                held = true;
-                for (int d = 0; d < 3; ++d) driven = driven || ((b >> d) & 1 && w_.vel[3 * n + d] != 0);
+            double* sum = &restSums_[4 * p];
+            double* flag = &restSums_[4 * np + 2 * p];
+            for (int32_t n = info.nodeBegin; n < info.nodeEnd; ++n) {
+                if (dom && !dom->owns(n)) continue;
+                const double* f = &w_.force[3 * n];
+                sum[0] += f[0], sum[1] += f[1], sum[2] += f[2];
+                sum[3] += std::abs(f[0]) + std::abs(f[1]) + std::abs(f[2]);
+                const uint8_t bits = w_.blocked[n];
+                if (!bits) continue;
+                flag[0] = 1.0;
+                for (int d = 0; d < 3; ++d)
+                    if ((bits >> d) & 1 && w_.vel[3 * n + d] != 0) flag[1] = 1.0;
             }
-            restFlags_[2 * p] = held ? 1.0 : 0.0;
-            restFlags_[2 * p + 1] = driven ? 1.0 : 0.0;
         }
-        if (Domain* dom = w_.domain.built()) dom->comm().allreduceMax(restFlags_.data(), static_cast<int>(2 * np));
+        if (dom) dom->comm().treeReduce(restSums_.data(), static_cast<int>(4 * np), static_cast<int>(2 * np));
     }
+    const double g = w_.gravity.norm();
+    auto held = [&](std::size_t p) {
+        const double* sum = &restSums_[4 * p];
+        const double* flag = &restSums_[4 * np + 2 * p];
+        const double net = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+        // (1e-9 of the force magnitudes: the rounding of the internal forces' cancellation)
+        return flag[1] == 0 && (flag[0] > 0 || net <= 0.5 * w_.pieces[p].mass * g + 1e-9 * sum[3]);
+    };
     bool changed = false;
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
@@ -211,7 +219,7 @@ void SleepPhase::run(double dt) {
                 wakeOne(p);
                 changed = true;
             }
-        } else if (anyCandidate && candidate(p) && restFlags_[2 * p] > 0 && restFlags_[2 * p + 1] == 0) {
+        } else if (anyCandidate && candidate(p) && held(p)) {
             putToSleep(p);
             changed = true;
         }

@@ -23,7 +23,6 @@
 namespace qdem {
 
 class ObstaclePhase;
-class ContactForces;
 class PieceContactPhase;
 class IntegrationPhase;
 
@@ -48,7 +47,7 @@ public:
         const ObstaclePhase& obstacleContacts;  // what a piece pushed on obstacles, which it can reach
         PieceContactPhase& pieceContacts;       // neighbour pieces, Verlet lists; told of sleep changes
         const IntegrationPhase& integration;    // the pieces' largest node speeds
-        const ContactForces& contacts;          // whether anything holds a piece up
+        const Column<double>& force;            // the step's total node forces: is a piece held up?
     };
     explicit SleepPhase(const Data& data) : w_(data) {}
     const char* name() const override { return "sleep"; }
@@ -108,7 +107,7 @@ private:
     std::vector<uint8_t> asleep_;
     std::vector<double> slowFor_;      // time all its nodes have been slower than sleepVelocity [s]
     std::vector<double> pieceSpeed2_;  // largest squared node speed in the last step
-    std::vector<double> restFlags_;    // per candidate piece: something holds it up, a blocked DOF drives it
+    std::vector<double> restSums_;     // per candidate piece: net force, its scale, blocked and driven flags
     std::vector<uint8_t> held_;        // not dynamic (asleep until made dynamic)
     std::vector<double> sleepMoved2_;
     std::vector<std::vector<double>> frozenReaction_;

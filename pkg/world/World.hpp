@@ -312,7 +312,7 @@ private:
                             .pieces = pieces, .obstacles = obstacles, .spheres = spheres, .settings = settings,
                             .gravity = gravity, .domain = {domain_}, .energy = energy, .bounds = bounds_,
                             .obstacleContacts = obstaclePhase_, .pieceContacts = pieceContactPhase_,
-                            .integration = integrationPhase_, .contacts = contactForces_}};
+                            .integration = integrationPhase_, .force = force}};
     // In the order of the step; Checkpoint.cpp, addPiece and report() visit
     // them (a fixed array: report() is called every step from Python).
     const std::array<Phase*, 6> phases_{&obstaclePhase_,    &pieceContactPhase_, &spherePhase_,
