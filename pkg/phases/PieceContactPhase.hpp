@@ -59,6 +59,12 @@ public:
     const Data& data() const { return w_; }
     // Some kind of the table is switched on (pieces then have neighbour lists).
     bool anyKindOn() const;
+    // Every check period (PieceStartOverlap.cpp): throws StabilityError naming
+    // both pieces, the node, its depth and the fixes when a surface node lies
+    // inside another piece deeper than their contact reach r_a + r_b (the
+    // contact cannot see it: the pieces interpenetrate for good).  Reads
+    // every node: gatherAll() first under MPI.
+    void checkDeepOverlap(long iter, double time) const;
 
 private:
     Data w_;
@@ -99,6 +105,17 @@ private:
     // deep inside the other (winding number) where point-polygon saw none
     // inside: no contact pushes them apart.
     void finishStartCheck();
+    // The surface node lying deepest inside another piece (winding number),
+    // among at most 16 per neighbour pair, those deepest in the other's box
+    // less the reach.  Start check (periodic = false): pairs with a piece not
+    // yet checked and not in `pushed`, own nodes.  Periodic: every pair, only
+    // nodes deeper than the pair's reach, the deepest beyond it.
+    struct DeepNode {
+        int32_t node = -1, pa = -1, pb = -1;
+        double depth = 0, reach = 0;
+        long count = 0;
+    };
+    DeepNode deepestInside(bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed) const;
 };
 
 }  // namespace qdem

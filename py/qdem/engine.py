@@ -336,6 +336,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
+            if core.nPieces > 1:  # a node sunk into another piece beyond the contact's reach
+                core.checkDeepOverlap()
             if core.nObstacles and core.nPieces:
                 self._checkObstacleEdges(core)
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
