@@ -63,8 +63,10 @@ public:
     // both pieces, the node, its depth and the fixes when a surface node lies
     // inside another piece deeper than their contact reach r_a + r_b (the
     // contact cannot see it: the pieces interpenetrate for good).  Reads
-    // every node: gatherAll() first under MPI.
-    void checkDeepOverlap(long iter, double time) const;
+    // every node: gatherAll() first under MPI.  Pairs started
+    // interpenetrated (accepted by the start check: the contact pushes them
+    // apart) are let alone until a check finds them out of each other.
+    void checkDeepOverlap(long iter, double time);
 
 private:
     Data w_;
@@ -115,7 +117,13 @@ private:
         double depth = 0, reach = 0;
         long count = 0;
     };
-    DeepNode deepestInside(bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed) const;
+    // Periodic: pairs in `pushed` (started interpenetrated) are not reported;
+    // those of them still deep are returned in *stillDeep (sorted).
+    DeepNode deepestInside(bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed,
+                           std::vector<std::pair<int32_t, int32_t>>* stillDeep) const;
+    // Pairs (lower id first, sorted) the start check accepted interpenetrated,
+    // not yet found out of each other by the periodic check.
+    std::vector<std::pair<int32_t, int32_t>> startOverlap_;
 };
 
 }  // namespace qdem

@@ -123,7 +123,7 @@ public:
     // another deeper than their contact reach r_a + r_b: no contact sees it
     // and the pieces interpenetrate for good (contacts too soft for the load,
     // PieceStartOverlap.cpp).  Reads every node: gatherAll() first under MPI.
-    void checkDeepOverlap() const {
+    void checkDeepOverlap() {
         requireGathered("checkDeepOverlap");
         pieceContactPhase_.checkDeepOverlap(iter, time);
     }

@@ -81,3 +81,26 @@ def test_stacks_whose_contact_holds_the_load_run_untouched(scene, eBottom, eTop,
     for _ in range(8):
         scene.run(int(0.1 / scene.dt), True)
         assert _nodesInside(top, bottom) == 0 and _nodesInside(bottom, top) == 0
+
+
+def test_pieces_started_interpenetrated_are_let_separate():
+    """Two cubes started 30 % into each other (accepted at the start: the
+    contact sees nodes inside and pushes them apart, test_hard_cases.py):
+    nodes still deeper than the reach at the first checks do not stop the
+    run; the pair is watched like any other once it is out."""
+    from conftest import rubber
+    L, frac = 0.1, 0.3
+    w = qdem.World()
+    mat = rubber(radius=2e-3, viscosity=100.0, young=1e7)
+    a = w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3), 5), mat, pos=(-(1 - frac) * L / 2, 0, 0))
+    b = w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3), 5), mat, pos=((1 - frac) * L / 2, 0.013, 0.007))
+    dt = 0.8 * w.stableDt()["combined"]
+    for _ in range(15):
+        w.core.step(dt, 100)
+        w.core.checkDeepOverlap()
+    assert b.pos[:, 0].min() > a.pos[:, 0].max()
+    # Out of each other and watched again: centres put half a side apart, it is named.
+    b.pos[:] += a.centroid() - b.centroid() + np.array([0.5 * L, 0, 0])
+    w.core.step(dt, 1)
+    with pytest.raises(qdem.StabilityError, match=r"piece [01] has sunk into piece [01] deeper"):
+        w.core.checkDeepOverlap()
