@@ -75,8 +75,9 @@ void PieceContactPhase::beginStartCheck() {
     for (auto& v : threadStartSeen_) v.clear();
 }
 
-PieceContactPhase::DeepNode PieceContactPhase::deepestInside(bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed,
-                                                             std::vector<std::pair<int32_t, int32_t>>* stillDeep) const {
+PieceContactPhase::DeepNode PieceContactPhase::deepestInside(
+    bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed,
+    std::vector<std::pair<int32_t, int32_t>>* stillDeep) const {
     constexpr int kSamples = 16;
     const auto isPushed = [&](int32_t a, int32_t b) {
         return std::binary_search(pushed.begin(), pushed.end(), std::make_pair(std::min(a, b), std::max(a, b)));
@@ -139,7 +140,8 @@ PieceContactPhase::DeepNode PieceContactPhase::deepestInside(bool periodic, cons
                 break;
             }
             ++f.count;
-            if (better(f, periodic ? depth - reach : depth, n)) f.node = n, f.pa = a, f.pb = b, f.depth = depth, f.reach = reach;
+            if (better(f, periodic ? depth - reach : depth, n))
+                f.node = n, f.pa = a, f.pb = b, f.depth = depth, f.reach = reach;
         }
     }
     if (stillDeep) {

@@ -123,10 +123,8 @@ public:
     // another deeper than their contact reach r_a + r_b: no contact sees it
     // and the pieces interpenetrate for good (contacts too soft for the load,
     // PieceStartOverlap.cpp).  Reads every node: gatherAll() first under MPI.
-    void checkDeepOverlap() {
-        requireGathered("checkDeepOverlap");
-        pieceContactPhase_.checkDeepOverlap(iter, time);
-    }
+    // Collective under MPI: every rank raises the lowest failing rank's error.
+    void checkDeepOverlap();
     // Box and Facet edges that cross a piece's surface triangles: an obstacle
     // edge narrower than the node spacing passed between the nodes
     // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.

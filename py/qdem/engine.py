@@ -55,7 +55,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                          "(raises qdem.StabilityError naming the limit).", boolean)
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
                             "checkDt) check that O.dt is below the stable step of the current, strained "
-                            "shape (0 = never).  Non-finite positions and velocities are caught every "
+                            "shape, and that no surface node lies inside another piece deeper than their "
+                            "contact reach r_a + r_b (qdem.StabilityError naming them: contacts too soft "
+                            "for the load; doc/hard_cases.md, 'Deep overlap') (0 = never).  Non-finite positions and velocities are caught every "
                             "step regardless: the step that meets one raises qdem.StabilityError.",
                         integer(0, extra=" (0 = never)"))
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).",
