@@ -59,6 +59,14 @@ public:
     const Data& data() const { return w_; }
     // Some kind of the table is switched on (pieces then have neighbour lists).
     bool anyKindOn() const;
+    // Every check period (PieceStartOverlap.cpp): throws StabilityError naming
+    // both pieces, the node, its depth and the fixes when a surface node lies
+    // inside another piece deeper than their contact reach r_a + r_b (the
+    // contact cannot see it: the pieces interpenetrate for good).  Reads
+    // every node: gatherAll() first under MPI.  Pairs started
+    // interpenetrated (accepted by the start check: the contact pushes them
+    // apart) are let alone until a check finds them out of each other.
+    void checkDeepOverlap(long iter, double time);
 
 private:
     Data w_;
@@ -99,6 +107,23 @@ private:
     // deep inside the other (winding number) where point-polygon saw none
     // inside: no contact pushes them apart.
     void finishStartCheck();
+    // The surface node lying deepest inside another piece (winding number),
+    // among at most 16 per neighbour pair, those deepest in the other's box
+    // less the reach.  Start check (periodic = false): pairs with a piece not
+    // yet checked and not in `pushed`, own nodes.  Periodic: every pair, only
+    // nodes deeper than the pair's reach, the deepest beyond it.
+    struct DeepNode {
+        int32_t node = -1, pa = -1, pb = -1;
+        double depth = 0, reach = 0;
+        long count = 0;
+    };
+    // Periodic: pairs in `pushed` (started interpenetrated) are not reported;
+    // those of them still deep are returned in *stillDeep (sorted).
+    DeepNode deepestInside(bool periodic, const std::vector<std::pair<int32_t, int32_t>>& pushed,
+                           std::vector<std::pair<int32_t, int32_t>>* stillDeep) const;
+    // Pairs (lower id first, sorted) the start check accepted interpenetrated,
+    // not yet found out of each other by the periodic check.
+    std::vector<std::pair<int32_t, int32_t>> startOverlap_;
 };
 
 }  // namespace qdem

@@ -1,5 +1,7 @@
 // Inverted elements are never carried silently (issue 12): counted every
-// check period; a law that cannot push them back stops the run.
+// check period; a law that cannot push them back stops the run.  So does a
+// node sunk into another piece beyond the contact reach (checkDeepOverlap,
+// the scan in pkg/phases/PieceStartOverlap.cpp).
 #include <cmath>
 
 #include "../core/Errors.hpp"
@@ -48,6 +50,18 @@ InversionCount World::checkInverted() const {
             "stays inverted, which this law cannot undo. Use law='stableNeoHookean' (the default), a stiffer "
             "material or a smaller impact speed."));
     return r;
+}
+
+void World::checkDeepOverlap() {
+    requireGathered("checkDeepOverlap");
+    std::string error;
+    try {
+        pieceContactPhase_.checkDeepOverlap(iter, time);
+    } catch (const StabilityError& e) {
+        error = e.what();
+    }
+    error = agreeOnError(error);  // (the ranks' start-overlap exemptions are their own nodes')
+    if (!error.empty()) throw StabilityError(error);
 }
 
 }  // namespace qdem

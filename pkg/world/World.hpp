@@ -119,6 +119,12 @@ public:
     // volume ratio and the fix when an inverted element's law cannot push it
     // back (Saint-Venant-Kirchhoff); returns the count otherwise.
     InversionCount checkInverted() const;
+    // Throws StabilityError when a surface node of one piece lies inside
+    // another deeper than their contact reach r_a + r_b: no contact sees it
+    // and the pieces interpenetrate for good (contacts too soft for the load,
+    // PieceStartOverlap.cpp).  Reads every node: gatherAll() first under MPI.
+    // Collective under MPI: every rank raises the lowest failing rank's error.
+    void checkDeepOverlap();
     // Box and Facet edges that cross a piece's surface triangles: an obstacle
     // edge narrower than the node spacing passed between the nodes
     // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.

@@ -55,7 +55,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                          "(raises qdem.StabilityError naming the limit).", boolean)
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
                             "checkDt) check that O.dt is below the stable step of the current, strained "
-                            "shape (0 = never).  Non-finite positions and velocities are caught every "
+                            "shape, and that no surface node lies inside another piece deeper than their "
+                            "contact reach r_a + r_b (qdem.StabilityError naming them: contacts too soft "
+                            "for the load; doc/hard_cases.md, 'Deep overlap') (0 = never).  Non-finite positions and velocities are caught every "
                             "step regardless: the step that meets one raises qdem.StabilityError.",
                         integer(0, extra=" (0 = never)"))
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).",
@@ -336,6 +338,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
                 core.checkCurrentDt(dt)
             core.checkFinite()
+            if core.nPieces > 1:  # a node sunk into another piece beyond the contact's reach
+                core.checkDeepOverlap()
             if core.nObstacles and core.nPieces:
                 self._checkObstacleEdges(core)
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
