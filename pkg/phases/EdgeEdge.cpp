@@ -202,7 +202,6 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const Vector3d vRel = ((1 - sp.s) * at(V, a0) + sp.s * at(V, a1)) -
                                           ((1 - sp.t) * at(V, b0) + sp.t * at(V, b1));
                     Vector3d sh = Vector3d::Zero();
-                    if (slot >= 0) sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     // Area weight (doc/contacts.md, "Area weights"): the mean of
                     // the two crossing points' weights, each interpolated along
                     // its edge, so it varies continuously as the crossing slides
@@ -211,6 +210,10 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     const double aw = 0.5 * ((1 - sp.s) * sw[S.surfIndexOfNode[a0]] + sp.s * sw[S.surfIndexOfNode[a1]] +
                                              (1 - sp.t) * sw[S.surfIndexOfNode[b0]] + sp.t * sw[S.surfIndexOfNode[b1]]);
                     const double saw = std::sqrt(aw);
+                    if (slot >= 0) {
+                        sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
+                        if (!regularized) sh /= std::sqrt(w * aw);  // (stored times sqrt(w aw), below)
+                    }
                     const ContactParams cp{w * aw * law.kn, w * saw * law.cn, w * aw * law.kt, w * saw * law.ct, law.mu,
                                            w_.settings.frictionRegVelocity, m1 * m2 / (m1 + m2)};
                     // Born deep (doc/contacts.md §5), with the edge-edge
@@ -245,7 +248,11 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     newOther[nNew] = local2;
                     newOtherPiece[nNew] = pb;
                     newSide[nNew] = static_cast<int8_t>(sUse);
-                    newShear[nNew] = sh;
+                    // Kept as sqrt(w aw) times the elongation: carried to a
+                    // step where the weight differs, the spring keeps the energy
+                    // it stored, 1/2 kt w aw |shear|^2, instead of gaining or
+                    // losing 1/2 kt d(w aw) |shear|^2 unbooked.
+                    newShear[nNew] = regularized ? sh : Vector3d(sh * std::sqrt(w * aw));
                     newRef[nNew] = r0;
                     ++nNew;
                     addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force + fw[0]);

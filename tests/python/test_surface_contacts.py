@@ -174,12 +174,15 @@ def test_crossed_bars_hit_edge_on_create_no_energy(deg):
     assert mech <= e0["kinetic"] * (1 + 2e-3)
 
 
-@pytest.mark.parametrize("deg", [90, 30, 4])
+@pytest.mark.parametrize("deg", [90, 45, 30, 4])
 def test_crossed_bars_hit_edge_on_with_friction_create_no_energy(deg):
     """The same with friction 0.5: friction can only take energy out; the
-    ledger holds to its friction accounting's accuracy (about 1 %)."""
+    ledger holds to its friction accounting's accuracy (+0.1 to +0.7 %, as
+    with point-polygon contacts alone; before, edge-edge springs whose
+    weight changed under a carried elongation took -0.4 to -0.75 % unbooked
+    at 90 and 45 degrees)."""
     e0, total, mech = _droppedCrossedBar(deg, 0.5)
-    assert total == pytest.approx(e0["total"], rel=1.5e-2)
+    assert total == pytest.approx(e0["total"], rel=1e-2)
     assert mech <= e0["kinetic"] * (1 + 1e-3)
 
 
