@@ -635,15 +635,44 @@ void buildEdgeCase(EdgeCase& c) {
     c.mb = B.density * tetVolume(c.xb) / 4;
 }
 
-void checkEdgeCase(const EdgeCase& c, const Vector3d& f, const std::string& what, bool torqueFree) {
+// The contact's area weight as a function of the four edge ends: the closest
+// points of the two (infinite) lines, the nodes' weights interpolated there.
+double edgeAreaWeight(const EdgeCase& c, const std::array<Vector3d, 4>& x) {
+    const auto wa = tetWeights(c.xa), wb = tetWeights(c.xb);
+    const Vector3d e1 = x[1] - x[0], e2 = x[3] - x[2], r = x[0] - x[2];
+    // (r + s e1 - t e2) . e1 = 0, (r + s e1 - t e2) . e2 = 0
+    const double a = e1.dot(e1), b = e1.dot(e2), e = e2.dot(e2), d = a * e - b * b;
+    const double s = (b * e2.dot(r) - e * e1.dot(r)) / d, t = (a * e2.dot(r) - b * e1.dot(r)) / d;
+    return 0.5 * ((1 - s) * wa[0] + s * wa[1] + (1 - t) * wb[0] + t * wb[1]);
+}
+
+// The force's part from the varying weight (doc/contacts.md §4, "Conservative
+// weights"): -1/2 kn delta^2 grad(aw) on the edges' ends, by central
+// differences.  out: A's ends 0, 1 then B's ends 0, 1.
+std::array<Vector3d, 4> weightForce(const EdgeCase& c, double knUnweighted) {
+    std::array<Vector3d, 4> x = {c.xa[0], c.xa[1], c.xb[0], c.xb[1]}, out;
+    const double h = 1e-6;
+    for (int k = 0; k < 4; ++k)
+        for (int d = 0; d < 3; ++d) {
+            auto xp = x, xm = x;
+            xp[k][d] += h;
+            xm[k][d] -= h;
+            out[k][d] = -0.5 * knUnweighted * kDelta * kDelta * (edgeAreaWeight(c, xp) - edgeAreaWeight(c, xm)) / (2 * h);
+        }
+    return out;
+}
+
+void checkEdgeCase(const EdgeCase& c, const Vector3d& f, const std::string& what, bool torqueFree,
+                   const std::array<Vector3d, 4>& fw) {
     EXPECT_EQ(eeCount(c.w), 1) << what;
     EXPECT_EQ(ppCount(c.w), 0) << what;
     const double F = f.norm();
     Vector3d sum = Vector3d::Zero(), torque = Vector3d::Zero();
     for (int k = 0; k < 4; ++k) {
         const Vector3d ga = forceOn(c.w, nodeId(c.w, c.pa, k)), gb = forceOn(c.w, nodeId(c.w, c.pb, k));
-        expectVec(ga, c.sa[k] * f, F, what + ": A node " + std::to_string(k));
-        expectVec(gb, -c.sb[k] * f, F, what + ": B node " + std::to_string(k));
+        const Vector3d wA = k < 2 ? fw[k] : Vector3d::Zero(), wB = k < 2 ? fw[2 + k] : Vector3d::Zero();
+        expectVec(ga, c.sa[k] * f + wA, F, what + ": A node " + std::to_string(k));
+        expectVec(gb, -c.sb[k] * f + wB, F, what + ": B node " + std::to_string(k));
         sum += ga + gb;
         torque += c.xa[k].cross(ga) + c.xb[k].cross(gb);
     }
@@ -657,7 +686,7 @@ TEST(ReferenceForces, EdgeEdgeStatic) {
     c.w.step(kDt);
     const Law L = pairLaw(c.aw, 1.0);  // right angle, far from the ends: fade weights 1
     ASSERT_GT(std::abs(c.aw - 1), 0.01) << "the weight must matter";
-    checkEdgeCase(c, L.kn * kDelta * Vector3d::UnitZ(), "edge-edge static", true);
+    checkEdgeCase(c, L.kn * kDelta * Vector3d::UnitZ(), "edge-edge static", true, weightForce(c, L.kn / c.aw));
 }
 
 // A moving rigidly down and sideways: dashpot and friction on the reduced
@@ -672,7 +701,7 @@ TEST(ReferenceForces, EdgeEdgeDashpotAndFriction) {
         const Law L = pairLaw(c.aw, m1 * m2 / (m1 + m2));
         EXPECT_EQ(slides(L, Vector3d::UnitZ(), kDelta, v, kDt), v.x() > 1) << "stuck and sliding cases";
         checkEdgeCase(c, springLaw(L, Vector3d::UnitZ(), kDelta, v, kDt, true),
-                      v.x() > 1 ? "edge-edge sliding" : "edge-edge stuck", false);
+                      v.x() > 1 ? "edge-edge sliding" : "edge-edge stuck", false, weightForce(c, L.kn / c.aw));
     }
 }
 
