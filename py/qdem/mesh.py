@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from . import _core
+from .attrs import _isint
 
 
 def _meshioRead(path, who):
@@ -139,7 +140,7 @@ def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     cells = _threeNumbers(cells, "cells", "an integer >= 1 or 3 of them (cells along x, y, z)", integral=True)
     if not np.all(cells >= 1):
         raise ValueError("boxMesh: cells must be integers >= 1, got %s" % "x".join("%d" % c for c in cells))
-    if not (_isInteger(tetsPerCell) and int(tetsPerCell) in (5, 6, 12)):
+    if not (_isint(tetsPerCell) and int(tetsPerCell) in (5, 6, 12)):
         raise ValueError("boxMesh: tetsPerCell must be 5, 6 or 12, got %r" % (tetsPerCell,))
     tetsPerCell = int(tetsPerCell)
     nx, ny, nz = (int(c) for c in cells)
@@ -158,13 +159,6 @@ def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
     return Mesh(nodes, tets, check=False)
 
 
-def _isInteger(v):
-    """An int, a NumPy integer or a float with no fraction; not a bool."""
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
-        return False
-    return bool(np.isfinite(float(v))) and float(v).is_integer()
-
-
 def _threeNumbers(value, name, what, integral=False):
     """boxMesh's size / cells: one number (the same along x, y, z) or three."""
     vals = None
@@ -181,7 +175,7 @@ def _threeNumbers(value, name, what, integral=False):
     if vals is None:
         raise ValueError("boxMesh: %s must be %s, got %r" % (name, what, value))
     if integral:
-        if not all(_isInteger(v) for v in vals):
+        if not all(_isint(v) for v in vals):
             raise ValueError("boxMesh: %s must be %s, got %r (no fractions: a count is not rounded)"
                              % (name, what, value))
         return np.array([int(v) for v in vals], dtype=object)
