@@ -157,13 +157,24 @@ void PieceContactPhase::run(double dt) {
                    st_.listActive.size() != np || st_.listKinds != lists ||
                    (dom && listDomainVersion_ != dom->currentVersion());
     for (std::size_t ip = 0; ip < np && !rebuild; ++ip) rebuild = st_.pieceActive[ip] && !st_.listActive[ip];
+    bool outran = false;          // motion outran an open window: all at once
+    // A rebuild spread over steps (PieceContactState.hpp): not under MPI
+    // (ranks rebuild as their halos change), nor without node lists.
+    const int spread = dom || !verlet || !triLists ? 1 : w_.settings.verletRebuildSteps;
+    bool finishWindow = false;  // build every chunk still to do, this step
+    bool spreadNow = false;     // a rebuild due now is spread over steps
+    if (st_.windowNext >= 0 && spread == 1) rebuild = true;  // (spreading switched off: all at once)
+    const bool forced = rebuild;  // by a change, not by motion: all at once
+    if (rebuild) st_.windowNext = -1;  // (an open window's lists are given up)
+    double movedNow = 0;               // the largest move from listPos
     if (!rebuild) {
         // Only the awake pieces' nodes move; under MPI the current ones (the
         // owned and the ghosts: a ghost face moving in counts as much).
         const bool all = w_.sleeping.everything();
         const std::vector<int32_t>& moving = dom ? dom->currentSurf() : w_.sleeping.awakeSurf();
         const auto ns = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(moving.size());
-        double moved2 = 0;
+        const bool window = st_.windowNext >= 0;
+        double moved2 = 0, movedOld2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved2)
         for (int32_t j = 0; j < ns; ++j) {
             const int32_t i = all ? j : moving[j];
@@ -174,8 +185,45 @@ void PieceContactPhase::run(double dt) {
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
         for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip)
             if (st_.pieceActive[ip] && w_.sleeping.asleep(ip)) moved2 = std::max(moved2, w_.sleeping.moved2(ip));
-        rebuild = moved2 > 0.25 * skin * skin;
+        if (window) {
+            // The former lists, still read by the nodes not yet done: every
+            // surface node (a sleeping one too: it may have moved since then).
+            const auto nsAll = static_cast<int32_t>(w_.surfNodes.size());
+#pragma omp parallel for schedule(static) reduction(max : movedOld2)
+            for (int32_t i = 0; i < nsAll; ++i) {
+                const int32_t n = w_.surfNodes[i];
+                movedOld2 = std::max(movedOld2,
+                                     (at(X, n) - Eigen::Map<const Vector3d>(&st_.listPosOld[3 * i])).squaredNorm());
+            }
+        }
+        const double moved = std::sqrt(moved2), half = 0.5 * skin;
+        if (spread == 1) {
+            rebuild = moved2 > 0.25 * skin * skin;  // (the rule of a rebuild in one step, exactly)
+        } else if (window) {
+            // The new lists: built up to now, each valid while no node moves
+            // more than half the skin less the move at its build.
+            if (moved > half - std::max(st_.listSlack, moved)) rebuild = outran = true;
+            else finishWindow = std::sqrt(movedOld2) > half - st_.listSlackOld;
+        } else {
+            // Start early enough for the window to end before the lists in
+            // use expire: the largest move grows by about `growth` a step,
+            // and the window's last chunks come spread - 1 steps after its
+            // start (with half as much again to spare; if motion speeds up,
+            // finishWindow builds the rest at once).  Lists that live only a
+            // few tens of steps are not worth spreading (the margin and the
+            // slack would make rebuilds more frequent): all in one step then,
+            // by the one-step rule.
+            const double growth = st_.lastMoved >= 0 ? std::max(0.0, moved - st_.lastMoved) : 0.0;
+            const double margin = 1.5 * (spread - 1) * growth, room = half - st_.listSlack;
+            spreadNow = room > 10 * margin;
+            rebuild = spreadNow ? moved + margin > room
+                                : (st_.listSlack > 0 ? moved > room : moved2 > 0.25 * skin * skin);
+        }
+        st_.lastMoved = movedNow = moved;
     }
+    // This step: the whole rebuild (one step, or one forced by a change), the
+    // first step of a window, or some of an open window's chunks.
+    const bool windowStart = rebuild && spreadNow && !forced && !outran;
     const double grow = verlet ? skin : 0.0;
 
     // Register, piece by piece, the surface elements that lie near another
@@ -325,6 +373,7 @@ void PieceContactPhase::run(double dt) {
     st_.threadForceData.resize(nth);
     for (int th = 0; th < nth; ++th) st_.threadForceData[th] = st_.threadForce[th].data();
     const bool all = w_.sleeping.everything();
+    const bool windowOpen = windowStart || st_.windowNext >= 0;  // some nodes read their former lists
     // Unit normals of the surface triangles of active pieces (quick plane test);
     // a sleeping piece's once after it stopped (and again after a rebuild,
     // which may register others of its triangles).  The same region zeroes the
@@ -345,8 +394,10 @@ void PieceContactPhase::run(double dt) {
             for (int d = 0; d < 3; ++d) st_.triNormal[3 * t + d] = n[d];
         };
         for (std::size_t ip = 0; ip < np; ++ip) {
-            if (!st_.pieceActive[ip] || (normalsFresh_[ip] && !rebuild)) continue;
-            if (tetItems) {  // (the seed's cases: every tet face may be read)
+            if (!st_.pieceActive[ip] || (normalsFresh_[ip] && !rebuild && !windowOpen)) continue;
+            // (the seed's cases: every tet face may be read; during a spread
+            // rebuild, the former lists may hold triangles no longer registered)
+            if (tetItems || windowOpen) {
 #pragma omp for schedule(static) nowait
                 for (int32_t t = S.pieceTriStart[ip]; t < S.pieceTriStart[ip + 1]; ++t) normal(t);
             } else {
@@ -359,7 +410,7 @@ void PieceContactPhase::run(double dt) {
         }
     }
     for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
-    if (verlet && rebuild && triLists) {
+    if (verlet && triLists && (rebuild || st_.windowNext >= 0)) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
         const auto ns = static_cast<int32_t>(w_.surfNodes.size());
@@ -370,10 +421,40 @@ void PieceContactPhase::run(double dt) {
         // chunk with no second pass to pack them.
         constexpr int32_t CH = PieceContactState::kListChunk;
         const int32_t nChunks = (ns + CH - 1) / CH;
-        st_.listFlat.resize(static_cast<std::size_t>(KL) * CH * nChunks);  // (same size each rebuild: no fill)
-        st_.listCount.resize(ns);
-        st_.listStart.resize(ns);
-        st_.listPos.resize(3 * static_cast<std::size_t>(ns));
+        // Two halves: a spread rebuild writes the new lists into the one
+        // the nodes not yet done do not read.
+        const std::size_t halfSize = static_cast<std::size_t>(KL) * CH * nChunks;
+        if (rebuild) {
+            st_.listFlat.resize(2 * halfSize);  // (same size each rebuild: no fill)
+            st_.listCount.resize(ns);
+            st_.listStart.resize(ns);
+            // The lists' reference positions: every surface node's, now.
+            if (windowStart) std::swap(st_.listPos, st_.listPosOld), st_.listSlackOld = st_.listSlack;
+            st_.listPos.resize(3 * static_cast<std::size_t>(ns));
+            const auto* surf = w_.surfNodes.data();
+            double* ref = st_.listPos.data();
+#pragma omp parallel for schedule(static)
+            for (int32_t i = 0; i < ns; ++i)
+                for (int d = 0; d < 3; ++d) ref[3 * i + d] = X[3 * surf[i] + d];
+            st_.listSlack = 0, st_.lastMoved = 0;
+            st_.listHalf = windowStart ? 1 - st_.listHalf : 0;
+        }
+        // The chunks this step builds: all of them (a rebuild in one step, or
+        // what is left of a window when the former lists expire), none on a
+        // window's first step, or the next part of an open window.
+        int32_t chunk0 = 0, chunk1 = nChunks;
+        if (windowStart) {
+            st_.windowNext = 0;
+            st_.windowChunksPerStep = (nChunks + spread - 2) / (spread - 1);
+            chunk1 = 0;
+        } else if (!rebuild) {
+            chunk0 = st_.windowNext;
+            chunk1 = finishWindow ? nChunks : std::min(nChunks, chunk0 + st_.windowChunksPerStep);
+            st_.listSlack = std::max(st_.listSlack, movedNow);  // these lists are built that far from listPos
+            st_.windowNext = chunk1 < nChunks ? chunk1 : -1;
+            ++st_.windowSteps;
+        }
+        const std::size_t base = static_cast<std::size_t>(st_.listHalf) * halfSize;
         // Per neighbour entry: the reach (ra + rb + skin, summed in that
         // order) and the neighbour's box, as 7 arrays over the entries.
         const std::size_t nq = st_.nbrs.size();
@@ -394,7 +475,6 @@ void PieceContactPhase::run(double dt) {
             const int32_t node = w_.surfNodes[i];
             const int32_t pa = w_.nodePiece[node];
             const Vector3d A = at(X, node);
-            for (int d = 0; d < 3; ++d) st_.listPos[3 * i + d] = A[d];
             if (!st_.pieceActive[pa] || (dom && !dom->owns(node))) return 0;  // (another rank's query point)
             // Branch-free tests (ListKernels.hpp): about one visited item in
             // five passes, unpredictably; more than KL pass: crowded, this
@@ -428,8 +508,8 @@ void PieceContactPhase::run(double dt) {
             return count > KL ? -1 : count;
         };
 #pragma omp parallel for schedule(dynamic, 1)
-        for (int32_t chunk = 0; chunk < nChunks; ++chunk) {
-            int32_t fill = KL * CH * chunk;
+        for (int32_t chunk = chunk0; chunk < chunk1; ++chunk) {
+            auto fill = static_cast<int32_t>(base + static_cast<std::size_t>(KL) * CH * chunk);
             for (int32_t i = CH * chunk; i < std::min(ns, CH * (chunk + 1)); ++i) {
                 int32_t buf[KL + 8];
                 const int count = nodeList(i, buf);
@@ -438,13 +518,15 @@ void PieceContactPhase::run(double dt) {
                 fill += std::max(0, count);
             }
         }
-        st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
-        w_.sleeping.listsRebuilt();  // lists now from the current positions
-        st_.listSkin = skin;
-        st_.listTris = S.nTris();
-        st_.listValid = true;
-        ++st_.listBuilds;
-        if (dom) listDomainVersion_ = dom->currentVersion();
+        if (rebuild) {
+            st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
+            w_.sleeping.listsRebuilt();  // lists now from the current positions
+            st_.listSkin = skin;
+            st_.listTris = S.nTris();
+            st_.listValid = true;
+            ++st_.listBuilds;
+            if (dom) listDomainVersion_ = dom->currentVersion();
+        }
     }
     if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).

@@ -51,6 +51,22 @@ struct PieceContactState {
     static constexpr int32_t kListChunk = 64;
     std::vector<int32_t> listStart, listFlat;
     std::vector<double> listPos;     // surface node positions at the rebuild (3 each)
+    // A rebuild spread over steps (settings.verletRebuildSteps, doc/contacts.md
+    // "Verlet lists"): its first step registers and bins the surface elements
+    // and builds the edge lists, the next ones the nodes' lists chunk by chunk,
+    // into the other half of listFlat, while the nodes not yet done go on with
+    // their former lists.  Those stay valid while no surface node has moved
+    // more than skin/2 - listSlackOld from listPosOld (their reference); the
+    // new lists while none has moved more than skin/2 - listSlack from
+    // listPos, where listSlack is the largest such move at any of their
+    // chunks' builds (lists built a few steps after their reference).
+    std::vector<double> listPosOld;
+    double listSlack = 0, listSlackOld = 0;
+    int32_t windowNext = -1;         // next chunk of an open window (-1: none open)
+    int32_t windowChunksPerStep = 0;
+    int listHalf = 0;                // the half of listFlat the newest lists are in
+    double lastMoved = -1;           // the largest move from listPos at the last step (-1: lists new)
+    long windowSteps = 0;            // steps that built node lists after their window's first
     std::vector<uint8_t> listActive; // pieces active at the rebuild
     double listSkin = 0;
     std::size_t listTris = 0;        // triangle count at the rebuild (pieces added: rebuild)

@@ -243,6 +243,8 @@ public:
         return r;
     }
     long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
+    long verletWindowSteps() const { return pieceContactPhase_.state().windowSteps; }
+    bool verletWindowOpen() const { return pieceContactPhase_.state().windowNext >= 0; }
     // The piece-contact lists and histories (diagnostics, tests).
     const PieceContactState& pieceContactState() const { return pieceContactPhase_.state(); }
     const SurfaceIndex& surfaceIndex() const { return surf_; }

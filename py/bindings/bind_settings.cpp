@@ -60,9 +60,10 @@ void assign(T& member, const py::object& value, const char* name, const SettingR
             throw InputError("World." + std::string(name) + "=" + py::cast<std::string>(py::repr(value)) + " is invalid: " +
                              describe(range));
         }
-        if (!allowed(range, v))
+        const bool integral = std::is_integral_v<T> && !std::is_same_v<T, bool>;
+        if (!allowed(range, v) || (integral && v != std::floor(v)))
             throw InputError("World." + std::string(name) + "=" + py::cast<std::string>(py::repr(value)) + " is invalid: " +
-                             describe(range));
+                             (integral ? "must be a whole number, " : "") + describe(range));
         member = static_cast<T>(v);
     }
 }
@@ -90,7 +91,10 @@ void bindSettings(py::module_& m, py::class_<World>& world) {
         d["engineName"] = engineName;                                                                              \
         d["default"] = toPython(static_cast<T>(def));                                                              \
         d["doc"] = doc;                                                                                            \
-        d["kind"] = std::is_same_v<T, bool> ? "bool" : (std::is_enum_v<T> ? "choice" : "real");                   \
+        d["kind"] = std::is_same_v<T, bool> ? "bool"                                                               \
+                    : std::is_enum_v<T>     ? "choice"                                                             \
+                    : std::is_integral_v<T> ? "integer"                                                            \
+                                            : "real";                                                              \
         d["lo"] = r.lo, d["hi"] = r.hi, d["loOpen"] = r.loOpen, d["hiOpen"] = r.hiOpen;                            \
         d["choices"] = r.choices;                                                                                  \
         d["rule"] = describe(r);                                                                                   \

@@ -220,6 +220,11 @@ void bindWorld(py::module_& m) {
             "gravity", [](const World& w) { return w.gravity; },
             [](World& w, const Eigen::Vector3d& g) { w.setGravity(g); })
         .def_property_readonly("verletRebuilds", &World::verletRebuilds)
+        .def_property_readonly("verletWindowSteps", &World::verletWindowSteps,
+                               "Steps that built nodes' Verlet lists after the first step of their rebuild "
+                               "(verletRebuildSteps > 1 spreads a rebuild over steps).")
+        .def_property_readonly("verletWindowOpen", &World::verletWindowOpen,
+                               "Is a rebuild of the Verlet lists under way, spread over the next steps?")
         .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
              "Is the piece asleep (left out of the step until something near it moves)?")
         .def_property_readonly("nAsleep", &World::nAsleep)

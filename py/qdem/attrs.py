@@ -173,6 +173,8 @@ class WorldSetting(Attr):
         v = getattr(obj.world.core, self.decl["name"])
         if self.decl["kind"] == "choice":
             return self.decl["choices"][v]
+        if self.decl["kind"] == "integer":
+            return int(v)
         return bool(v) if self.decl["kind"] == "bool" else float(v)
 
     def __set__(self, obj, value):
@@ -182,6 +184,15 @@ class WorldSetting(Attr):
                 raise ValueError("%s: %s=%r is invalid: must be one of %s"
                                  % (type(obj).__name__, self.name, value, d["choices"]))
             value = d["choices"].index(value)
+        elif d["kind"] == "integer":
+            ok = _isint(value)
+            if ok:
+                v = int(value)
+                ok = (v > d["lo"] if d["loOpen"] else v >= d["lo"]) and (v < d["hi"] if d["hiOpen"] else v <= d["hi"])
+            if not ok:
+                raise ValueError("%s: %s=%r is invalid: must be a whole number, %s"
+                                 % (type(obj).__name__, self.name, value, d["rule"]))
+            value = int(value)
         elif d["kind"] == "real":
             ok = _isnum(value)
             if ok:

@@ -14,17 +14,22 @@ runs flagged and left out of 'clean').
 
 For our method (broad phase 'triangles', Verlet lists): the amortised step
 (all steps' wall time over the steps), the ordinary step (median of the steps
-without a rebuild) and the rebuild step (median of the steps that rebuilt the
-lists), the number of rebuilds, the phases (amortised).  The seed's cases
+that did no rebuild work), the rebuild step (median of the steps that started
+a rebuild) and, when a rebuild is spread over steps (World.verletRebuildSteps
+> 1, the default; --rebuild-steps sets it), the window step (median of the
+later steps that built nodes' lists) and the whole extra cost of one rebuild
+(its steps' time above the ordinary step's), the number of rebuilds, the
+phases (amortised).  The seed's cases
 A / B / C (cell lists filled anew every step: no rebuild to amortise) are
 timed over fewer steps of the same motion, beside it.
 
     /usr/bin/python3.11 scripts/bench/bench_cubes27.py [--steps 600] [--abc-steps 30] [--rounds 5]
-                                                       [--throw 4] [--out out/bench]
+                                                       [--throw 4] [--rebuild-steps K] [--out out/bench]
 
 Writes cubes27.json and cubes27.png (a bar chart like the seed's Figure 6).
 Targets (issue 16, target 2, 2 threads): our whole step <= 15 ns/tet
-(amortised), the rebuild step <= 1.3x the ordinary step, contacts >= 10x
+(amortised), the costliest step of a rebuild (its first step, or a window
+step if dearer) <= 1.3x the ordinary step, contacts >= 10x
 cheaper than case A; target 3: 1 -> 2 threads >= 1.8x."""
 import argparse
 import json
@@ -43,7 +48,8 @@ CASES = [("ours", 0), ("C", 3), ("B", 2), ("A", 1)]   # World.broadPhase: 0 our 
 PHASES = ["broadPhase", "pointPolygon", "edgeEdge", "elements", "integrate", "obstacles"]
 CONTACT = ["broadPhase", "pointPolygon", "edgeEdge"]
 DT = 6.4e-6   # seed Table 1
-KEYS = ["step_ms", "ordinary_step_ms", "rebuild_step_ms", "contact_ms", "ns_per_tet_step",
+KEYS = ["step_ms", "ordinary_step_ms", "rebuild_step_ms", "window_step_ms", "rebuild_extra_ms", "contact_ms",
+        "ns_per_tet_step",
         "ns_per_tet_step_on_cpu"] + PHASES
 
 
@@ -70,16 +76,18 @@ def scene(L=4.0, mat=None, throw=0.0, seed=3):
     return w
 
 
-def run(w, state, case, threads, steps):
+def run(w, state, case, threads, steps, rebuildSteps=None):
     """One timed run from the saved state: per-step wall times, which steps
     rebuilt the Verlet lists, phases summed."""
     w.core.loadState(state)
     w.core.broadPhase = case
+    if rebuildSteps:
+        w.core.verletRebuildSteps = rebuildSteps
     _core.setThreads(threads)
     w.core.step(DT, 3)          # lists and thread layout built anew after loading
     acc = dict.fromkeys(PHASES, 0.0)
-    times, rebuilt = [], []
-    count = w.core.verletRebuilds
+    times, rebuilt, windowed = [], [], []
+    count, wcount = w.core.verletRebuilds, w.core.verletWindowSteps
     probe = LoadProbe()
     t0 = time.perf_counter()
     for _ in range(steps):
@@ -89,22 +97,31 @@ def run(w, state, case, threads, steps):
         now = w.core.verletRebuilds
         rebuilt.append(now != count)
         count = now
+        windowed.append(w.core.verletWindowSteps != wcount)
+        wcount = w.core.verletWindowSteps
         for k, v in w.core.timings.items():
             if k in acc:
                 acc[k] += v
     wall = time.perf_counter() - t0
     rec = probe.finish(wall)
-    ordinary = [t for t, r in zip(times, rebuilt) if not r]
+    ordinary = [t for t, r, wi in zip(times, rebuilt, windowed) if not r and not wi]
     rebuild = [t for t, r in zip(times, rebuilt) if r]
+    window = [t for t, r, wi in zip(times, rebuilt, windowed) if wi and not r]
+    ordMedian = statistics.median(ordinary) if ordinary else None
+    extra = (sum(rebuild) + sum(window) - (len(rebuild) + len(window)) * ordMedian) / len(rebuild) \
+        if rebuild and ordMedian else None
     ms = {k: 1e3 * v / steps for k, v in acc.items()}
     rec.update(ms)
     # On CPU: the process's CPU time over the threads (waiting threads sleep:
     # OMP_WAIT_POLICY=passive): the step while its threads hold cores.
     rec.update(step_ms=1e3 * sum(times) / steps, ns_per_tet_step=1e9 * sum(times) / steps / w.core.nTets,
                ns_per_tet_step_on_cpu=1e9 * rec["own_cpu_s"] / threads / steps / w.core.nTets,
-               ordinary_step_ms=1e3 * statistics.median(ordinary) if ordinary else None,
+               ordinary_step_ms=1e3 * ordMedian if ordinary else None,
                rebuild_step_ms=1e3 * statistics.median(rebuild) if rebuild else None,
-               rebuilds=sum(rebuilt), contact_ms=sum(ms[k] for k in CONTACT),
+               window_step_ms=1e3 * statistics.median(window) if window else None,
+               rebuild_extra_ms=1e3 * extra if extra is not None else None,
+               rebuilds=sum(rebuilt), window_steps=sum(windowed),
+               verletRebuildSteps=w.core.verletRebuildSteps, contact_ms=sum(ms[k] for k in CONTACT),
                pointPolygonContacts=w.core.contactCounts["pointPolygon"],
                edgeEdgeContacts=w.core.contactCounts["edgeEdge"])
     return rec
@@ -150,8 +167,10 @@ def targets(res):
         "ours_whole_step_ns_per_tet_2_threads": {"target": "<= 15", "measured": get(two, "ours", "ns_per_tet_step"),
                                                  "from": best(two["ours"], "ns_per_tet_step")[1] if two else None},
         "ours_rebuild_over_ordinary_step_2_threads": {
-            "target": "<= 1.3", "measured": ratio(get(two, "ours", "rebuild_step_ms"),
-                                                  get(two, "ours", "ordinary_step_ms"))},
+            "target": "<= 1.3", "what": "the costliest step of a rebuild (its first, or a later window step)",
+            "measured": ratio(max((v for v in (get(two, "ours", "rebuild_step_ms"), get(two, "ours", "window_step_ms"))
+                                   if v is not None), default=None),
+                              get(two, "ours", "ordinary_step_ms"))},
         "contact_A_over_ours_2_threads": {"target": ">= 10", "measured": ratio(get(two, "A", "contact_ms"),
                                                                                get(two, "ours", "contact_ms"))},
         "ours_speedup_1_to_2_threads": {"target": ">= 1.8", "measured": ratio(get(one, "ours", "step_ms"),
@@ -166,6 +185,8 @@ def main():
     ap.add_argument("--rounds", type=int, default=5, help="runs of each case and thread count, interleaved")
     ap.add_argument("--throw", type=float, default=4.0, help="throw speed scale [m/s] (0: the static stack)")
     ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--rebuild-steps", type=int, default=None,
+                    help="World.verletRebuildSteps for our method (default: the engine's default)")
     ap.add_argument("--out", default="out/bench")
     a = ap.parse_args()
     if a.steps < 1 or a.rounds < 1 or a.abc_steps < 0:
@@ -185,13 +206,14 @@ def main():
     for r in range(a.rounds):
         for t in threadList:
             for name, case in cases:
-                x = run(w, state, case, t, a.steps if name == "ours" else a.abc_steps)
+                x = run(w, state, case, t, a.steps if name == "ours" else a.abc_steps, a.rebuild_steps)
                 runs[str(t)][name].append(x)
-                print("  round %d, %d thread(s), %-4s: step %.2f ms (%.1f ns/tet, %.1f on CPU; ordinary %s, rebuild %s, %d "
-                      "rebuilds), contact %.2f ms, elements %.2f ms; load %.2f (own %.2f), others %.2f%s"
+                print("  round %d, %d thread(s), %-4s: step %.2f ms (%.1f ns/tet, %.1f on CPU; ordinary %s, rebuild %s, "
+                      "window %s, %d rebuilds), contact %.2f ms, elements %.2f ms; load %.2f (own %.2f), others %.2f%s"
                       % (r, t, name, x["step_ms"], x["ns_per_tet_step"], x["ns_per_tet_step_on_cpu"],
                          "%.2f" % x["ordinary_step_ms"] if x["ordinary_step_ms"] else "-",
-                         "%.2f" % x["rebuild_step_ms"] if x["rebuild_step_ms"] else "-", x["rebuilds"],
+                         "%.2f" % x["rebuild_step_ms"] if x["rebuild_step_ms"] else "-",
+                         "%.2f" % x["window_step_ms"] if x["window_step_ms"] else "-", x["rebuilds"],
                          x["contact_ms"], x["elements"], x["load1"], x["own_load"], x["other_cores"],
                          " BUSY" if x["busy"] else ""), flush=True)
     res = {}
