@@ -233,7 +233,13 @@ void PieceContactPhase::run(double dt) {
     // the arrays (its triangles, tets or edges' id range), then the
     // stretches are packed in piece order: the same items, in the same
     // order, as one pass piece after piece.
-    const bool edgeRebuild = rebuild || !verlet;  // edge lists follow the same rebuilds
+    // Edge lists follow the same rebuilds; a spread rebuild registers the
+    // edges and builds their lists on its second step (the former ones,
+    // registered with the former lists, serve until then).
+    const bool edgesNow = st_.windowEdgesPending && !rebuild;
+    const bool edgeRebuild = (rebuild && !windowStart) || edgesNow || !verlet;
+    st_.windowEdgesPending = windowStart;
+    const bool registerNow = rebuild || edgeRebuild;
     const bool allTets = w_.settings.broadPhase == BroadPhase::AllTets;
     // Piece ip's candidate items: a range of ids (its triangles; its tets or
     // surface tets in the seed's cases A/B/C); the ones registered are
@@ -289,8 +295,8 @@ void PieceContactPhase::run(double dt) {
         return true;
     };
     const auto npi = static_cast<int32_t>(np);
-#pragma omp parallel for schedule(dynamic, 1) reduction(max : itemR, edgeR) if (edgeRebuild)
-    for (int32_t ip = 0; ip < (edgeRebuild ? npi : 0); ++ip) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(max : itemR, edgeR) if (registerNow)
+    for (int32_t ip = 0; ip < (registerNow ? npi : 0); ++ip) {
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
         if (st_.pieceActive[ip] && triLists && rebuild) {
@@ -353,8 +359,8 @@ void PieceContactPhase::run(double dt) {
     }
     if (rebuild) st_.itemReach = itemR + 2 * rMax + grow, st_.listKinds = lists;
     // (each piece's grids are its own: built in parallel)
-#pragma omp parallel for schedule(dynamic, 1) if (edgeRebuild)
-    for (int32_t ip = 0; ip < (edgeRebuild ? npi : 0); ++ip) {
+#pragma omp parallel for schedule(dynamic, 1) if (registerNow)
+    for (int32_t ip = 0; ip < (registerNow ? npi : 0); ++ip) {
         const int32_t i0 = st_.itemStart[ip], i1 = st_.itemStart[ip + 1];
         // Cells twice the reach: a query box of +-reach then spans 2 cells per
         // axis (8 cells) instead of 3 (27), for a few more items per cell.

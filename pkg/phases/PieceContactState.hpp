@@ -52,10 +52,11 @@ struct PieceContactState {
     std::vector<int32_t> listStart, listFlat;
     std::vector<double> listPos;     // surface node positions at the rebuild (3 each)
     // A rebuild spread over steps (settings.verletRebuildSteps, doc/contacts.md
-    // "Verlet lists"): its first step registers and bins the surface elements
-    // and builds the edge lists, the next ones the nodes' lists chunk by chunk,
-    // into the other half of listFlat, while the nodes not yet done go on with
-    // their former lists.  Those stay valid while no surface node has moved
+    // "Verlet lists"): its first step registers and bins the surface
+    // triangles, the second the feature edges (with their lists), and the
+    // steps after the first build the nodes' lists chunk by chunk, into the
+    // other half of listFlat, while the nodes not yet done go on with their
+    // former lists.  Those stay valid while no surface node has moved
     // more than skin/2 - listSlackOld from listPosOld (their reference); the
     // new lists while none has moved more than skin/2 - listSlack from
     // listPos, where listSlack is the largest such move at any of their
@@ -64,6 +65,7 @@ struct PieceContactState {
     double listSlack = 0, listSlackOld = 0;
     int32_t windowNext = -1;         // next chunk of an open window (-1: none open)
     int32_t windowChunksPerStep = 0;
+    bool windowEdgesPending = false; // the window's edges are registered on its second step
     int listHalf = 0;                // the half of listFlat the newest lists are in
     double lastMoved = -1;           // the largest move from listPos at the last step (-1: lists new)
     long windowSteps = 0;            // steps that built node lists after their window's first

@@ -103,3 +103,53 @@ def test_verlet_rebuild_steps_is_a_whole_number_from_1_to_64():
     assert e.verletRebuildSteps == 2 and isinstance(e.verletRebuildSteps, int)
     with pytest.raises(ValueError, match="whole number"):
         e.verletRebuildSteps = 1.5
+
+
+def _slidingCrossedBars(broadPhase, spread, steps=4000):
+    """A square bar turned 45 degrees about its axis, lying ridge down across
+    the ridges of two held bars (crossed at 90 degrees, 12 cm apart) under
+    gravity, and sliding along its axis at 0.3 m/s (y blocked: it slides
+    and bounces, but does not roll off): it rests on two edge-edge contacts
+    whose crossings run along its ridge over segment ends, while the lists
+    are rebuilt every ~200 steps (a spread rebuild registers the edges on
+    its second step).  Returns the edge-edge count of every step, the final
+    positions and the list counters."""
+    import math
+    mat = rubber(radius=1e-3, frictionPiece=0.05)
+    w = qdem.World()
+    w.core.gravity = (0, 0, -9.81)
+    h = 0.01 * math.sqrt(2)
+    top = w.addPiece(qdem.boxMesh((0.22, 0.02, 0.02), (11, 1, 1)), mat, pos=(-0.02, 0, h + 0.9e-3),
+                     ori=((1, 0, 0), math.pi / 4), vel=(0.3, 0, 0))
+    top.blocked[:] = 2
+    for x in (-0.06, 0.06):
+        rail = w.addPiece(qdem.boxMesh((0.02, 0.22, 0.02), (1, 11, 1)), mat, pos=(x, 0, -h - 1e-3),
+                          ori=((0, 1, 0), math.pi / 4))
+        rail.blocked[:] = 7
+    w.core.broadPhase = broadPhase
+    w.core.verletRebuildSteps = spread
+    w.core.verletSkin = 4.0  # (lists that live long enough to be spread)
+    dt = 0.5 * w.stableDt()["combined"]
+    counts = []
+    for _ in range(steps):
+        w.core.step(dt, 1)
+        counts.append(w.core.contactCounts["edgeEdge"])
+    return np.array(counts), np.array(w.core.pos), dict(rebuilds=w.core.verletRebuilds,
+                                                         windowSteps=w.core.verletWindowSteps)
+
+
+def test_spread_rebuild_finds_the_cell_search_edge_contacts_every_step():
+    """Edge-edge under a spread rebuild: the former edge lists serve on the
+    window's first step, the new ones (registered on its second) after; the
+    contacts are the cell search's at every step and the run equals the
+    one-step rebuild's."""
+    ours, posOurs, info = _slidingCrossedBars(0, 4)
+    one, posOne, infoOne = _slidingCrossedBars(0, 1)
+    seed, posSeed, _ = _slidingCrossedBars(3, 4)
+    assert (ours >= 2).sum() > 0.5 * len(ours), "the bar must rest on both rails"
+    assert info["rebuilds"] >= 10 and info["windowSteps"] >= 1.5 * info["rebuilds"], info  # most spread
+    assert infoOne["windowSteps"] == 0
+    np.testing.assert_array_equal(ours, seed)
+    np.testing.assert_array_equal(ours, one)
+    assert np.abs(posOurs - posSeed).max() < 1e-9
+    assert np.abs(posOurs - posOne).max() <= 1e-12
