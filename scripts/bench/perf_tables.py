@@ -104,19 +104,31 @@ def ops(d):
 def cubes27(d):
     print("%d tets: %s; %s; ms per step, median (min–max) of the quiet rounds, quiet/all rounds; ours amortised "
           "over its Verlet rebuilds, A/B/C fill their cell lists every step.\n" % (d["tets"], d["scene"], d["date"]))
-    print("| threads | case | amortised step | ordinary step | rebuild step | window step | rebuilds | contacts "
-          "| ns/tet (amortised) | ns/tet on CPU |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| threads | case | amortised step | ordinary step | rebuild step | window step | costliest rebuild step "
+          "/ ordinary (within a run) | rebuilds | contacts | ns/tet (amortised) | ns/tet on CPU |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for th, cases in sorted(d["threads"].items()):
         for name, c in cases.items():
-            print("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            print("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 th, name, fig(c["clean"]["step_ms"], c["all"]["step_ms"], 2),
                 fig(c["clean"]["ordinary_step_ms"], c["all"]["ordinary_step_ms"], 2),
                 fig(c["clean"]["rebuild_step_ms"], c["all"]["rebuild_step_ms"], 2),
                 fig(c["clean"].get("window_step_ms"), c["all"].get("window_step_ms"), 2),
+                fig(c["clean"].get("costliest_rebuild_over_ordinary"), c["all"].get("costliest_rebuild_over_ordinary"),
+                    2),
                 c["rebuilds_per_round"], fig(c["clean"]["contact_ms"], c["all"]["contact_ms"], 2),
                 fig(c["clean"]["ns_per_tet_step"], c["all"]["ns_per_tet_step"], 1),
                 fig(c["clean"].get("ns_per_tet_step_on_cpu"), c["all"].get("ns_per_tet_step_on_cpu"), 1)))
+    paired = d.get("paired_variant_ratios") or {}
+    if paired:
+        print("\nVariants of ours against ours, round by round (median (min–max) of the paired ratios):\n")
+        print("| threads | variant | amortised step | ordinary step | contacts | elements |")
+        print("| --- | --- | --- | --- | --- | --- |")
+        for th, byVariant in sorted(paired.items()):
+            for name, r in byVariant.items():
+                cell = ["%.3f (%.3f–%.3f)" % (r[k]["median"], r[k]["min"], r[k]["max"]) if r.get(k) else "—"
+                        for k in ("step_ms", "ordinary_step_ms", "contact_ms", "elements")]
+                print("| %s | %s | %s |" % (th, name, " | ".join(cell)))
     print("\nTargets (issue 16 target 2, 2 threads):")
     for k, v in d["targets"].items():
         print("- %s: target %s, measured %s" % (k, v["target"], "not measured" if v["measured"] is None
