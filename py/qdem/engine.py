@@ -135,11 +135,15 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
 
     def _worldReplaced(self, old, new):
         """O.reset() replaced the default world: the new one takes this engine's
-        settings (they live in the world), and the engine forgets the old scene."""
-        for k in AttrObject.attrNames.__func__(type(self)):
-            a = getattr(type(self), k)
-            if isinstance(a, WorldSetting):
-                setattr(new.core, a.decl["name"], getattr(old.core, a.decl["name"]))
+        settings (they live in the world), and the engine forgets the old scene.
+        A world that O.load rebuilt keeps the loaded scene's settings: this
+        engine is not one of that scene's (O.load put its own in O.engines),
+        and a script touching its old engine object must not change them."""
+        if not getattr(new, "_restored", False):
+            for k in AttrObject.attrNames.__func__(type(self)):
+                a = getattr(type(self), k)
+                if isinstance(a, WorldSetting):
+                    setattr(new.core, a.decl["name"], getattr(old.core, a.decl["name"]))
         self._freshRunState()
 
     def __repr__(self):
@@ -441,4 +445,11 @@ def _step(qdemId):
         engine._run()
     except Exception as e:
         lifecycle._pending.append(e)
+        # YADE's periodic engines mark a step done before their command runs
+        # (iterLast = O.iter), and a step that raised does not advance O.iter:
+        # a script that catches the error and runs on (doc/yade.md) would have
+        # its next step skip QDEM while NewtonIntegrator still moved YADE's
+        # bodies, and QDEM's clock would stay a step behind for good.
+        if engine is not None:
+            engine.iterLast = O.iter - 1
         raise

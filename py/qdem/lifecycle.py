@@ -126,6 +126,7 @@ def restoreWorld(blob, into=None):
         return into, meta["engines"]
     worldModule.reset()
     w = worldModule.defaultWorld()
+    w._restored = True  # (an engine of the scene before does not carry its settings into it)
     mats = [QdemMat(**m) for m in meta["materials"]]
     for m in mats:
         w.materialIndex(m)
@@ -203,7 +204,19 @@ def afterLoad(O):
         # so the script's Piece objects stay live on the worker.
         states = restoreWorld(blob, into=worldModule.defaultWorld())[1]
     else:
-        _, states = restoreWorld(blob)
+        old = worldModule._default
+        same = old is not None and _sameWorld(old, blob)
+        new, states = restoreWorld(blob)
+        if same:
+            # The scene loaded holds the same pieces (O.loadTmp rewinding a
+            # run, O.reload): the script's Piece handles follow it, as its
+            # YADE body ids do, instead of reading the scene before the load
+            # and losing what is written to them.
+            for i, p in enumerate(old.pieces):
+                p.world, p._material = new, new.pieces[i]._material
+                new.pieces[i] = p
+        if old is not None:
+            old._replacedBy = "O.load" if not same else None
     O.tags[TAG] = ""  # the live scene keeps no stale copy (YADE's tags cannot be deleted)
     _rebind(O, states)
 

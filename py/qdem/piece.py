@@ -32,8 +32,18 @@ class Piece:
                              "or start from a new QdemMat before addPiece.")
 
     # -- views -----------------------------------------------------------------
+    def _live(self, name):
+        """Refuses a handle of a scene that O.load replaced with other pieces:
+        it would read the scene before the load, and what is written to it
+        would go nowhere."""
+        if getattr(self.world, "_replacedBy", None):
+            raise RuntimeError("qdem: piece.%s of a piece of the scene before %s, which loaded a scene with other "
+                               "pieces: this handle no longer steps. Take the loaded scene's pieces from "
+                               "qdem.defaultWorld().pieces." % (name, self.world._replacedBy))
+
     def _nodes(self, name):
         """A node array of the world restricted to this piece (no waking)."""
+        self._live(name)
         _requireCurrent(self.world.core, name)
         return getattr(self.world.core, name)[self.nodeSlice]
 
@@ -41,6 +51,7 @@ class Piece:
         """A node array for writing: wakes the piece so that what is written
         takes effect; read-only while the piece is not dynamic (it is held
         where it is: set dynamic = True first)."""
+        self._live(name)
         core = self.world.core
         _requireCurrent(core, name)
         a = getattr(core, name)[self.nodeSlice]
@@ -125,6 +136,7 @@ class Piece:
 
     def stress(self):
         """Cauchy stress (t,6: xx yy zz yz xz xy) [Pa] of each tet, elastic + viscous."""
+        self._live("stress")
         return self.world.core.stress()[self.tetSlice]
 
     def vonMises(self):
@@ -141,6 +153,7 @@ class Piece:
     # -- rigid-body summaries --------------------------------------------------
     @property
     def totalMass(self):
+        self._live("totalMass")
         return self.world.core.pieceMass(self.id)
 
     @property

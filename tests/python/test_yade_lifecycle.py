@@ -194,6 +194,101 @@ def test_qdem_errors_reach_the_script_as_themselves(scene):
         O.wait()
 
 
+def test_a_caught_error_loses_no_qdem_step(scene):
+    """The retry pattern of doc/yade.md: a step refused for its O.dt, caught,
+    O.dt lowered, the run goes on.  Before, YADE counted the refused step as
+    done for the QdemEngine (a PyRunner), so the retry's first step skipped
+    QDEM while NewtonIntegrator moved the sphere: QDEM's clock stayed a step
+    behind YADE's and the piece fell behind a sphere let go beside it."""
+    O = scene
+    from yade import (Bo1_Sphere_Aabb, ForceResetter, InsertionSortCollider, InteractionLoop, NewtonIntegrator,
+                      utils)
+    piece = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber(), pos=(0, 0, 2))
+    ball = O.bodies.append(utils.sphere((1, 0, 2), 0.05))
+    qe = qdem.QdemEngine()
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]), InteractionLoop([], [], []), qe,
+                 NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    core = qdem.defaultWorld().core
+    good = 0.5 * qe.stableTimeStep()
+    O.dt = good
+    O.run(20, True)
+    for retry in (lambda: O.run(20, True), O.step):
+        O.dt = 3 * good
+        with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+            retry()
+        with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
+            O.step()  # (refused again: the step is QDEM's to refuse, not skipped)
+        O.dt = good
+        O.run(20, True)
+        assert core.iter == O.iter
+        assert core.time == pytest.approx(O.time, rel=1e-12)
+        assert piece.velocity()[2] == pytest.approx(O.bodies[ball].state.vel[2], rel=1e-9)
+
+
+def _droppedBlock(O):
+    from yade import ForceResetter, NewtonIntegrator, utils
+    block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber(), pos=(0, 0, 0.3), angVel=(0, 2, 0))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    engine = qdem.QdemEngine()
+    O.engines = [ForceResetter(), engine, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * engine.stableTimeStep()
+    return block, engine
+
+
+def test_the_old_engine_object_leaves_a_loaded_scene_s_settings_alone(scene):
+    """After O.loadTmp the script still holds its engine object; touching it
+    (here stableTimeStep()) copied its settings into the loaded scene, whose
+    run then parted from the saved one.  The loaded scene keeps its own."""
+    O = scene
+    block, engine = _droppedBlock(O)
+    O.run(10, True)
+    O.saveTmp("rewind")
+    O.run(150, True)
+    ref = np.array(block.pos)
+    engine.damping, engine.friction = 0.4, False
+    O.run(10, True)
+    O.loadTmp("rewind")
+    engine.stableTimeStep()
+    loaded = [e for e in O.engines if isinstance(e, qdem.QdemEngine)][0]
+    assert loaded.damping == 0.0 and loaded.friction
+    O.run(150, True)
+    assert np.array_equal(np.array(qdem.defaultWorld().pieces[0].pos), ref)
+
+
+def test_piece_handles_follow_a_rewind_and_refuse_another_scene(scene, tmp_path):
+    """A Piece handle after O.loadTmp of the same scene (a rewind) reads and
+    writes the loaded scene, as YADE body ids do; after O.load of a scene with
+    other pieces it refuses, instead of reading the scene before the load and
+    losing what is written to it."""
+    O = scene
+    block, _ = _droppedBlock(O)
+    O.run(10, True)
+    O.saveTmp("rewind")
+    z0 = block.centroid()[2]
+    O.run(200, True)
+    assert block.centroid()[2] < z0 - 1e-3
+    O.loadTmp("rewind")
+    assert qdem.defaultWorld().pieces[0] is block
+    assert block.centroid()[2] == z0
+    block.extForce[:, 2] = 1000.0 / len(block.mass)  # lifts it: the write reaches the loaded scene
+    O.run(100, True)
+    assert block.centroid()[2] > z0
+    # a scene with other pieces
+    other = str(tmp_path / "other.yade")
+    O.reset()
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, 0.5))
+    from yade import ForceResetter, NewtonIntegrator
+    O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator()]
+    O.save(other)
+    O.reset()
+    block2, _ = _droppedBlock(O)
+    O.load(other)
+    with pytest.raises(RuntimeError, match="qdem.defaultWorld\\(\\).pieces"):
+        block2.centroid()
+    with pytest.raises(RuntimeError, match="before O.load"):
+        block2.vel[:] = 0
+
+
 def test_uncaught_error_ends_yade_with_a_nonzero_exit(tmp_path):
     r = _yade(tmp_path, SCENE + "O.dt = 3 * qe.stableTimeStep()\nO.run(10, True)\nprint('NOT REACHED')\n")
     assert r.returncode != 0
