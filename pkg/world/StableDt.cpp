@@ -137,8 +137,20 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     return std::sqrt(best);
 }
 
+// A step that is not a positive finite number, with the likely cause named:
+// stableTimeStep() is inf while no piece is there, and 0.8 x inf is inf.
+static void requirePositiveFinite(double dt) {
+    if (dt > 0 && std::isfinite(dt)) return;
+    if (std::isinf(dt) && dt > 0)
+        throw StabilityError(
+            "QDEM: time step inf is not a positive number. A stable time step computed before any piece was added "
+            "is inf (nothing limits it): set O.dt from QdemEngine.stableTimeStep() after qdem.addPiece, or give it "
+            "a number.");
+    throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+}
+
 void World::checkCurrentDt(double dt) const {
-    if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+    requirePositiveFinite(dt);
     requireGathered("checkCurrentDt");
     stableDt();  // fills the reference frequencies
     for (std::size_t i = 0; i < pieces.size(); ++i) {
@@ -355,7 +367,7 @@ StableDt World::stableDt() const {
 
 void World::checkDt(double dt) const {
     const StableDt s = stableDt();
-    if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError(cat("QDEM: time step ", dt, " is not a positive number"));
+    requirePositiveFinite(dt);
     if (!(dt <= s.combined) && s.obstacleIndex >= 0 && s.obstacle <= s.combined) {
         const Obstacle& o = obstacles[s.obstacleIndex];
         throw StabilityError(cat(
