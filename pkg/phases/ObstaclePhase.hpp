@@ -2,6 +2,8 @@
 // step.  Owns the node-obstacle contact history and the per-(piece,
 // obstacle) reactions that sleeping pieces keep pushing with.
 #pragma once
+#include <string>
+#include <utility>
 #include <cstdint>
 #include <vector>
 
@@ -57,6 +59,10 @@ public:
     void stateLoaded() override { startChecked_.assign(startChecked_.size(), 1); }
     // A new obstacle list: every piece is checked against it once.
     void obstaclesChanged() { startChecked_.assign(startChecked_.size(), 0); }
+    // Pieces that started pressed into an obstacle by more than a quarter of their
+    // node radius (not refused: their node centres are outside), one message
+    // each, handed over once (the engine turns them into warnings).
+    std::vector<std::string> takeStartWarnings() { return std::exchange(startWarnings_, {}); }
 
     // The obstacles each piece could reach in the last step (CSR: piece p's
     // are pieceObstacles()[pieceObstacleBegin()[p] .. [p + 1])), and what
@@ -99,6 +105,7 @@ private:
     Column<double> slotShear_;
     Column<int8_t> slotSide_;
     std::vector<uint8_t> startChecked_;     // per piece: start overlap checked for this obstacle list
+    std::vector<std::string> startWarnings_;
     std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
     std::vector<int> pieceObstacles_, pieceObstacleBegin_;
     std::vector<PairConst> pairConst_;      // per (piece, obstacle) pair: the contact model's constants

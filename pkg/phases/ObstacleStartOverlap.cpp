@@ -16,6 +16,7 @@
 #include <limits>
 #include <sstream>
 
+#include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "ObstaclePhase.hpp"
@@ -59,10 +60,37 @@ void ObstaclePhase::checkStartOverlaps() {
             double depth = 0;  // how far the deepest node centre is past the obstacle's surface
             int nPast = 0;
             Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+            // Not past, but pressed in: the deepest spring compression and
+            // the energy the springs hold (what throws a piece placed with
+            // its mesh face flush on a floor: compression r, a full radius).
+            double pressed = 0, stored = 0;
+            Eigen::Vector3d pressedNormal = Eigen::Vector3d::Zero();
             for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
                 const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * w_.surfNodes[s]]);
                 double d;
                 Eigen::Vector3d nd;
+                {
+                    double ov = 0;
+                    Eigen::Vector3d np;
+                    if (o.kind == ObstacleKind::Facet) {
+                        const TriPoint tp = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
+                        const double dist = (x - tp.point).norm();
+                        ov = r - dist;
+                        // (a node on the facet: its normal, towards the piece)
+                        np = dist > 1e-12 * r ? Eigen::Vector3d((x - tp.point) / dist)
+                                              : Eigen::Vector3d(side * (o.worldVerts[1] - o.worldVerts[0])
+                                                                           .cross(o.worldVerts[2] - o.worldVerts[0])
+                                                                           .normalized());
+                    } else {
+                        ObstacleHit hit;
+                        if (touchObstacle(o, x, r, side, hit)) ov = hit.overlap, np = hit.normal;
+                    }
+                    if (ov > 0 && ov <= r) {
+                        const double kn = w_.surfWeight[s] * pairLaw(pairConst_[j], w_.mass[w_.surfNodes[s]]).kn;
+                        stored += 0.5 * kn * ov * ov;
+                        if (ov > pressed) pressed = ov, pressedNormal = np;
+                    }
+                }
                 if (o.kind == ObstacleKind::Facet) {
                     // Past the triangle itself: on the far side of its plane
                     // with the foot of the perpendicular inside it.  (Not its
@@ -89,7 +117,29 @@ void ObstaclePhase::checkStartOverlaps() {
                     normal = nd;
                 }
             }
-            if (nPast == 0) continue;
+            if (nPast == 0) {
+                if (pressed > 0.25 * r) {
+                    // The piece rests where its springs carry its weight, a
+                    // compression of m g / (n kn), a small part of r.
+                    std::ostringstream m;
+                    m.precision(3);
+                    const double speed = std::sqrt(2 * stored / p.mass);
+                    m << "qdem: piece " << ip << " starts pressed " << pressed << " m (" << 100 * pressed / r
+                      << " % of its node radius " << r << " m) into obstacle body " << o.bodyId << " ("
+                      << kindName(o) << "): its contact springs hold " << stored
+                      << " J, enough to throw it off at up to " << speed
+                      << " m/s. A piece's surface is its nodes' spheres, r outside the mesh: to start it at rest ";
+                    if (std::fabs(pressedNormal[2]) > 0.999)
+                        m << "place it " << pressed << " m " << (pressedNormal[2] > 0 ? "higher" : "lower")
+                          << " (a block on a floor: centre at half its height + r)";
+                    else
+                        m << "move it " << pressed << " m along (" << pressedNormal[0] << ", " << pressedNormal[1]
+                          << ", " << pressedNormal[2] << ")";
+                    m << ".";
+                    startWarnings_.push_back(m.str());
+                }
+                continue;
+            }
             std::ostringstream m;
             m.precision(3);
             m << "piece " << ip << " starts inside obstacle body " << o.bodyId << " (" << kindName(o)

@@ -129,6 +129,9 @@ public:
     // edge narrower than the node spacing passed between the nodes
     // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.
     ObstacleEdgeCrossing obstacleEdgeCrossing() const;
+    // Pieces that started pressed into an obstacle by more than a quarter of their
+    // node radius (ObstaclePhase::takeStartWarnings), handed over once.
+    std::vector<std::string> takeStartWarnings() { return obstaclePhase_.takeStartWarnings(); }
 
     // ---- restarts (Checkpoint.cpp) ---------------------------------------
     // The dynamic state (positions, velocities, contact histories, sleeping

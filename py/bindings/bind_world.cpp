@@ -185,6 +185,9 @@ void bindWorld(py::module_& m) {
             "Box and Facet edges crossing a piece's surface triangles (an edge narrower than the node spacing "
             "passed between the nodes): dict of count and the first one's obstacle index, YADE bodyId, piece "
             "and point.")
+        .def("takeStartWarnings", &World::takeStartWarnings,
+             "Messages about pieces that started pressed into a YADE obstacle by more than a quarter of their node "
+             "radius / 4 (thrown off by their contact springs), each handed over once; QdemEngine warns with them.")
         .def("checkCurrentDt", &World::checkCurrentDt, py::arg("dt"),
              "Raise StabilityError when dt exceeds the stable step of the current (strained) shape.")
         .def("stableDt",

@@ -337,6 +337,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         checking = self.checkPeriod and core.iter % self.checkPeriod == 0
         if core.mpiSize > 1 and (checking or (self.gatherPeriod and core.iter % self.gatherPeriod == 0)):
             core.gatherAll()  # every rank sees every node: the checks agree, scripts read current arrays
+        for msg in core.takeStartWarnings():  # pieces placed pressed into an obstacle: at once (they are thrown)
+            warnings.warn(msg, RuntimeWarning, stacklevel=3)
         if checking:
             self._checkInverted(core, dt)  # first: an inverted element is named as inverted
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
