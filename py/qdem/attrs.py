@@ -156,7 +156,11 @@ nonNegative = number(0)
 
 class WorldSetting(Attr):
     """An engine attribute that is a setting of the engine's QDEM world: read
-    from and written to ``obj.world.core`` (no copy kept in the engine).  Built
+    from and written to ``obj.world.core`` while the engine is the one that
+    steps that world, and kept in the engine's own ``_own`` as well, so that
+    creating another engine (a dead one, a throw-away one to read a stable
+    step) never changes the settings of the one that runs (engine.py,
+    ``_activate``).  Built
     from the setting's one declaration in C++ (pkg/world/Settings.hpp, exposed
     as ``qdem._core.settings``): default, docstring and allowed values."""
 
@@ -170,6 +174,8 @@ class WorldSetting(Attr):
     def __get__(self, obj, objtype=None):
         if obj is None:
             return self
+        if not obj._ownsSettings():  # (another engine steps this world: this one's own values)
+            return obj._own[self.name]
         v = getattr(obj.world.core, self.decl["name"])
         if self.decl["kind"] == "choice":
             return self.decl["choices"][v]
@@ -206,7 +212,9 @@ class WorldSetting(Attr):
             if msg:
                 raise ValueError("%s: %s=%r is invalid: %s" % (type(obj).__name__, self.name, value, msg))
             value = bool(value)
-        setattr(obj.world.core, d["name"], value)
+        obj._own[self.name] = d["choices"][value] if d["kind"] == "choice" else value
+        if obj._ownsSettings():
+            setattr(obj.world.core, d["name"], value)
 
 
 def worldSettings(namespace):

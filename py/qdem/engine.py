@@ -12,6 +12,7 @@ the Python glue is a few microseconds plus a few per obstacle."""
 import math
 import time
 import warnings
+import weakref
 
 import numpy as np
 from yade import O, PyRunner
@@ -93,12 +94,22 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                 raise TypeError("QdemEngine: unknown keyword %r; known: world, label, dead, %s"
                                 % (k, ", ".join(known)))
         self._setWorld(world)
-        # A new engine starts its world from the declared defaults (as YADE engines
-        # start from theirs), then takes the keywords; afterwards the world holds them.
+        # A new engine starts from the declared defaults (as YADE engines start
+        # from theirs), then takes the keywords.  They go into the world at
+        # once unless another live engine steps it (two engines, one dead; a
+        # throw-away QdemEngine() made to read a stable step: they reset the
+        # running one's settings, found by a tester): then when this engine
+        # first steps or computes a stable step (_activate).
+        self._own = {}
+        self._owner = False
         for k in known:
             a = getattr(type(self), k)
-            if isinstance(a, WorldSetting) and k not in kw:
-                setattr(self, k, a.default)
+            if isinstance(a, WorldSetting):
+                self._own[k] = a.default
+        current = getattr(self._world, "_settingsOwner", None)
+        current = current() if current is not None else None
+        if current is None and not kw.get("dead", False):
+            self._activate()
         for k, v in kw.items():
             setattr(self, k, v)
         self.iterPeriod = 1
@@ -108,6 +119,32 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
         self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId
         self._freshRunState()
+
+    def _ownsSettings(self):
+        """Are this engine's settings the ones in its world (it steps it)?"""
+        if not self._owner:
+            return False
+        o = getattr(self.world, "_settingsOwner", None)
+        return o is not None and o() is self
+
+    def _activate(self):
+        """Make this engine's settings the world's (it is about to step it, or
+        to compute its stable step): the engine that held them keeps its own."""
+        w = self.world
+        o = getattr(w, "_settingsOwner", None)
+        o = o() if o is not None else None
+        if o is self and self._owner:
+            return
+        if o is not None and o is not self:
+            o._own = {k: getattr(o, k) for k in o._own}  # (its values, direct changes to the core included)
+            o._owner = False
+        for k, a in ((k, getattr(type(self), k)) for k in self._own):
+            v = self._own[k]
+            if a.decl["kind"] == "choice":
+                v = a.decl["choices"].index(v)
+            setattr(w.core, a.decl["name"], v)
+        w._settingsOwner = weakref.ref(self)
+        self._owner = True
 
     def _freshRunState(self):
         """What the engine learns of its scene while it runs (none of it a setting)."""
@@ -139,11 +176,15 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         A world that O.load rebuilt keeps the loaded scene's settings: this
         engine is not one of that scene's (O.load put its own in O.engines),
         and a script touching its old engine object must not change them."""
-        if not getattr(new, "_restored", False):
-            for k in AttrObject.attrNames.__func__(type(self)):
+        o = getattr(old, "_settingsOwner", None)
+        if self._owner and o is not None and o() is self:  # its values, direct changes to the core included
+            for k in self._own:
                 a = getattr(type(self), k)
-                if isinstance(a, WorldSetting):
-                    setattr(new.core, a.decl["name"], getattr(old.core, a.decl["name"]))
+                v = getattr(old.core, a.decl["name"])
+                self._own[k] = a.decl["choices"][v] if a.decl["kind"] == "choice" else v
+        self._owner = False
+        if not getattr(new, "_restored", False) and getattr(new, "_settingsOwner", None) is None:
+            self._activate()
         self._freshRunState()
 
     def __repr__(self):
@@ -159,6 +200,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         current YADE obstacles included.  combinedExplicit and combinedImplicit are the
         combined limit with the viscous force integrated explicitly and implicitly
         (viscousIntegration); combined is the one in force."""
+        self._activate()  # this engine's settings decide its stable step
         if self._mpy is None:  # (under yade.mpy the step's allgather set them, alike on every rank)
             self._syncObstacles()
             if self._spheres is not None and self.spheres:
@@ -260,6 +302,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
 
     def _run(self):
         core = self.world.core
+        if not self._owner:  # (another engine's settings were in force: this one's now)
+            self._activate()
         if self.iterPeriod != 1:  # (read every step: set mid-run, it would slow QDEM's clock at once)
             setupcheck.checkPeriods(self)
         if self._checkedSetup != O.iter:  # first step of a run, and every checkPeriod

@@ -453,3 +453,31 @@ def test_a_command_finds_its_engine_in_O_engines_and_nowhere_else(tmp_path):
         with pytest.raises(RuntimeError, match="no engine for command id"):
             lifecycle.engineFor(obj.qdemId)
     O.reset()
+
+
+def test_another_engine_does_not_change_the_running_one_s_settings(scene):
+    """Settings live in the world; every new QdemEngine wrote its defaults
+    there: a dead second engine (what the two-engines refusal suggests) or a
+    throw-away QdemEngine() made to read a stable step silently put the
+    running engine back to damping 0, friction on, explicit viscosity.  Each
+    engine keeps its own now, and the one that steps has them in force."""
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator, utils
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (2, 2, 2)), rubber(viscosity=5.0), pos=(0, 0, 0.3))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    a = qdem.QdemEngine(damping=0.3, friction=False, viscousIntegration="implicit")
+    b = qdem.QdemEngine(dead=True)
+    O.engines = [ForceResetter(), a, b, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    core = qdem.defaultWorld().core
+    wanted = (0.3, False, "implicit")
+    assert (a.damping, a.friction, a.viscousIntegration) == wanted
+    assert (b.damping, b.friction, b.viscousIntegration) == (0.0, True, "explicit")
+    O.dt = 0.5 * a.stableTimeStep()
+    O.run(5, True)
+    assert (core.localDamping, core.frictionOn) == (0.3, False)
+    throwAway = qdem.QdemEngine().stableTimeStep()  # computed with its own (default) settings
+    assert throwAway > 0 and (a.damping, a.friction, a.viscousIntegration) == wanted
+    O.run(5, True)
+    assert (core.localDamping, core.frictionOn) == (0.3, False)
+    a.damping = 0.1  # a change to the running engine goes into the world
+    assert core.localDamping == 0.1
