@@ -26,6 +26,7 @@ How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
 import base64
 import io
 import json
+import threading
 import uuid
 
 import numpy as np
@@ -292,7 +293,16 @@ def _wrapSave(orig, toFile=True):
     def wrapped(self, *a, **k):
         from .world import defaultWorld
         w = defaultWorld()
-        if w.pieces or any(_idOf(e) for e in self.engines):
+        qdemScene = w.pieces or any(_idOf(e) for e in self.engines)
+        if qdemScene and self.running and threading.current_thread() is threading.main_thread():
+            # The loop thread goes on stepping while QDEM's part is written
+            # here and YADE's after it: the two would come from different
+            # steps (a tester found 22 steps apart).  From a PyRunner inside
+            # the run (the loop thread) the save is between steps: fine.
+            raise RuntimeError("O.save: a run is going on in the background (O.running): QDEM's part and YADE's "
+                               "part of the file could come from different steps. Call O.pause() and O.wait() "
+                               "first (O.run() resumes), or save from a PyRunner inside the run.")
+        if qdemScene:
             self.tags[TAG] = sceneBlob(w, self)
         try:
             # Under mpiexec every rank runs the script: rank 0 alone writes a

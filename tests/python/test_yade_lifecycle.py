@@ -481,3 +481,24 @@ def test_another_engine_does_not_change_the_running_one_s_settings(scene):
     assert (core.localDamping, core.frictionOn) == (0.3, False)
     a.damping = 0.1  # a change to the running engine goes into the world
     assert core.localDamping == 0.1
+
+
+def test_save_during_a_background_run_is_refused_and_works_after_wait(scene, tmp_path):
+    """O.save from the script while O.run() goes on in the background wrote
+    QDEM's part and YADE's part from different steps (22 steps apart in a
+    tester's run).  It is refused, naming the fix; after O.pause(); O.wait()
+    the file is consistent."""
+    O = scene
+    block, _ = _droppedBlock(O)
+    path = str(tmp_path / "bg.yade")
+    O.run(1000000)
+    try:
+        with pytest.raises(RuntimeError, match=r"O.pause\(\) and O.wait\(\)"):
+            O.save(path)
+    finally:
+        O.pause()
+        O.wait()
+    O.save(path)
+    it = O.iter
+    O.load(path)
+    assert O.iter == it == qdem.defaultWorld().core.iter
