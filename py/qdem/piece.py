@@ -79,6 +79,9 @@ class Piece:
 
     @dynamic.setter
     def dynamic(self, value):
+        from .attrs import boolean
+        if boolean(value):  # ('no' would count as True, as it did)
+            raise ValueError("Piece.dynamic=%r is invalid: must be True or False" % (value,))
         self.world.core.setDynamic(self.id, bool(value))
 
     @property

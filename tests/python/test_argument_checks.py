@@ -382,3 +382,18 @@ def test_mesh_out_of_floating_point_range_is_named():
     with pytest.raises(ValueError, match="node 0 gets mass .*out of floating point range"):
         qdem.addPiece(qdem.Mesh(m.nodes * 1e200, m.tets, check=False), rubber(), world=w)
     _untouched(w)
+
+
+def test_piece_dynamic_takes_a_flag_only():
+    """Piece.dynamic = 'no' counted as True (the piece stayed dynamic), as
+    engine flags do no more: refused; NumPy bools and 0/1 are flags."""
+    w = qdem.World()
+    p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber())
+    for bad in ("no", "False", 2, 0.5, None):
+        with pytest.raises(ValueError, match="must be True or False"):
+            p.dynamic = bad
+        assert p.dynamic
+    p.dynamic = np.bool_(False)
+    assert not p.dynamic
+    p.dynamic = 1
+    assert p.dynamic
