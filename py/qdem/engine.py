@@ -149,6 +149,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     def _freshRunState(self):
         """What the engine learns of its scene while it runs (none of it a setting)."""
         self._checkedSetup = None
+        self._lastStepAt = None
         self._warnedDamping = False
         self._runStart = None
         self._nBodies = -1
@@ -302,6 +303,13 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
 
     def _run(self):
         core = self.world.core
+        # How long a step lasts (lifecycle._settle waits for one in flight):
+        # between two consecutive steps of one O.run, not across the script's
+        # own work between runs.
+        now, at = time.perf_counter(), (O.iter, O.stopAtIter)
+        if self._lastStepAt is not None and self._lastStepAt[1] == (at[0] - 1, at[1]):
+            lifecycle.stepSeconds = now - self._lastStepAt[0]
+        self._lastStepAt = (now, at)
         if not self._owner:  # (another engine's settings were in force: this one's now)
             self._activate()
         if self.iterPeriod != 1:  # (read every step: set mid-run, it would slow QDEM's clock at once)

@@ -27,6 +27,7 @@ import base64
 import io
 import json
 import threading
+import time
 import uuid
 
 import numpy as np
@@ -289,9 +290,30 @@ def _wrapErrors(orig):
     return wrapped
 
 
+stepSeconds = 0.0  # wall time between the last two QDEM steps (QdemEngine._run): how long a step lasts
+
+
+def _settle(O):
+    """After O.pause(), YADE's O.wait() returns at once, and the loop thread
+    still finishes the step it is in (O.subStep >= 0 until then; measured:
+    one more step lands after O.wait()).  Saving or loading then wrote
+    QDEM's part and YADE's from different steps, or crashed inside YADE's
+    load.  Waits for that step, from the script's thread; bounded, since a
+    step that raised leaves O.subStep >= 0 with nothing in flight."""
+    if O.running or threading.current_thread() is not threading.main_thread() or O.subStep < 0:
+        return
+    it = O.iter
+    deadline = time.monotonic() + min(60.0, max(0.05, 20 * stepSeconds))
+    while O.subStep >= 0 and O.iter == it and time.monotonic() < deadline:
+        time.sleep(0.0005)
+    while O.subStep >= 0 and O.iter != it and time.monotonic() < deadline:  # (epilogue of the step)
+        time.sleep(0.0005)
+
+
 def _wrapSave(orig, toFile=True):
     def wrapped(self, *a, **k):
         from .world import defaultWorld
+        _settle(self)
         w = defaultWorld()
         qdemScene = w.pieces or any(_idOf(e) for e in self.engines)
         if qdemScene and self.running and threading.current_thread() is threading.main_thread():
@@ -322,6 +344,7 @@ def _wrapAfter(after):
     """A wrapper that calls YADE's method, then after(O)."""
     def wrap(orig):
         def wrapped(self, *a, **k):
+            _settle(self)
             r = orig(self, *a, **k)
             after(self)
             return r
