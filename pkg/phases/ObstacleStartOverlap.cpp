@@ -65,51 +65,50 @@ void ObstaclePhase::checkStartOverlaps() {
             // its mesh face flush on a floor: compression r, a full radius).
             double pressed = 0, stored = 0;
             Eigen::Vector3d pressedNormal = Eigen::Vector3d::Zero();
+            // (a facet's unit normal, towards the piece)
+            const Eigen::Vector3d facetNormal =
+                o.kind == ObstacleKind::Facet
+                    ? Eigen::Vector3d(side * (o.worldVerts[1] - o.worldVerts[0])
+                                                 .cross(o.worldVerts[2] - o.worldVerts[0])
+                                                 .normalized())
+                    : Eigen::Vector3d::Zero();
             for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
                 const Eigen::Map<const Eigen::Vector3d> x(&w_.pos[3 * w_.surfNodes[s]]);
-                double d;
-                Eigen::Vector3d nd;
-                {
-                    double ov = 0;
-                    Eigen::Vector3d np;
-                    if (o.kind == ObstacleKind::Facet) {
-                        const TriPoint tp = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
-                        const double dist = (x - tp.point).norm();
-                        ov = r - dist;
-                        // (a node on the facet: its normal, towards the piece)
-                        np = dist > 1e-12 * r ? Eigen::Vector3d((x - tp.point) / dist)
-                                              : Eigen::Vector3d(side * (o.worldVerts[1] - o.worldVerts[0])
-                                                                           .cross(o.worldVerts[2] - o.worldVerts[0])
-                                                                           .normalized());
-                    } else {
-                        ObstacleHit hit;
-                        if (touchObstacle(o, x, r, side, hit)) ov = hit.overlap, np = hit.normal;
-                    }
-                    if (ov > 0 && ov <= r) {
-                        const double kn = w_.surfWeight[s] * pairLaw(pairConst_[j], w_.mass[w_.surfNodes[s]]).kn;
-                        stored += 0.5 * kn * ov * ov;
-                        if (ov > pressed) pressed = ov, pressedNormal = np;
-                    }
-                }
+                // The node's spring compression and normal, and (d) how far
+                // its centre is past the obstacle's surface, if it is.
+                double ov = 0, d = 0;
+                Eigen::Vector3d np = Eigen::Vector3d::Zero();
+                bool past = false;
                 if (o.kind == ObstacleKind::Facet) {
+                    const TriPoint tp = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
+                    const double dist = (x - tp.point).norm();
+                    ov = r - dist;
+                    np = dist > 1e-12 * r ? Eigen::Vector3d((x - tp.point) / dist) : facetNormal;
                     // Past the triangle itself: on the far side of its plane
                     // with the foot of the perpendicular inside it.  (Not its
                     // plane: a node beside or below the triangle's edge, on the
                     // plane's far side, is not inside anything; one within r of
                     // the edge is an ordinary contact.  A fence whose lower edge
                     // hung 3 mm above a slab was refused as 58 nodes 9 cm deep.)
-                    const TriPoint tp = closestOnTriangle(x, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]);
-                    if (tp.feature != TriFeature::Face) continue;
-                    const Eigen::Vector3d nf =
-                        (o.worldVerts[1] - o.worldVerts[0]).cross(o.worldVerts[2] - o.worldVerts[0]).normalized();
-                    d = -side * nf.dot(x - tp.point);
-                    nd = side * nf;
+                    if (tp.feature == TriFeature::Face) {
+                        d = -facetNormal.dot(x - tp.point);
+                        past = true;
+                    }
                 } else {
                     ObstacleHit hit;
-                    if (!touchObstacle(o, x, r, side, hit)) continue;
-                    d = hit.overlap - r;
-                    nd = hit.normal;
+                    if (touchObstacle(o, x, r, side, hit)) {
+                        ov = hit.overlap, np = hit.normal;
+                        d = hit.overlap - r;
+                        past = true;
+                    }
                 }
+                if (ov > 0 && ov <= r) {
+                    const double kn = w_.surfWeight[s] * pairLaw(pairConst_[j], w_.mass[w_.surfNodes[s]]).kn;
+                    stored += 0.5 * kn * ov * ov;
+                    if (ov > pressed) pressed = ov, pressedNormal = np;
+                }
+                if (!past) continue;
+                const Eigen::Vector3d nd = o.kind == ObstacleKind::Facet ? facetNormal : np;
                 if (!(d > 1e-9 * r)) continue;
                 ++nPast;
                 if (d > depth) {
