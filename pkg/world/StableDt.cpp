@@ -238,9 +238,17 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
         // is smaller than its own (Gershgorin on the corner's row: doc/
         // contacts.md §7).  A 1-cell cube under an 8x8x8-cell one gained
         // energy without bound at 0.9 x the former step (found by a tester).
-        double finest = p.meanSurfaceShare;
-        for (std::size_t j = 0; j < pieces.size(); ++j)
-            if (j != i && pieces[j].meanSurfaceShare > 0) finest = std::min(finest, pieces[j].meanSurfaceShare);
+        if (shareCacheN_ != pieces.size()) {
+            shareMin1_ = shareMin2_ = std::numeric_limits<double>::infinity();
+            for (std::size_t j = 0; j < pieces.size(); ++j) {
+                const double a = pieces[j].meanSurfaceShare;
+                if (!(a > 0)) continue;
+                if (a < shareMin1_) shareMin2_ = shareMin1_, shareMin1_ = a, shareArgMin_ = j;
+                else if (a < shareMin2_) shareMin2_ = a;
+            }
+            shareCacheN_ = pieces.size();
+        }
+        const double finest = std::min(p.meanSurfaceShare, i == shareArgMin_ ? shareMin2_ : shareMin1_);
         wc = std::sqrt(pair.kn / (p.minSurfaceMassPerWeight * (finest / p.meanSurfaceShare)));
         xic = pair.xi;
     }

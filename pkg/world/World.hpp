@@ -352,6 +352,12 @@ private:
     std::vector<double> boxes_;  // pieceBoxes(), made at step boxesIter_
     long boxesIter_ = -1;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
+    // The two smallest mean areas per surface node over the pieces, and the
+    // piece with the smallest (contactMode: the finest other piece), for
+    // shareCacheN_ pieces: once per piece added, not once per piece per call.
+    mutable std::size_t shareCacheN_ = 0;
+    mutable double shareMin1_ = 0, shareMin2_ = 0;
+    mutable std::size_t shareArgMin_ = 0;
     mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };
 
