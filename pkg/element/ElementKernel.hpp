@@ -38,7 +38,7 @@ __attribute__((always_inline)) inline void elementLanes(const Law& law, const Te
     alignas(64) double aux[kLanes];
     const auto& B = blk.B;
     const auto& V0 = blk.vol;
-    const double blam = p.beta * p.lambda, bmu2 = 2 * p.beta * p.mu;
+    const double bmu = p.beta * p.mu, blam = p.beta * p.lambda;
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
         // F = Ds * B  (Ds columns are the edge vectors)
@@ -52,60 +52,73 @@ __attribute__((always_inline)) inline void elementLanes(const Law& law, const Te
                     Fd[i][j] =
                         dv[0][i][l] * B[0 * 3 + j][l] + dv[1][i][l] * B[1 * 3 + j][l] + dv[2][i][l] * B[2 * 3 + j][l];
             }
+        // The forces are H = -V0 P B^T.  The factor s = -V0 is folded into
+        // the stresses' constants (a few multiplies per lane) instead of
+        // scaling the nine entries of H: the laws return s P.
+        const double s = -V0[l];
         // Kelvin-Voigt: S_v = beta (2 mu dE/dt + lambda tr(dE/dt) I) on the
-        // Green-Lagrange strain rate dE/dt = sym(F^T dF/dt), for every law.
+        // Green-Lagrange strain rate dE/dt = sym(g), g = F^T dF/dt, for every
+        // law, written on g itself (2 dE/dt = g + g^T, tr dE/dt = tr g) so
+        // that no factor 1/2 is applied and undone; passed on as s S_v.
         double Sv[3][3] = {};  // (read by the laws only when Viscous)
         double dRate = 0;
         if constexpr (Viscous) {
-            double Ed[3][3];
+            double g[3][3];
             #pragma GCC unroll 3
             for (int a = 0; a < 3; ++a)
                 #pragma GCC unroll 3
-                for (int b = a; b < 3; ++b) {
-                    const double gab = F[0][a] * Fd[0][b] + F[1][a] * Fd[1][b] + F[2][a] * Fd[2][b];
-                    const double gba = F[0][b] * Fd[0][a] + F[1][b] * Fd[1][a] + F[2][b] * Fd[2][a];
-                    Ed[a][b] = 0.5 * (gab + gba);
-                    Ed[b][a] = Ed[a][b];
-                }
-            const double trEd = Ed[0][0] + Ed[1][1] + Ed[2][2];
+                for (int b = 0; b < 3; ++b) g[a][b] = F[0][a] * Fd[0][b] + F[1][a] * Fd[1][b] + F[2][a] * Fd[2][b];
+            const double cm = s * bmu, cl = s * blam * (g[0][0] + g[1][1] + g[2][2]);
+            double gs[3][3];  // g + g^T = 2 dE/dt (off the diagonal)
             #pragma GCC unroll 3
-            for (int a = 0; a < 3; ++a)
+            for (int a = 0; a < 3; ++a) {
+                Sv[a][a] = (cm + cm) * g[a][a] + cl;
                 #pragma GCC unroll 3
-                for (int b = 0; b < 3; ++b) {
-                    Sv[a][b] = bmu2 * Ed[a][b] + (a == b ? blam * trEd : 0.0);
-                    if constexpr (Energy) dRate += Sv[a][b] * Ed[a][b];
+                for (int b = a + 1; b < 3; ++b) {
+                    gs[a][b] = g[a][b] + g[b][a];
+                    Sv[a][b] = Sv[b][a] = cm * gs[a][b];
                 }
+            }
+            // V0 S_v : dE/dt = -(s S_v) : dE/dt
+            if constexpr (Energy)
+                dRate = -(Sv[0][0] * g[0][0] + Sv[1][1] * g[1][1] + Sv[2][2] * g[2][2] + Sv[0][1] * gs[0][1] +
+                          Sv[0][2] * gs[0][2] + Sv[1][2] * gs[1][2]);
         }
-        double P[3][3];
+        double P[3][3];  // s P
         double wEl = 0, ax = 0;
-        law.template lane<Viscous, Energy>(F, Sv, P, wEl, ax);
-        // H = -V0 P B^T : forces on nodes 1..3 as columns
+        law.template lane<Viscous, Energy>(F, Sv, s, P, wEl, ax);
+        // H = s P B^T : forces on nodes 1..3 as columns
         #pragma GCC unroll 3
         for (int i = 0; i < 3; ++i) {
             double sum = 0;
             #pragma GCC unroll 3
             for (int k = 0; k < 3; ++k) {
-                const double h =
-                    -V0[l] * (P[i][0] * B[k * 3 + 0][l] + P[i][1] * B[k * 3 + 1][l] + P[i][2] * B[k * 3 + 2][l]);
+                const double h = P[i][0] * B[k * 3 + 0][l] + P[i][1] * B[k * 3 + 1][l] + P[i][2] * B[k * 3 + 2][l];
                 out.f[k + 1][i][l] = h;
                 sum += h;
             }
             out.f[0][i][l] = -sum;
         }
         out.wElastic[l] = V0[l] * wEl;
-        out.diss[l] = V0[l] * dRate;
+        out.diss[l] = dRate;
         if constexpr (Energy && Law::kEnergyFinish) aux[l] = ax;
     }
     if constexpr (Energy && Law::kEnergyFinish)
         for (int l = 0; l < kLanes; ++l) out.wElastic[l] += V0[l] * law.energyFinish(aux[l]);
 }
 
+// X, V: node arrays of last + 1 nodes (x y z each).
 template <class Law, bool Viscous, bool Energy>
 __attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk, const double* X, const double* V,
-                                            const ElementParams& p, BatchOut& out) {
+                                            int32_t last, const ElementParams& p, BatchOut& out) {
     alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes];
-    gatherEdges(X, blk.node, dx);
-    if constexpr (Viscous) gatherEdges(V, blk.node, dv);
+    if (plainGatherSafe(blk.node, last)) {
+        gatherEdges<true>(X, blk.node, dx);
+        if constexpr (Viscous) gatherEdges<true>(V, blk.node, dv);
+    } else {
+        gatherEdges(X, blk.node, dx);
+        if constexpr (Viscous) gatherEdges(V, blk.node, dv);
+    }
     elementLanes<Law, Viscous, Energy>(law, blk, dx, dv, p, out);
 }
 
@@ -117,7 +130,7 @@ inline void elementBatch(const Law& law, int32_t e0, int count, const int32_t* c
                          const double* Bs, const double* vol, const ElementParams& p, BatchOut& out) {
     TetBlock b;
     fillTetBlock(b, e0, count, conn, Bs, vol);
-    elementBlock<Law, Viscous, Energy>(law, b, X, V, p, out);
+    elementBlock<Law, Viscous, Energy>(law, b, X, V, -1, p, out);  // -1: sizes unknown, masked loads
 }
 
 // Stress of one element (elastic + viscous) and the pieces of it that the

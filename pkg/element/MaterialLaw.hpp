@@ -1,6 +1,7 @@
 // The material-law interface.  A law is a small struct (laws/*.hpp) built
 // from the small-strain Lame constants (lambda, mu) that gives
-//   lane<Viscous, Energy>(F, S_v, P, w, aux)  the SIMD-lane stress and energy,
+//   lane<Viscous, Energy>(F, sS_v, s, sP, w, aux)  the SIMD-lane stress, scaled
+//                                              by s = -V0, and energy,
 //   energyFinish(aux)                          a scalar energy term (log etc.),
 //   piola(F), energy(F), tangent(F)            reference forms (dP/dF 9x9),
 //   stiffening(C, s2)                          frequency-growth estimate,

@@ -32,10 +32,14 @@ constexpr int kForceStride = 4;
 #if defined(__AVX__)
 namespace simd {
 
+// x y z of the node at p.  Plain: a 4-wide load that also reads the next
+// node's x (dropped), for nodes that are not the last of their array.
+template <bool Plain>
 inline __m256d loadXyz(const double* p) {
 #if defined(__AVX512VL__)
     return _mm256_maskz_loadu_pd(0x7, p);
 #else
+    if constexpr (Plain) return _mm256_loadu_pd(p);
     return _mm256_maskload_pd(p, _mm256_set_epi64x(0, -1, -1, -1));
 #endif
 }
@@ -65,11 +69,12 @@ inline void columnsToRows(__m256d x, __m256d y, __m256d z, __m256d (&r)[4]) {
 }
 
 // Corner k of lanes 4h .. 4h+3 as x, y, z columns.
+template <bool Plain>
 inline void cornerColumns(const double* A, const int32_t (&node)[4][kLanes], int k, int h, __m256d& x, __m256d& y,
                           __m256d& z) {
     const int32_t* n = node[k] + 4 * h;
-    rowsToColumns(loadXyz(A + 3 * n[0]), loadXyz(A + 3 * n[1]), loadXyz(A + 3 * n[2]), loadXyz(A + 3 * n[3]), x, y,
-                  z);
+    rowsToColumns(loadXyz<Plain>(A + 3 * n[0]), loadXyz<Plain>(A + 3 * n[1]), loadXyz<Plain>(A + 3 * n[2]),
+                  loadXyz<Plain>(A + 3 * n[3]), x, y, z);
 }
 
 #if defined(__AVX512F__)
@@ -87,8 +92,34 @@ inline __m512d join(__m256d lo, __m256d hi) {
 }  // namespace simd
 #endif
 
+// Whether the gather of a block may read each node with a plain 4-wide load
+// (no corner is the array's last node, `last`).  Only AVX2 builds use it:
+// there the masked load that keeps the last node from reading past the
+// array is a slower instruction (the element pass took 0.88-0.96 of its
+// time with plain loads, doc/performance.md); AVX-512's masked load costs
+// what a plain one does.  last < 0: the array's size is not known (no).
+inline bool plainGatherSafe(const int32_t (&node)[4][kLanes], int32_t last) {
+    if (last < 0) return false;
+#if defined(__AVX2__) && !defined(__AVX512VL__)
+    static_assert(kLanes == 8, "one 8 x int32 register per corner");
+    const __m256i l = _mm256_set1_epi32(last);
+    __m256i hit = _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(node[0])), l);
+    for (int k = 1; k < 4; ++k)
+        hit = _mm256_or_si256(hit, _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(node[k])), l));
+    return _mm256_testz_si256(hit, hit);
+#else
+    bool hit = false;
+    for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < kLanes; ++l) hit |= node[k][l] == last;
+    return !hit;
+#endif
+}
+
 // d[k][i][l] = A[node[k+1][l]][i] - A[node[0][l]][i]: the edge vectors (of
 // positions or velocities) of every lane's tet, k = 0..2, component i.
+// Plain: no node is the last of A (plainGatherSafe), so each may be read
+// with a plain 4-wide load.
+template <bool Plain = false>
 inline void gatherEdges(const double* A, const int32_t (&node)[4][kLanes], double (&d)[3][3][kLanes]) {
 #if defined(__AVX__)
     static_assert(kLanes == 8, "the transposes below take lanes in two groups of four");
@@ -97,9 +128,9 @@ inline void gatherEdges(const double* A, const int32_t (&node)[4][kLanes], doubl
     // kernel reads each row with one 8-wide load, which a store of two
     // 4-wide halves could not forward.
     __m256d c0[2][3], ck[2][3];
-    for (int h = 0; h < 2; ++h) simd::cornerColumns(A, node, 0, h, c0[h][0], c0[h][1], c0[h][2]);
+    for (int h = 0; h < 2; ++h) simd::cornerColumns<Plain>(A, node, 0, h, c0[h][0], c0[h][1], c0[h][2]);
     for (int k = 1; k < 4; ++k) {
-        for (int h = 0; h < 2; ++h) simd::cornerColumns(A, node, k, h, ck[h][0], ck[h][1], ck[h][2]);
+        for (int h = 0; h < 2; ++h) simd::cornerColumns<Plain>(A, node, k, h, ck[h][0], ck[h][1], ck[h][2]);
         for (int i = 0; i < 3; ++i) {
             _mm512_store_pd(d[k - 1][i], _mm512_sub_pd(simd::join(ck[0][i], ck[1][i]), simd::join(c0[0][i], c0[1][i])));
         }
@@ -107,10 +138,10 @@ inline void gatherEdges(const double* A, const int32_t (&node)[4][kLanes], doubl
 #else
     for (int h = 0; h < 2; ++h) {
         __m256d x0, y0, z0;
-        simd::cornerColumns(A, node, 0, h, x0, y0, z0);
+        simd::cornerColumns<Plain>(A, node, 0, h, x0, y0, z0);
         for (int k = 1; k < 4; ++k) {
             __m256d x, y, z;
-            simd::cornerColumns(A, node, k, h, x, y, z);
+            simd::cornerColumns<Plain>(A, node, k, h, x, y, z);
             _mm256_store_pd(d[k - 1][0] + 4 * h, _mm256_sub_pd(x, x0));
             _mm256_store_pd(d[k - 1][1] + 4 * h, _mm256_sub_pd(y, y0));
             _mm256_store_pd(d[k - 1][2] + 4 * h, _mm256_sub_pd(z, z0));

@@ -14,12 +14,12 @@
 
 namespace qdem {
 
-// elementBatch's law interface with zero elastic stress: P = F S_v.
+// elementBatch's law interface with zero elastic stress: sP = F (sS_v).
 struct ViscousStressOnly {
     static constexpr bool kEnergyFinish = false;
     template <bool Viscous, bool Energy>
-    inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double (&P)[3][3], double& /*w*/,
-                     double& /*aux*/) const {
+    inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double /*s*/, double (&P)[3][3],
+                     double& /*w*/, double& /*aux*/) const {
         #pragma GCC unroll 3
         for (int i = 0; i < 3; ++i)
             #pragma GCC unroll 3

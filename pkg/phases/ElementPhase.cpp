@@ -20,12 +20,13 @@ void ElementPhase::elementRange(const Law& law, const TetBlock* blocks, const Bl
     const ElementParams prm{m.lambda(), m.mu(), Viscous ? m.beta() : 0.0};
     const double* X = w_.pos.data();
     const double* V = w_.vel.data();
+    const auto last = static_cast<int32_t>(std::min(w_.pos.size(), w_.vel.size()) / 3) - 1;
     double w = 0, d = 0;
     BatchOut out;
     const TetBlock* b = blocks + sg.first;
     for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes, ++b) {
         const int count = sg.count(e0);
-        elementBlock<Law, Viscous, Energy>(law, *b, X, V, prm, out);
+        elementBlock<Law, Viscous, Energy>(law, *b, X, V, last, prm, out);
         scatterForces(out.f, b->node, count, buf, lo);
         if constexpr (Energy)
             for (int l = 0; l < count; ++l) {

@@ -80,6 +80,8 @@ void ViscousSolve::apply(double* p, double* y) {
         BatchOut out;
         const TetBlock* blocks = blocks_[th].blocks.data();
         const double* X = w_.pos.data();
+        // p holds 3 per node, as pos does (solve() sizes it)
+        const auto last = static_cast<int32_t>(std::min(w_.pos.size() / 3, w_.mass.size())) - 1;
         for (const BlockSegment& sg : blocks_[th].segments) {
             const Material& m = w_.materials[w_.pieces[sg.piece].material];
             if (!viscous(w_.settings, m)) continue;
@@ -87,7 +89,7 @@ void ViscousSolve::apply(double* p, double* y) {
             const TetBlock* b = blocks + sg.first;
             for (int32_t e0 = sg.t0; e0 < sg.t1; e0 += kLanes, ++b) {
                 const int cnt = sg.count(e0);
-                elementBlock<ViscousStressOnly, true, false>(law, *b, X, p, prm, out);
+                elementBlock<ViscousStressOnly, true, false>(law, *b, X, p, last, prm, out);
                 for (int l = 0; l < cnt; ++l)
                     for (int k = 0; k < 4; ++k) {
                         double* o = buf.data() + 3 * (b->node[k][l] - lo);

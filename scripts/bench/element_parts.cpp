@@ -62,12 +62,18 @@ __attribute__((noinline)) void lanesOnly(const Law& law, const TetBlock& b, cons
     elementLanes<Law, Viscous, false>(law, b, dx, dv, p, out);
 }
 
-// The gather alone, into lane arrays the caller keeps.
+// The gather alone, into lane arrays the caller keeps (as elementBlock
+// gathers: plain loads where no corner is the arrays' last node).
 template <bool Viscous>
-__attribute__((noinline)) void gatherOnly(const TetBlock& b, const double* X, const double* V,
+__attribute__((noinline)) void gatherOnly(const TetBlock& b, const double* X, const double* V, int32_t last,
                                           double (&dx)[3][3][kLanes], double (&dv)[3][3][kLanes]) {
-    gatherEdges(X, b.node, dx);
-    if constexpr (Viscous) gatherEdges(V, b.node, dv);
+    if (plainGatherSafe(b.node, last)) {
+        gatherEdges<true>(X, b.node, dx);
+        if constexpr (Viscous) gatherEdges<true>(V, b.node, dv);
+    } else {
+        gatherEdges(X, b.node, dx);
+        if constexpr (Viscous) gatherEdges(V, b.node, dv);
+    }
 }
 
 enum Variant { kWhole, kGatherArith, kArithScatter, kArith, kGather, kScatter, kNVariants };
@@ -125,9 +131,10 @@ void pass(const Law& law, const Scene& s, const Blocks& blocks, std::size_t nBlo
     const ElementParams p{s.w.materials[0].lambda(), s.w.materials[0].mu(), Viscous ? s.w.materials[0].beta() : 0.0};
     const double* X = s.w.pos.data();
     const double* V = s.w.vel.data();
+    const auto last = static_cast<int32_t>(s.w.nNodes()) - 1;
     BatchOut out{};
     alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes];
-    gatherOnly<true>(blocks[0], X, V, dx, dv);  // edges for the variants without gather
+    gatherOnly<true>(blocks[0], X, V, last, dx, dv);  // edges for the variants without gather
     lanesOnly<Law, Viscous>(law, blocks[0], dx, dv, p, out);  // forces for the scatter alone
     const std::size_t mask = blocks.size() - 1;  // blocks.size(): a power of two, or all of them
     const bool all = nBlocks == blocks.size();
@@ -137,11 +144,11 @@ void pass(const Law& law, const Scene& s, const Blocks& blocks, std::size_t nBlo
         const TetBlock& b = blocks[all ? i : (i & mask)];
         switch (v) {
             case kWhole:
-                elementBlock<Law, Viscous, false>(law, b, X, V, p, out);
+                elementBlock<Law, Viscous, false>(law, b, X, V, last, p, out);
                 scatterForces(out.f, b.node, kLanes, buf.data(), 0);
                 break;
             case kGatherArith:
-                elementBlock<Law, Viscous, false>(law, b, X, V, p, out);
+                elementBlock<Law, Viscous, false>(law, b, X, V, last, p, out);
                 sink += out.f[1][2][i & 7];
                 break;
             case kArithScatter:
@@ -153,7 +160,7 @@ void pass(const Law& law, const Scene& s, const Blocks& blocks, std::size_t nBlo
                 sink += out.f[1][2][i & 7];
                 break;
             case kGather:
-                gatherOnly<Viscous>(b, X, V, dx, dv);
+                gatherOnly<Viscous>(b, X, V, last, dx, dv);
                 sink += dx[1][2][i & 7];
                 break;
             case kScatter:

@@ -85,3 +85,38 @@ TEST(NodeGather, ScatterIntoABufferStartingAtNodeLo) {
             for (int i = 0; i < 3; ++i) want[kForceStride * (node[k][l] - 100) + i] += f[k][i][l];
     for (std::size_t j = 0; j < buf.size(); ++j) EXPECT_EQ(buf[j], want[j]) << j;
 }
+
+TEST(NodeGather, PlainLoadsAllowedOnlyWhereNoCornerIsTheLastNode) {
+    const int32_t N = 40, last = N - 1;
+    int32_t node[4][kLanes];
+    for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < kLanes; ++l) node[k][l] = (7 * k + 3 * l) % last;  // never the last node
+    EXPECT_TRUE(plainGatherSafe(node, last));
+    EXPECT_FALSE(plainGatherSafe(node, -1)) << "an array of unknown size gets masked loads";
+    for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < kLanes; ++l) {
+            const int32_t keep = node[k][l];
+            node[k][l] = last;
+            EXPECT_FALSE(plainGatherSafe(node, last)) << "last node in corner " << k << " lane " << l;
+            node[k][l] = keep;
+        }
+}
+
+TEST(NodeGather, PlainGatherEqualsTheMaskedOneAndTheScalarLoop) {
+    const int32_t N = 40, last = N - 1;
+    std::vector<double> X(3 * N);
+    for (int i = 0; i < 3 * N; ++i) X[i] = 0.37 * i - 0.011 * i * i + (i % 3) * 1e-9;
+    int32_t node[4][kLanes];
+    for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < kLanes; ++l) node[k][l] = (11 * k + 5 * l + (l == 3 ? 0 : 1)) % last;  // repeats too
+    ASSERT_TRUE(plainGatherSafe(node, last));
+    alignas(64) double plain[3][3][kLanes], masked[3][3][kLanes];
+    gatherEdges<true>(X.data(), node, plain);
+    gatherEdges(X.data(), node, masked);
+    for (int l = 0; l < kLanes; ++l)
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 3; ++i) {
+                EXPECT_EQ(plain[k][i][l], masked[k][i][l]) << "lane " << l << " edge " << k << " component " << i;
+                EXPECT_EQ(plain[k][i][l], X[3 * node[k + 1][l] + i] - X[3 * node[0][l] + i]);
+            }
+}

@@ -18,42 +18,54 @@ struct SaintVenantKirchhoff {
     static constexpr bool kRecoversFromInversion = false;
     static constexpr bool kEnergyFinish = false;  // no per-lane scalar energy term
 
-    double lam, mu, mu2;
-    SaintVenantKirchhoff(double lambda, double mu_) : lam(lambda), mu(mu_), mu2(2 * mu_) {}
+    double lam, mu, mu2, halfLam, restOffset;
+    SaintVenantKirchhoff(double lambda, double mu_)
+        : lam(lambda), mu(mu_), mu2(2 * mu_), halfLam(0.5 * lambda), restOffset(-(1.5 * lambda + mu_)) {}
 
-    // One SIMD lane: P = F (S_e + S_v), the viscous stress S_v added before
-    // the push-forward (the original kernel's order, so results are
-    // bit-identical to it).  w: strain energy density; aux unused.
+    // One SIMD lane: sP = F (s S_e + sS_v) with the viscous stress sS_v
+    // (already scaled by s) added before the push-forward.  S_e is written
+    // on C = F^T F, not on E = (C - I)/2:
+    //     S_e = mu (C - I) + lambda/2 (tr C - 3) I,
+    // so the diagonal is mu C_aa + q with q = lambda/2 tr C - (3 lambda/2 + mu)
+    // (the subtraction of the rest state, a cancellation like C_aa - 1 in E,
+    // with a rounding error of the same size: a few ulps of lambda + mu), and
+    // the scale s rides on the three constants mu, lambda/2 and that offset.
+    // w: strain energy density (unscaled); aux unused.
     template <bool Viscous, bool Energy>
-    inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double (&P)[3][3], double& w,
+    inline void lane(const double (&F)[3][3], const double (&sSv)[3][3], double s, double (&P)[3][3], double& w,
                      double& /*aux*/) const {
-        double E[3][3];
+        double C[3][3];
         #pragma GCC unroll 3
         for (int a = 0; a < 3; ++a)
             #pragma GCC unroll 3
             for (int b = a; b < 3; ++b) {
-                E[a][b] = 0.5 * (F[0][a] * F[0][b] + F[1][a] * F[1][b] + F[2][a] * F[2][b] - (a == b ? 1.0 : 0.0));
-                E[b][a] = E[a][b];
+                C[a][b] = F[0][a] * F[0][b] + F[1][a] * F[1][b] + F[2][a] * F[2][b];
+                C[b][a] = C[a][b];
             }
-        const double trE = E[0][0] + E[1][1] + E[2][2];
-        double S[3][3];
+        const double trC = C[0][0] + C[1][1] + C[2][2];
+        const double sMu = s * mu, q = (s * halfLam) * trC + s * restOffset;
+        double S[3][3];  // s (S_e + S_v)
         #pragma GCC unroll 3
         for (int a = 0; a < 3; ++a)
             #pragma GCC unroll 3
-            for (int b = 0; b < 3; ++b) S[a][b] = mu2 * E[a][b] + (a == b ? lam * trE : 0.0);
+            for (int b = a; b < 3; ++b) {
+                S[a][b] = sMu * C[a][b] + (a == b ? q : 0.0);
+                if constexpr (Viscous) S[a][b] += sSv[a][b];
+                S[b][a] = S[a][b];
+            }
         if constexpr (Energy) {
+            double E[3][3];
+            #pragma GCC unroll 3
+            for (int a = 0; a < 3; ++a)
+                #pragma GCC unroll 3
+                for (int b = 0; b < 3; ++b) E[a][b] = 0.5 * (C[a][b] - (a == b ? 1.0 : 0.0));
+            const double trE = E[0][0] + E[1][1] + E[2][2];
             double ee = 0;
             #pragma GCC unroll 3
             for (int a = 0; a < 3; ++a)
                 #pragma GCC unroll 3
                 for (int b = 0; b < 3; ++b) ee += E[a][b] * E[a][b];
             w = 0.5 * lam * trE * trE + 0.5 * mu2 * ee;
-        }
-        if constexpr (Viscous) {
-            #pragma GCC unroll 3
-            for (int a = 0; a < 3; ++a)
-                #pragma GCC unroll 3
-                for (int b = 0; b < 3; ++b) S[a][b] += Sv[a][b];
         }
         #pragma GCC unroll 3
         for (int i = 0; i < 3; ++i)

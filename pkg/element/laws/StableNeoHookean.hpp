@@ -32,10 +32,13 @@ struct StableNeoHookean {
     StableNeoHookean(double lambda, double mu)
         : muS(4.0 / 3.0 * mu), lamS(lambda + 5.0 / 6.0 * mu), alpha(1.0 + 0.75 * muS / lamS) {}
 
-    // One SIMD lane: P = P_e(F) + F S_v.  w: the energy density W(F) - W(I)
-    // without its log term, aux: what the log term needs (energyFinish).
+    // One SIMD lane: sP = s P_e(F) + F (sS_v), the scale s on the two
+    // coefficients of P_e and already in sS_v; the viscous push-forward is
+    // merged with the F term: s P = F (s a I + sS_v) + s t cof(F).  w: the
+    // energy density W(F) - W(I) without its log term (unscaled), aux: what
+    // the log term needs (energyFinish).
     template <bool Viscous, bool Energy>
-    inline void lane(const double (&F)[3][3], const double (&Sv)[3][3], double (&P)[3][3], double& w,
+    inline void lane(const double (&F)[3][3], const double (&sSv)[3][3], double s, double (&P)[3][3], double& w,
                      double& aux) const {
         double G[3][3];  // cofactor of F = dJ/dF
         G[0][0] = F[1][1] * F[2][2] - F[1][2] * F[2][1];
@@ -53,15 +56,25 @@ struct StableNeoHookean {
         for (int i = 0; i < 3; ++i)
             #pragma GCC unroll 3
             for (int j = 0; j < 3; ++j) Ic += F[i][j] * F[i][j];
-        const double a = muS * (1.0 - 1.0 / (Ic + 1.0));
-        const double t = lamS * (J - alpha);
-        #pragma GCC unroll 3
-        for (int i = 0; i < 3; ++i)
+        const double a = s * (muS * (1.0 - 1.0 / (Ic + 1.0)));
+        const double t = s * (lamS * (J - alpha));
+        if constexpr (Viscous) {
+            double M[3][3];  // s a I + sS_v
             #pragma GCC unroll 3
-            for (int j = 0; j < 3; ++j) {
-                P[i][j] = a * F[i][j] + t * G[i][j];
-                if constexpr (Viscous) P[i][j] += F[i][0] * Sv[0][j] + F[i][1] * Sv[1][j] + F[i][2] * Sv[2][j];
-            }
+            for (int i = 0; i < 3; ++i)
+                #pragma GCC unroll 3
+                for (int j = 0; j < 3; ++j) M[i][j] = sSv[i][j] + (i == j ? a : 0.0);
+            #pragma GCC unroll 3
+            for (int i = 0; i < 3; ++i)
+                #pragma GCC unroll 3
+                for (int j = 0; j < 3; ++j)
+                    P[i][j] = F[i][0] * M[0][j] + F[i][1] * M[1][j] + F[i][2] * M[2][j] + t * G[i][j];
+        } else {
+            #pragma GCC unroll 3
+            for (int i = 0; i < 3; ++i)
+                #pragma GCC unroll 3
+                for (int j = 0; j < 3; ++j) P[i][j] = a * F[i][j] + t * G[i][j];
+        }
         if constexpr (Energy) {
             double h[3][3];  // F - I: exact near rest (Sterbenz)
             #pragma GCC unroll 3
