@@ -33,8 +33,7 @@ struct StableNeoHookean {
         : muS(4.0 / 3.0 * mu), lamS(lambda + 5.0 / 6.0 * mu), alpha(1.0 + 0.75 * muS / lamS) {}
 
     // One SIMD lane: sP = s P_e(F) + F (sS_v), the scale s on the two
-    // coefficients of P_e and already in sS_v; the viscous push-forward is
-    // merged with the F term: s P = F (s a I + sS_v) + s t cof(F).  w: the
+    // coefficients of P_e and already in sS_v.  w: the
     // energy density W(F) - W(I) without its log term (unscaled), aux: what
     // the log term needs (energyFinish).
     template <bool Viscous, bool Energy>
@@ -58,23 +57,20 @@ struct StableNeoHookean {
             for (int j = 0; j < 3; ++j) Ic += F[i][j] * F[i][j];
         const double a = s * (muS * (1.0 - 1.0 / (Ic + 1.0)));
         const double t = s * (lamS * (J - alpha));
-        if constexpr (Viscous) {
-            double M[3][3];  // s a I + sS_v
+        // (Viscous: F sS_v first, a and t last: they wait for the division
+        // and the determinant, the push-forward does not.  Merging a into
+        // sS_v, F (s a I + sS_v), saves 6 operations but put all 27 of the
+        // push-forward behind the division: measured slower.)
+        #pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i)
             #pragma GCC unroll 3
-            for (int i = 0; i < 3; ++i)
-                #pragma GCC unroll 3
-                for (int j = 0; j < 3; ++j) M[i][j] = sSv[i][j] + (i == j ? a : 0.0);
-            #pragma GCC unroll 3
-            for (int i = 0; i < 3; ++i)
-                #pragma GCC unroll 3
-                for (int j = 0; j < 3; ++j)
-                    P[i][j] = F[i][0] * M[0][j] + F[i][1] * M[1][j] + F[i][2] * M[2][j] + t * G[i][j];
-        } else {
-            #pragma GCC unroll 3
-            for (int i = 0; i < 3; ++i)
-                #pragma GCC unroll 3
-                for (int j = 0; j < 3; ++j) P[i][j] = a * F[i][j] + t * G[i][j];
-        }
+            for (int j = 0; j < 3; ++j) {
+                if constexpr (Viscous)
+                    P[i][j] = F[i][0] * sSv[0][j] + F[i][1] * sSv[1][j] + F[i][2] * sSv[2][j] + a * F[i][j] +
+                              t * G[i][j];
+                else
+                    P[i][j] = a * F[i][j] + t * G[i][j];
+            }
         if constexpr (Energy) {
             double h[3][3];  // F - I: exact near rest (Sterbenz)
             #pragma GCC unroll 3
