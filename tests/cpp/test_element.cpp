@@ -1,6 +1,8 @@
 // Element kernel: objectivity, patch test, batch kernel == reference kernel.
 #include <gtest/gtest.h>
 
+#include <type_traits>
+
 #include <memory>
 
 #include <Eigen/Geometry>
@@ -127,11 +129,15 @@ TEST(Element, BatchKernelMatchesReference) {
         }
         const Material& m = w.materials[0];
         const ElementParams p{m.lambda(), m.mu(), m.beta()};
-        withLaw(m, [&](const auto& law) {
+        // Every compiled combination (viscous or not, energy or not): each is
+        // its own code, with the scale -V0 folded into different constants.
+        auto check = [&](const auto& law, auto viscousTag, auto energyTag) {
             using Law = std::decay_t<decltype(law)>;
+            constexpr bool Viscous = decltype(viscousTag)::value, Energy = decltype(energyTag)::value;
+            const ElementParams pv{p.lambda, p.mu, Viscous ? p.beta : 0.0};
             BatchOut out;
-            elementBatch<Law, true, true>(law, 3, 5, w.tetNodes.data(), w.pos.data(), w.vel.data(), w.tetB.data(),
-                                          w.tetVol0.data(), p, out);
+            elementBatch<Law, Viscous, Energy>(law, 3, 5, w.tetNodes.data(), w.pos.data(), w.vel.data(),
+                                               w.tetB.data(), w.tetVol0.data(), pv, out);
             for (int l = 0; l < 5; ++l) {
                 const int e = 3 + l;
                 const int32_t* c = &w.tetNodes[4 * e];
@@ -139,19 +145,31 @@ TEST(Element, BatchKernelMatchesReference) {
                 const Mat3 F = edgeMatrix(&w.pos[3 * c[0]], &w.pos[3 * c[1]], &w.pos[3 * c[2]], &w.pos[3 * c[3]]) * B;
                 const Mat3 Fd =
                     edgeMatrix(&w.vel[3 * c[0]], &w.vel[3 * c[1]], &w.vel[3 * c[2]], &w.vel[3 * c[3]]) * B;
-                const TetStress st = tetStress<Law, true, true>(law, F, Fd, p);
+                const TetStress st = tetStress<Law, Viscous, true>(law, F, Fd, pv);
                 double f[4][3];
                 nodalForces(st.P, B, w.tetVol0[e], f);
                 for (int k = 0; k < 4; ++k)
                     for (int i = 0; i < 3; ++i)
-                        EXPECT_NEAR(out.f[k][i][l], f[k][i], 1e-9 * (1 + std::fabs(f[k][i]))) << lawName(m.law);
-                EXPECT_NEAR(out.wElastic[l], w.tetVol0[e] * st.wElastic, 1e-9 * std::fabs(out.wElastic[l]) + 1e-12)
-                    << lawName(m.law);
-                EXPECT_NEAR(out.diss[l], w.tetVol0[e] * st.dissRate, 1e-9 * std::fabs(out.diss[l]) + 1e-12);
+                        EXPECT_NEAR(out.f[k][i][l], f[k][i], 1e-9 * (1 + std::fabs(f[k][i])))
+                            << lawName(m.law) << " viscous " << Viscous << " energy " << Energy;
+                if (Energy) {
+                    EXPECT_NEAR(out.wElastic[l], w.tetVol0[e] * st.wElastic, 1e-9 * std::fabs(out.wElastic[l]) + 1e-12)
+                        << lawName(m.law);
+                    EXPECT_NEAR(out.diss[l], w.tetVol0[e] * st.dissRate, 1e-9 * std::fabs(out.diss[l]) + 1e-12);
+                    if (Viscous) {
+                        EXPECT_GT(out.diss[l], 0) << "a deforming viscous element dissipates";
+                    }
+                }
                 if (e == 5) {
                     EXPECT_LT(F.determinant(), 0);
                 }
             }
+        };
+        withLaw(m, [&](const auto& law) {
+            check(law, std::true_type{}, std::true_type{});
+            check(law, std::true_type{}, std::false_type{});
+            check(law, std::false_type{}, std::true_type{});
+            check(law, std::false_type{}, std::false_type{});
         });
     }
 }
