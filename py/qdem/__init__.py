@@ -18,6 +18,9 @@ from .piece import Piece
 from .restart import loadState, saveState
 from .shapes import ballMesh
 from .world import World, addPiece, defaultWorld, reset, stableDt
+from . import parallel as _parallel
+
+_parallel.abortOnError()  # under mpiexec: a script's error on one rank ends the job, not a hang
 
 __version__ = "0.1.0"
 

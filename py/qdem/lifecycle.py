@@ -327,11 +327,18 @@ def _wrapSave(orig, toFile=True):
         if qdemScene:
             self.tags[TAG] = sceneBlob(w, self)
         try:
-            # Under mpiexec every rank runs the script: rank 0 alone writes a
-            # file (O.saveTmp keeps each rank's copy in its own memory).
-            if toFile and not parallel.isWriter():
-                return None
-            return orig(self, *a, **k)
+            # O.saveTmp keeps each rank's copy in its own memory.
+            if not toFile:
+                return orig(self, *a, **k)
+            path = a[0] if a else k.get("file")
+
+            def write():
+                if isinstance(path, str):
+                    parallel.checkWritable(path, "O.save")
+                return orig(self, *a, **k)
+            # Under mpiexec every rank runs the script: rank 0 alone writes
+            # the file, and a failure there stops every rank.
+            return parallel.writerDoes(write, "O.save(%r)" % (path,))
         finally:
             if _blob(self):
                 self.tags[TAG] = ""

@@ -79,6 +79,85 @@ def attach(world):
     core.setCommunicator(MPI.COMM_WORLD)
 
 
+def _plainMpiRanks():
+    """Number of ranks of a plain mpiexec run whose every rank runs the script
+    (1 serially and under yade.mpy, whose workers do not run it)."""
+    size = launchedSize()
+    if size <= 1 or _mpyInUse():
+        return 1
+    return size
+
+
+def checkWritable(path, what):
+    """Raises OSError naming `path` when its directory is missing or not
+    writable.  (YADE's gzip writer loops for good on a stream that failed to
+    open - O.save('missing/x.yade.gz') hung - and a bare FileNotFoundError
+    named a temporary file the user never gave.)"""
+    d = os.path.dirname(os.path.abspath(os.path.expanduser(path)))
+    if not os.path.isdir(d):
+        raise OSError("%s: cannot write %r: the directory %r does not exist (create it first, e.g. "
+                      "os.makedirs(%r, exist_ok=True))" % (what, path, d, d))
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise OSError("%s: cannot write %r: the directory %r is not writable (choose another one)" % (what, path, d))
+
+
+def writerDoes(action, what):
+    """Runs action() on the rank that writes files (rank 0; the only process
+    serially) and returns its result there (None on the other ranks).  Under
+    mpiexec every rank calls this (collective): a failure on the writer is
+    raised on every rank, with the writer's message.  Before, a write that
+    failed on rank 0 alone (a missing directory, a full disk) stopped rank 0's
+    script while the others waited in the next step's exchange for good."""
+    result, err = None, None
+    if isWriter():
+        try:
+            result = action()
+        except Exception as e:  # (re-raised below, on every rank)
+            err = e
+    if _plainMpiRanks() > 1:
+        from mpi4py import MPI
+        msg = MPI.COMM_WORLD.bcast(None if err is None else "%s: %s" % (type(err).__name__, err), root=0)
+        if msg is not None and err is None:
+            raise RuntimeError("%s failed on rank 0, the rank that writes the files: %s" % (what, msg))
+    if err is not None:
+        raise err
+    return result
+
+
+def abortOnError():
+    """Under a plain mpiexec run of several ranks: an error that ends the
+    script on one rank ends the job (MPI_Abort), with its message.  YADE
+    prints a script's uncaught error and calls sys.exit(1); the other ranks
+    then waited for good in the next step's exchange (a typo inside
+    ``if rank == 0:`` hung the job until its time limit).  Installed when
+    qdem is imported; a no-op serially and under yade.mpy."""
+    import sys
+    if _plainMpiRanks() <= 1 or getattr(sys.exit, "_qdemAbort", False):
+        return
+    plainExit = sys.exit
+
+    def exitOrAbort(code=None):
+        if code not in (None, 0) and _plainMpiRanks() > 1:  # (yade.mpy may have been imported since)
+            sys.stderr.write("qdem: rank %d of %d stopped with an error (above); stopping every rank "
+                             "(MPI_Abort) rather than leave the others waiting for it\n" % (rank(), launchedSize()))
+            sys.stderr.flush()
+            from mpi4py import MPI
+            MPI.COMM_WORLD.Abort(code if isinstance(code, int) else 1)
+        plainExit(code)
+    exitOrAbort._qdemAbort = True
+    sys.exit = exitOrAbort
+    plainHook = sys.excepthook
+
+    def hookThenAbort(t, v, tb):
+        plainHook(t, v, tb)
+        exitOrAbort(1)
+    sys.excepthook = hookThenAbort
+
+
+# (these counts are per run, not per rank: the same on every rank)
+_NOT_SUMMED = ("viscousIterations", "viscousIterationsTotal", "viscousWarmStart")
+
+
 def summedCounts(core):
     """core.contactCounts summed over the ranks (each rank counts the contacts
     it computed); the counts themselves on one process.  Collective under MPI."""
@@ -88,7 +167,7 @@ def summedCounts(core):
     from mpi4py import MPI
     keys = sorted(c)
     every = MPI.COMM_WORLD.allgather([c[k] for k in keys])
-    return {k: sum(r[i] for r in every) for i, k in enumerate(keys)}
+    return {k: (c[k] if k in _NOT_SUMMED else sum(r[i] for r in every)) for i, k in enumerate(keys)}
 
 
 def assignSubdomains(world=None):

@@ -68,6 +68,34 @@ def test_error_on_one_rank_stops_every_rank(P):
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
 
 
+@pytest.mark.parametrize("case", ["typo", "save"])
+def test_script_error_on_some_ranks_ends_the_job(case, tmp_path):
+    """A script error on rank 0 alone (a typo inside `if rank == 0:`), or a
+    save that fails on the writing rank only (a missing directory), ended
+    rank 0 while the others waited in the next step for good: the job hung
+    until its time limit.  Now it ends at once with the message."""
+    requireMpi()
+    rc, out = mpirun(2, ["yade", "-n", "-x", "tests/mpi/yade_rank_errors.py", case, str(tmp_path)], timeout=90)
+    assert rc not in (0, 124, 137), "the job %s:\n%s" % ("hung" if rc in (124, 137) else "did not fail", out[-4000:])
+    assert "stopping every rank" in out, out[-4000:]
+    assert "FINISHED" not in out
+    if case == "typo":
+        assert "no_such_attribute" in out
+    else:
+        assert "does not exist" in out and "no_such_dir" in out
+
+
+def test_failed_save_is_raised_on_every_rank(tmp_path):
+    """The writer's failure reaches every rank as an exception the script can
+    catch, and the run goes on alike."""
+    requireMpi()
+    rc, out = mpirun(2, ["yade", "-n", "-x", "tests/mpi/yade_rank_errors.py", "savecaught", str(tmp_path)],
+                     timeout=90)
+    assert rc == 0, out[-4000:]
+    assert "RANK 0 CAUGHT OSError" in out and "RANK 1 CAUGHT RuntimeError" in out, out[-4000:]
+    assert "RANK 0 FINISHED iter 40" in out and "RANK 1 FINISHED iter 40" in out, out[-4000:]
+
+
 @pytest.mark.parametrize("P,warm", [(2, False), (3, False), (2, True), (3, True)])
 def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     # The distributed conjugate gradients (doc/parallel.md): C p by one pass

@@ -296,6 +296,25 @@ def test_uncaught_error_ends_yade_with_a_nonzero_exit(tmp_path):
     assert "StabilityError" in r.stdout + r.stderr
 
 
+@pytest.mark.parametrize("ext", ["yade.gz", "yade", "xml.bz2"])
+def test_save_into_a_missing_directory_is_an_error_naming_it(tmp_path, ext):
+    """YADE's gzip writer looped for good on a stream that failed to open:
+    O.save('missing/x.yade.gz') hung with nothing printed (and plain YADE
+    'saved' a small scene there, writing nothing)."""
+    r = _yade(tmp_path, SCENE + textwrap.dedent("""
+        O.run(5, True)
+        try:
+            O.save("missing_dir/scene.%s")
+        except OSError as e:
+            print("CAUGHT", e)
+        print("DONE")
+        """ % ext))
+    out = r.stdout + r.stderr
+    assert "DONE" in out, out[-3000:]
+    assert "CAUGHT O.save: cannot write 'missing_dir/scene.%s'" % ext in out and "does not exist" in out, out[-3000:]
+    assert not (tmp_path / "missing_dir").exists()
+
+
 def _engines(order):
     from yade import ForceResetter, NewtonIntegrator
     made = {"F": ForceResetter, "Q": qdem.QdemEngine, "N": lambda: NewtonIntegrator(gravity=(0, 0, -9.81))}
