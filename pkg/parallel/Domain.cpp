@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "../core/Errors.hpp"
 #include "../world/World.hpp"
@@ -103,31 +105,6 @@ void Domain::build(const PartitionOptions& opt) {
     if (contactHalo_) sendContactHalo();  // collective: every rank builds at the same step
 }
 
-// The split is computed by every rank alone: it must come out the same
-// everywhere, or the halos do not match and messages would be cut.  A
-// script that builds other scenes on other ranks (unseeded random positions)
-// is told so here, on every rank, before anything is exchanged.
-void Domain::checkSameEverywhere(const PartitionInput& in) const {
-    uint64_t h = 1469598103934665603ull;  // FNV-1a over sizes, positions and owners
-    const auto mixBytes = [&](const void* p, std::size_t n) {
-        const auto* b = static_cast<const uint8_t*>(p);
-        for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-    };
-    mixBytes(&in.nNodes, sizeof in.nNodes);
-    mixBytes(&in.nTets, sizeof in.nTets);
-    mixBytes(in.pos, 3 * sizeof(double) * static_cast<std::size_t>(in.nNodes));
-    mixBytes(part_.nodeOwner.data(), part_.nodeOwner.size() * sizeof(int32_t));
-    // Two exact halves (32 bits each fit a double), compared by min and max.
-    double lo[2] = {double(h >> 32), double(h & 0xffffffffu)}, hi[2] = {lo[0], lo[1]};
-    comm_->allreduceMin(lo, 2);
-    comm_->allreduceMax(hi, 2);
-    if (lo[0] != hi[0] || lo[1] != hi[1])
-        throw InputError("QDEM under MPI: the ranks hold different scenes (other pieces, node positions or states), "
-                         "so they cannot share one split. Every rank must build the same scene: seed random numbers "
-                         "alike on every rank (e.g. random.seed(1) before placing pieces), and change pieces on "
-                         "every rank, not on one");
-}
-
 namespace {
 
 // FNV-1a over raw bytes.
@@ -137,41 +114,117 @@ struct Fnv {
         const auto* b = static_cast<const uint8_t*>(p);
         for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
     }
-    template <class T>
-    void vec(const std::vector<T>& v) {
+    template <class V>
+    void vec(const V& v) {
         const std::size_t n = v.size();
         bytes(&n, sizeof n);
-        if (n) bytes(v.data(), n * sizeof(T));
+        if (n) bytes(v.data(), n * sizeof(v.data()[0]));
     }
+    void real(double v) { bytes(&v, sizeof v); }
 };
 
-// Equal on every rank?  Two exact 32-bit halves compared by min and max.
-bool sameEverywhere(Communicator& comm, uint64_t h) {
-    double v[4] = {double(h >> 32), double(h & 0xffffffffu), -double(h >> 32), -double(h & 0xffffffffu)};
-    comm.allreduceMin(v, 4);
-    return v[0] == -v[2] && v[1] == -v[3];
+// Which of the hashes h[0..n) differ between ranks (bit i: h[i] does).  One
+// reduction for all: two exact 32-bit halves of each (they fit a double),
+// compared by min and max (the max as the min of the negatives).
+uint32_t differing(Communicator& comm, const uint64_t* h, int n) {
+    std::vector<double> v(4 * static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        v[4 * i] = double(h[i] >> 32), v[4 * i + 1] = double(h[i] & 0xffffffffu);
+        v[4 * i + 2] = -v[4 * i], v[4 * i + 3] = -v[4 * i + 1];
+    }
+    comm.allreduceMin(v.data(), static_cast<int>(v.size()));
+    uint32_t bits = 0;
+    for (int i = 0; i < n; ++i)
+        if (v[4 * i] != -v[4 * i + 2] || v[4 * i + 1] != -v[4 * i + 3]) bits |= 1u << i;
+    return bits;
+}
+
+// "a, b and c" of the names whose bit is set.
+std::string namesOf(uint32_t bits, const char* const* names, int n) {
+    std::vector<std::string> on;
+    for (int i = 0; i < n; ++i)
+        if (bits >> i & 1u) on.emplace_back(names[i]);
+    std::string r;
+    for (std::size_t i = 0; i < on.size(); ++i)
+        r += (i == 0 ? "" : i + 1 == on.size() ? " and " : ", ") + on[i];
+    return r;
 }
 
 }  // namespace
 
-void Domain::checkYadeAlike() const {
-    Fnv f;
-    const SphereSet& S = w_.spheres;
-    f.vec(S.id), f.vec(S.radius), f.vec(S.mass), f.vec(S.pairStart), f.vec(S.pairPiece);
-    f.vec(S.pos), f.vec(S.vel), f.vec(S.angVel);
-    const std::size_t no = w_.obstacles.size();
-    f.bytes(&no, sizeof no);
-    for (const Obstacle& o : w_.obstacles) {
-        f.bytes(&o.bodyId, sizeof o.bodyId);
-        f.bytes(o.pos.data(), 3 * sizeof(double));
-        f.bytes(o.vel.data(), 3 * sizeof(double));
+// The split is computed by every rank alone: it must come out the same
+// everywhere, or the halos do not match and messages would be cut.  A
+// script that builds other scenes on other ranks (unseeded random positions
+// or velocities, a load set on one rank) is refused on every rank, naming
+// what differs.  At the first split every rank's whole node state comes from
+// its own copy of the script, so all of it is compared; at a later split
+// (pieces added, a rebalance) only what gatherAll made whole (positions).
+void Domain::checkSameEverywhere(const PartitionInput& in) const {
+    enum { kPos, kVel, kLoad, kMass, kN };
+    static const char* const names[kN] = {"node positions", "node velocities",
+                                          "loads (extForce) or blocked DOFs", "masses (densities)"};
+    Fnv f[kN];
+    f[kPos].bytes(&in.nNodes, sizeof in.nNodes);
+    f[kPos].bytes(&in.nTets, sizeof in.nTets);
+    f[kPos].bytes(in.pos, 3 * sizeof(double) * static_cast<std::size_t>(in.nNodes));
+    f[kPos].vec(part_.nodeOwner);
+    if (!everBuilt_) {
+        f[kVel].vec(w_.vel);
+        f[kLoad].vec(w_.extForce), f[kLoad].vec(w_.blocked);
+        f[kMass].vec(w_.mass);
     }
-    if (!sameEverywhere(*comm_, f.h))
-        throw InputError("QDEM under MPI: the ranks' YADE scenes differ (other walls, boxes, facets or spheres, or "
-                         "the same ones in other states), so their forces cannot be shared. Under plain mpiexec every "
-                         "rank must build and step the same YADE scene: seed random numbers alike on every rank, "
-                         "and change bodies on every rank (under yade.mpy, step with mp.mpirun: QDEM then gathers "
-                         "the bodies from their owners itself, doc/parallel.md)");
+    const uint64_t h[kN] = {f[0].h, f[1].h, f[2].h, f[3].h};
+    const uint32_t bits = differing(*comm_, h, kN);
+    if (bits)
+        throw InputError("QDEM under MPI: the ranks hold different scenes (their " + namesOf(bits, names, kN) +
+                         " differ), so they cannot share one split. Every rank must build the same scene: seed "
+                         "random numbers alike on every rank (e.g. random.seed(1) before placing pieces or "
+                         "drawing velocities), and change pieces on every rank, not on one");
+}
+
+
+void Domain::checkYadeAlike(double dt) const {
+    enum { kBodies, kDt, kGravity, kSettings, kMaterials, kN };
+    static const char* const names[kN] = {"YADE bodies (walls, boxes, facets or spheres, or their states)",
+                                          "time steps (O.dt)", "gravity (NewtonIntegrator.gravity)",
+                                          "QdemEngine settings", "materials"};
+    Fnv f[kN];
+    const SphereSet& S = w_.spheres;
+    f[kBodies].vec(S.id), f[kBodies].vec(S.radius), f[kBodies].vec(S.mass), f[kBodies].vec(S.pairStart);
+    f[kBodies].vec(S.pairPiece), f[kBodies].vec(S.pos), f[kBodies].vec(S.vel), f[kBodies].vec(S.angVel);
+    const std::size_t no = w_.obstacles.size();
+    f[kBodies].bytes(&no, sizeof no);
+    for (const Obstacle& o : w_.obstacles) {
+        f[kBodies].bytes(&o.bodyId, sizeof o.bodyId);
+        f[kBodies].bytes(o.pos.data(), 3 * sizeof(double));
+        f[kBodies].bytes(o.vel.data(), 3 * sizeof(double));
+    }
+    f[kDt].real(dt);
+    for (int d = 0; d < 3; ++d) f[kGravity].real(w_.gravity[d]);
+    // Field by field (not the struct's bytes: its padding is undefined).
+#define QDEM_HASH_SETTING(T, name, engineName, def, range, doc) \
+    {                                                           \
+        const T v = w_.settings.name;                           \
+        f[kSettings].bytes(&v, sizeof v);                       \
+    }
+    QDEM_SETTINGS(QDEM_HASH_SETTING)
+#undef QDEM_HASH_SETTING
+    for (const Material& m : w_.materials) {
+        for (const double v : {m.young, m.poisson, m.density, m.viscosity, m.frictionPiece, m.frictionWall, m.radius,
+                               m.restitution})
+            f[kMaterials].real(v);
+        const int law = static_cast<int>(m.law);
+        f[kMaterials].bytes(&law, sizeof law);
+    }
+    const uint64_t h[kN] = {f[0].h, f[1].h, f[2].h, f[3].h, f[4].h};
+    const uint32_t bits = differing(*comm_, h, kN);
+    if (bits)
+        throw InputError("QDEM under MPI: the ranks' " + namesOf(bits, names, kN) +
+                         " differ, so they would step one scene by different rules. Under plain mpiexec every rank "
+                         "runs the same script and must build, set and step the same scene: seed random numbers "
+                         "alike on every rank, and change bodies, O.dt, gravity, engine settings and materials on "
+                         "every rank, not inside `if rank == 0:` (under yade.mpy, step with mp.mpirun: QDEM then "
+                         "gathers the bodies from their owners itself, doc/parallel.md)");
 }
 
 void Domain::markCurrent() {

@@ -89,10 +89,12 @@ public:
     void ensureSphereHalo();
     // Every rank's copy of YADE must hold the same obstacles and coupled
     // spheres in the same states (they size the step's reductions, and each
-    // rank applies the same forces to its copy): checked at the start of
-    // every step by one reduction of a hash, refused on every rank with the
-    // fix otherwise (never a mismatched message).  Collective.
-    void checkYadeAlike() const;
+    // rank applies the same forces to its copy), and step with the same dt,
+    // gravity, settings and materials (each rank integrates its own nodes
+    // by them): checked at the start of every step by one reduction of a
+    // hash each, refused on every rank naming what differs and the fix
+    // (never a mismatched message).  Collective.
+    void checkYadeAlike(double dt) const;
 
     // Nodes whose state is current on this rank: owned, element ghosts and
     // contact ghosts.  version() changes whenever the set does (the contact

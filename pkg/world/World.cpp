@@ -255,9 +255,9 @@ void World::setCommunicator(std::shared_ptr<Communicator> comm) {
 // spheres), the world split at the first step (and again after pieces were
 // added), the contact halo widened for the spheres listed.  Each check is
 // collective and decided alike everywhere, so no rank waits for another.
-void World::prepareDomain() {
+void World::prepareDomain(double dt) {
     if (domain_->built()) {
-        domain_->checkYadeAlike();    // before any message sized by them
+        domain_->checkYadeAlike(dt);    // before any message sized by them
         domain_->ensureSphereHalo();  // spheres listed since, or larger ones: a wider contact halo now
         return;
     }
@@ -268,7 +268,7 @@ void World::prepareDomain() {
         domain_->gatherAll();
         domain_->gatherRows();
     }
-    domain_->checkYadeAlike();
+    domain_->checkYadeAlike(dt);
     domain_->build(partitionOptions);
     sleepPhase_.awakeSetChanged();
     energyTotal_ = energy;

@@ -346,7 +346,7 @@ private:
     Energy energyTotal_;
     long gatheredIter_ = -1;  // the step gatherAll() last made every node current at
     long rowsGatheredIter_ = -1;  // and gatherState() every history row
-    void prepareDomain();
+    void prepareDomain(double dt);
     // Throws InputError under MPI unless gatherAll() made every node current this step.
     void requireGathered(const char* what) const;
     std::vector<double> boxes_;  // pieceBoxes(), made at step boxesIter_

@@ -69,6 +69,35 @@ w.core.setSpheres(np.array([7], i32), np.array([0.01]), np.array([1e7]), np.arra
 x = 0.05 if comm.rank == comm.size - 1 else 0.0
 w.core.setSphereStates(np.array([[x, 0.0, 0.06]], f64), np.zeros((1, 3)), np.zeros((1, 3)))
 c = caught(lambda: w.core.step(dt, 2))
-everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d}, root=0)
+# (e) Ranks whose scenes differ in something other than positions: node
+# velocities drawn unseeded, a load set on one rank, another O.dt, a setting
+# or a material changed on one rank.  Each ran on silently before, every rank
+# integrating its own nodes by its own values (a block torn in two).
+other = comm.rank == comm.size - 1
+e = {}
+w = scenes.contactFree()
+w.pieces[1].vel[:] += 0.01 * comm.rank
+w.core.setCommunicator(comm)
+e["velocities"] = caught(lambda: w.core.step(dt, 1))
+w = scenes.contactFree()
+if other:
+    w.pieces[0].extForce[0] = (0.0, 0.0, 1.0)
+w.core.setCommunicator(comm)
+e["loads"] = caught(lambda: w.core.step(dt, 1))
+w = scenes.contactFree()
+w.core.setCommunicator(comm)
+e["time steps"] = caught(lambda: w.core.step(dt * (0.5 if other else 1.0), 1))
+w = scenes.contactFree()
+w.core.setCommunicator(comm)
+w.core.step(dt, 1)
+if other:
+    w.core.localDamping = 0.1
+e["settings"] = caught(lambda: w.core.step(dt, 1))
+w = scenes.contactFree()
+w.core.setCommunicator(comm)
+if other:
+    w.core.gravity = (0.0, 0.0, -9.0)
+e["gravity"] = caught(lambda: w.core.step(dt, 1))
+everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d, "e": e}, root=0)
 if comm.rank == 0:
     print("RESULT " + json.dumps({"ranks": comm.size, "caught": everything, "nanNode": node}), flush=True)

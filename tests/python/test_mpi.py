@@ -62,10 +62,15 @@ def test_error_on_one_rank_stops_every_rank(P):
     assert kind == "StabilityError" and "not finite" in msg
     # (c) ranks whose YADE copies hold other spheres: refused on every rank, naming the fix.
     for c in caught:
-        assert c["c"][0] == "ValueError" and "YADE scenes differ" in c["c"][1] and "seed" in c["c"][1]
+        assert c["c"][0] == "ValueError" and "YADE bodies" in c["c"][1] and "seed" in c["c"][1]
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
+    # (e) scenes that differ in velocities, loads, O.dt, settings or gravity:
+    # refused on every rank, naming what differs (they ran on silently).
+    for c in caught:
+        for what, (kind, msg) in c["e"].items():
+            assert kind == "ValueError" and what in msg and "every rank" in msg, (what, kind, msg)
 
 
 @pytest.mark.parametrize("case", ["typo", "save"])
