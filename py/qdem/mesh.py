@@ -31,10 +31,17 @@ def _meshioRead(path, who):
 
 class Mesh:
     """Nodes (N,3) and tetrahedra (T,4) of one piece, in the piece's own frame.
-    Checked on construction: NaN, bad indices, inverted or zero-volume tets and
-    a non-manifold surface raise ValueError naming the problem."""
+    Checked on construction: NaN, bad indices, inverted or zero-volume tets, a
+    non-manifold surface, coincident nodes inside one part (an unmerged
+    interface: a crack) and coordinates so far from the origin that double
+    rounding distorts the elements raise ValueError naming the problem.
 
-    def __init__(self, nodes, tets, check=True):
+    nodeIds (N,) or None: the index in the mesh file of each node (loadMesh
+    sets it: a file's points that no tetrahedron uses are dropped, so node i
+    need not be the file's point i).  A piece added from this mesh gets
+    originalNodeIds in that numbering; None means the mesh's own indices."""
+
+    def __init__(self, nodes, tets, check=True, nodeIds=None):
         raw = np.asarray(nodes)
         if np.iscomplexobj(raw):
             raise ValueError("Mesh: nodes must hold real coordinates, got dtype %s" % raw.dtype)
@@ -61,13 +68,24 @@ class Mesh:
                                  "from 0)" % (t, v, len(nodes)))
         self.nodes = nodes
         self.tets = np.ascontiguousarray(tets, dtype=np.int32)
+        self.nodeIds = _nodeIds(nodeIds, len(nodes))
         if check:
             self.check()
 
     def check(self):
-        """Raise ValueError on NaN, bad index, inverted/zero-volume tet, non-manifold surface."""
+        """Raise ValueError on NaN, bad index, inverted/zero-volume tet, coincident
+        nodes in one part, coordinates too far from the origin, non-manifold surface."""
+        _checkPrecision(self.nodes, self.tets)  # first: far out, tets can come out flat or inverted
         _core.checkMesh(self.nodes, self.tets)
+        _checkCoincidentNodes(self.nodes, self.tets, self.nodeIds)
         _core.extractSurface(self.nodes, self.tets)
+
+    def originalIds(self, order):
+        """The ids a piece reports as originalNodeIds for its nodes taken in
+        ``order`` (indices into this mesh's nodes, e.g. addPiece's reordering):
+        the file's point indices for a mesh from loadMesh, else ``order``."""
+        order = np.asarray(order)
+        return order if self.nodeIds is None else self.nodeIds[order]
 
     @property
     def nNodes(self):
@@ -90,18 +108,121 @@ class Mesh:
 
     def scaled(self, factor):
         """A copy scaled about the origin (factor: number or 3 numbers)."""
-        return Mesh(self.nodes * np.asarray(factor, dtype=float), self.tets.copy(), check=False)
+        return Mesh(self.nodes * np.asarray(factor, dtype=float), self.tets.copy(), check=False,
+                    nodeIds=self.nodeIds)
 
     def __repr__(self):
         return "Mesh(%d nodes, %d tets)" % (self.nNodes, self.nTets)
 
 
+def _nodeIds(ids, n):
+    """Mesh.nodeIds: None, or one integer per node (its point index in the file)."""
+    if ids is None:
+        return None
+    ids = np.asarray(ids)
+    if ids.shape != (n,) or (n and not np.issubdtype(ids.dtype, np.integer)):
+        raise ValueError("Mesh: nodeIds must be one integer per node (%d), got shape %s dtype %s"
+                         % (n, ids.shape, ids.dtype))
+    return ids.astype(np.int64)
+
+
+def _fileId(nodeIds, i):
+    """How an error names node i: with its file index when that differs."""
+    if nodeIds is None or nodeIds[i] == i:
+        return "%d" % i
+    return "%d (point %d of the file)" % (i, nodeIds[i])
+
+
+# Rounding of coordinates far from the origin.  A double holds a coordinate of
+# magnitude X to within u*X (u = 2^-53), so each node of a mesh written at an
+# offset X has already moved by up to u*X before we see it (and moves again at
+# every step if the piece is placed there).  For a tetrahedron of size
+# s = (6|V|)^(1/3) that changes the volume by a relative c*u*X/s: c = 8 is the
+# first-order bound with all twelve roundings aligned, while the largest
+# per-tet error measured on boxMesh blocks written at offsets 1e6..1e14 m and
+# read back was 1.3..1.9 u*X/s; we take c = 2.  Refusing beyond a 1e-6
+# relative volume error means X/s > 4.5e9: 1e6-1e8 m (UTM-like) coordinates
+# with elements of 1 m, or of 1 cm at 1e7 m, load; a 0.3 m box at 1e10 m
+# (1.4e-5 volume error) or 1e14 m (8 %) is refused.
+_ROUNDING_C, _VOLUME_RTOL = 2.0, 1e-6
+
+
+def _checkPrecision(nodes, tets):
+    """Refuse a mesh whose coordinates are so large against its smallest
+    element that double rounding distorts element volumes beyond _VOLUME_RTOL;
+    only when an offset is the cause (centre farther from the origin than the
+    mesh's half extent), since translating is then the fix.  Costs one pass of
+    tetVolumes (some ms for 1M tets)."""
+    if not len(tets) or not np.isfinite(nodes).all() or tets.min() < 0 or tets.max() >= len(nodes):
+        return  # checkMesh names these
+    lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+    X = float(np.abs(nodes).max())
+    centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo).max())
+    if float(np.abs(centre).max()) <= half:
+        return  # near the origin: translating would not help (a degenerate tet is checkMesh's business)
+    v = np.abs(_core.tetVolumes(nodes, tets))
+    v = v[v > 0]
+    s = float(np.cbrt(6.0 * v.min())) if len(v) else 0.0  # all flat: coordinates collapsed by rounding
+    err = _ROUNDING_C * 2.0**-53 * X / s if s > 0 else np.inf
+    if err > _VOLUME_RTOL:
+        raise ValueError(
+            "Mesh: coordinates reach %.3g m while the smallest element is %.3g m in size ((6 x volume)^(1/3)): "
+            "at that offset (mesh centre (%.10g, %.10g, %.10g)) a double holds a coordinate only to within %.2g m, "
+            "which distorts element volumes by about %.2g relative (allowed %g). Translate the mesh near the "
+            "origin where it is made (in the mesher or CAD, before writing the file: the file's coordinates "
+            "have already lost those digits), e.g. subtract the centre, and place it with "
+            "addPiece(mesh, material, pos=centre)"
+            % (X, s, centre[0], centre[1], centre[2], 2.0**-53 * X, err, _VOLUME_RTOL))
+
+
+# Coincident nodes: exact equality.  Duplicates come from copying a node's
+# coordinates (an interface meshed twice, a mesher's unmerged seam), so they are
+# bit-identical, and text formats write both copies with the same digits.  A
+# tolerance would need a length scale (a mesh graded from 1 m to 1 um has
+# legitimate node pairs closer than any fixed fraction of its size) and a
+# neighbour search instead of one sort; nodes nearly coincident inside a tet
+# are already refused as a zero-volume tetrahedron.
+def _checkCoincidentNodes(nodes, tets, nodeIds=None):
+    """Refuse distinct nodes at identical coordinates inside one connected part:
+    an internal crack whose faces pass through each other (contacts inside a
+    piece are skipped).  Coincident nodes of different parts (blocks touching
+    in one file) are left to addPiece's parts check / splitMesh.  One lexsort,
+    O(N log N); the part labels are computed only when duplicates exist."""
+    if len(nodes) < 2:
+        return
+    order = np.lexsort(nodes.T[::-1])
+    s = nodes[order]
+    if not (s[1:] == s[:-1]).all(axis=1).any():
+        return
+    node = -np.ones(len(nodes), dtype=np.int64)  # part of each node; -1: in no tet (addPiece refuses those)
+    node[tets] = _core.meshParts(nodes, tets)[:, None]
+    # sort by part within equal coordinates too, so that same-part twins are neighbours
+    order = np.lexsort((node, nodes[:, 2], nodes[:, 1], nodes[:, 0]))
+    s, lab = nodes[order], node[order]
+    twin = (s[1:] == s[:-1]).all(axis=1) & (lab[1:] == lab[:-1]) & (lab[1:] >= 0)
+    k = np.flatnonzero(twin)
+    if not len(k):
+        return
+    pairs = ", ".join("%s and %s at (%.6g, %.6g, %.6g)"
+                      % ((_fileId(nodeIds, order[i]), _fileId(nodeIds, order[i + 1])) + tuple(s[i])) for i in k[:3])
+    raise ValueError(
+        "Mesh: %d pair%s of distinct nodes at identical coordinates in one connected part (nodes %s%s): an "
+        "interface left unmerged, i.e. an internal crack. Contacts inside a piece are skipped, so its faces "
+        "would pass through each other. Merge the duplicate nodes (gmsh: 'Coherence Mesh;' or "
+        "gmsh.model.mesh.removeDuplicateNodes() before writing; with NumPy: u, inv = np.unique(nodes, axis=0, "
+        "return_inverse=True); qdem.Mesh(u, inv.ravel()[tets])). If the crack is meant, cut the parts fully "
+        "apart and add each with qdem.splitMesh / qdem.addPiece"
+        % (len(k), "" if len(k) == 1 else "s", pairs, ", ..." if len(k) > 3 else ""))
+
+
 def splitMesh(mesh):
     """The connected parts of a mesh, one Mesh each (nodes renumbered, in their
-    original order), ordered by their first tetrahedron.  Tetrahedra sharing a
-    node are one part; for a mesh that passes the manifold check this is the
-    same as sharing faces.  addPiece refuses a mesh of several parts (its parts
-    would not touch each other): add each part as its own piece::
+    original order), ordered by their first tetrahedron; a part of a mesh read
+    from a file keeps the file's point indices (Mesh.nodeIds).  Tetrahedra
+    sharing a node are one part; for a mesh that passes the manifold check
+    this is the same as sharing faces.  addPiece refuses a mesh of several
+    parts (its parts would not touch each other): add each part as its own
+    piece::
 
         for part in qdem.splitMesh(mesh):
             qdem.addPiece(part, mat)
@@ -114,7 +235,8 @@ def splitMesh(mesh):
         used = np.unique(tets)
         remap = -np.ones(len(mesh.nodes), dtype=np.int64)
         remap[used] = np.arange(len(used))
-        parts.append(Mesh(mesh.nodes[used], remap[tets].astype(np.int32), check=False))
+        ids = None if mesh.nodeIds is None else mesh.nodeIds[used]
+        parts.append(Mesh(mesh.nodes[used], remap[tets].astype(np.int32), check=False, nodeIds=ids))
     return parts
 
 
@@ -215,7 +337,13 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     'tetra10' ...) is refused rather than loaded in part: re-mesh it into
     linear tetrahedra.  fixOrientation=True flips tets written with the
     opposite orientation convention instead of rejecting them.  scale (a
-    number or 3) multiplies the coordinates (0.001 for a file in mm)."""
+    number or 3) multiplies the coordinates (0.001 for a file in mm).
+
+    Points no tetrahedron uses (gmsh writes geometry points) are dropped;
+    the returned Mesh's ``nodeIds`` holds each node's index in the file, and
+    a piece added from it (or from the path) reports those file indices as
+    ``originalNodeIds``: nodes picked by their index in the file (e.g. from
+    meshio.read) are found with ``np.isin(piece.originalNodeIds, picked)``."""
     scale = _scaleFactor(scale, "loadMesh")
     if not os.path.exists(path):
         raise ValueError("loadMesh: no such file: %s" % path)
@@ -247,7 +375,7 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     nodes = points * scale
     if tets.min() < 0 or tets.max() >= len(nodes):
         raise ValueError("loadMesh: %s refers to nodes outside 0..%d" % (path, len(nodes) - 1))
-    used = np.unique(tets)
+    used = np.unique(tets)  # the file's index of each node we keep (nodeIds)
     if len(used) < len(nodes):  # drop points that belong to no tet (gmsh geometry points)
         remap = -np.ones(len(nodes), dtype=np.int64)
         remap[used] = np.arange(len(used))
@@ -261,20 +389,80 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     tets = tets.astype(np.int32)
     if fixOrientation:
         tets, _ = _core.orientPositive(nodes, tets)
-    return Mesh(nodes, tets)
+    return Mesh(nodes, tets, nodeIds=used)
+
+
+def _faceTriangles(block, verts, path):
+    """The triangles of one meshio cell block, as a list of (F,3) arrays.
+    Dropping quads or polygons would leave holes (a 'surface is not closed'
+    error that blames the file), so they are split: a fan from one corner
+    keeps the face's orientation.  Valid for convex faces; a concave quad is
+    split along its other diagonal, a non-convex polygon is refused."""
+    if block.type == "triangle":
+        return [np.asarray(block.data)]
+    if not (block.type == "quad" or block.type.startswith("polygon")):
+        return []
+    data = block.data
+    if not (isinstance(data, np.ndarray) and data.ndim == 2):  # polygons of several sizes: group them
+        rows = [np.asarray(r) for r in data]
+        return [t for k in sorted({len(r) for r in rows})
+                for t in _fanTriangles(np.array([r for r in rows if len(r) == k]), verts, path)]
+    return _fanTriangles(np.asarray(data), verts, path)
+
+
+def _fanTriangles(faces, verts, path):
+    """Faces (F,k) with k >= 3 corners, fanned from corner 0; a quad whose fan
+    turns against the face (concave at corner 1 or 3) is fanned from corner 1."""
+    faces = faces.astype(np.int64)
+    k = faces.shape[1]
+    if k < 3 or not len(faces):
+        return []
+    if faces.min() < 0 or faces.max() >= len(verts):
+        return [faces[:, :3]]  # meshClosedSurface names the bad index
+    bad = _againstFace(_fan(faces), verts, faces)
+    if k == 4 and bad.any():
+        faces[bad] = np.roll(faces[bad], -1, axis=1)
+        bad = _againstFace(_fan(faces), verts, faces)
+    if bad.any():
+        f = faces[int(np.flatnonzero(bad)[0])]
+        raise ValueError("loadSurface: %s: a face of %d corners (vertices %s, counted from 0) is not convex, and "
+                         "only convex faces are split into triangles. Triangulate the surface when exporting it "
+                         "(Blender: Triangulate Faces in the export options, or a Triangulate modifier)"
+                         % (path, k, " ".join("%d" % v for v in f)))
+    return [_fan(faces).reshape(-1, 3)]
+
+
+def _fan(faces):
+    """(F, k-2, 3): the fan of triangles from corner 0 of each of the faces (F,k)."""
+    return np.stack([faces[:, [0, j, j + 1]] for j in range(1, faces.shape[1] - 1)], axis=1)
+
+
+def _againstFace(fanTris, verts, faces):
+    """Per face: does a fan triangle turn against the face's normal (Newell's
+    normal, the sum of its corners' cross products)?  Only for finite
+    coordinates; NaN is named by meshClosedSurface."""
+    p = verts[faces]
+    normal = np.cross(p, np.roll(p, -1, axis=1)).sum(axis=1)
+    t = verts[fanTris]
+    n = np.cross(t[..., 1, :] - t[..., 0, :], t[..., 2, :] - t[..., 0, :])
+    with np.errstate(invalid="ignore"):
+        return (np.einsum("fjk,fk->fj", n, normal) < 0).any(axis=1)
 
 
 def loadSurface(path, scale=1.0):
-    """Read a closed triangle surface (OFF, STL, OBJ, PLY, ...) with meshio:
-    returns (vertices (V,3), triangles (F,3)), duplicate STL vertices merged."""
+    """Read a closed surface (OFF, STL, OBJ, PLY, ...) with meshio: returns
+    (vertices (V,3), triangles (F,3)), duplicate STL vertices merged.  Quads
+    (Blender's default OBJ export) and convex polygons are split into
+    triangles of the same orientation; lines and points are ignored."""
     if not os.path.exists(path):
         raise ValueError("loadSurface: no such file: %s" % path)
     scale = _scaleFactor(scale, "loadSurface")
     m = _meshioRead(path, "loadSurface")
-    tris = [c.data for c in m.cells if c.type == "triangle"]
-    if not tris:
-        raise ValueError("loadSurface: %s contains no triangles" % path)
     verts = np.asarray(m.points, dtype=float)[:, :3] * scale
+    tris = [t for c in m.cells for t in _faceTriangles(c, verts, path)]
+    if not tris:
+        raise ValueError("loadSurface: %s contains no triangles, quads or polygons (cell types: %s): a closed "
+                         "surface is needed" % (path, ", ".join(sorted({c.type for c in m.cells})) or "none"))
     tris = np.concatenate(tris).astype(np.int64)
     # STL stores every triangle's corners separately: merge equal vertices.
     uniq, inverse = np.unique(np.round(verts, 12), axis=0, return_inverse=True)

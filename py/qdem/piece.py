@@ -12,7 +12,13 @@ class Piece:
     what is written to it then takes effect.
 
     Node order is the solver's (space-filling-curve) order; ``originalNodeIds[i]``
-    is the index in the mesh you passed of solver node ``i``."""
+    is the index in the mesh you passed of solver node ``i``.  For a mesh read
+    from a file (``qdem.loadMesh``, a path given to addPiece, or its
+    ``splitMesh`` parts) it is the index of the point in the file, which
+    differs from the Mesh's own index when the file has points no
+    tetrahedron uses (loadMesh drops them; ``Mesh.nodeIds`` maps): nodes
+    picked in the file (e.g. with meshio.read) are the solver nodes
+    ``np.isin(piece.originalNodeIds, picked)``."""
 
     def __init__(self, world, pid, material, originalNodeIds):
         self.world, self.id, self._material = world, pid, material

@@ -141,7 +141,7 @@ class World:
                 self.core.removeLastMaterial()
                 material._inUse = wasInUse
             raise
-        p = Piece(self, pid, material, oldOf)
+        p = Piece(self, pid, material, mesh.originalIds(oldOf))  # file point indices for a loaded mesh
         p.vel[:] = v
         self.pieces.append(p)
         return p
