@@ -13,6 +13,7 @@
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
+#include "../contact/TriLanesFill.hpp"
 #include "../parallel/Domain.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -20,6 +21,7 @@ namespace qdem {
 
 using Eigen::Vector3d;
 using namespace contact_detail;
+
 
 // ---------------------------------------------------------------------------
 // Point-polygon: every surface node against the surface triangles of the
@@ -169,7 +171,9 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     // Lanes past cnt keep the triangles last loaded (a whole
                     // triangle each, so finite numbers); their results are
                     // not read.  (A quarter of the lanes here.)
-                    for (int l = 0; l < cnt; ++l) {
+                    int l0 = 0;
+                    for (; l0 + 4 <= cnt; l0 += 4) fillTriLanes4(X, tri, normal, L + k0 + l0, l0 / 4, lanes);
+                    for (int l = l0; l < cnt; ++l) {
                         const int32_t t = L[k0 + l];
                         const int32_t* c = tri + 3 * t;
                         for (int d = 0; d < 3; ++d) {

@@ -5,11 +5,13 @@
 // blocks (lanes past `count` add nothing).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
 #include "core/Aligned.hpp"
+#include "contact/TriLanesFill.hpp"
 #include "element/NodeGather.hpp"
 
 using namespace qdem;
@@ -119,4 +121,31 @@ TEST(NodeGather, PlainGatherEqualsTheMaskedOneAndTheScalarLoop) {
                 EXPECT_EQ(plain[k][i][l], masked[k][i][l]) << "lane " << l << " edge " << k << " component " << i;
                 EXPECT_EQ(plain[k][i][l], X[3 * node[k + 1][l] + i] - X[3 * node[0][l] + i]);
             }
+}
+
+// The point-polygon loop's lane fill: corners and normals of listed
+// triangles as columns, equal to the scalar copy, including the last node
+// and the last triangle of their arrays (masked loads: nothing read past).
+TEST(NodeGather, TriangleLanesEqualTheScalarCopy) {
+    const int32_t N = 13, T = 9;
+    std::vector<double> X(3 * N), normal(3 * T);
+    for (int i = 0; i < 3 * N; ++i) X[i] = 0.21 * i - 0.003 * i * i;
+    for (int i = 0; i < 3 * T; ++i) normal[i] = std::sin(0.7 * i);
+    std::vector<int32_t> tri(3 * T);
+    for (int t = 0; t < T; ++t)
+        for (int j = 0; j < 3; ++j) tri[3 * t + j] = (5 * t + 4 * j + (t == T - 1 ? N - 1 : 0)) % N;
+    tri[3 * (T - 1) + 2] = N - 1;
+    const int32_t L[kTriLanes] = {T - 1, 0, 3, 3, 7, 2, T - 1, 5};
+    TriLanes lanes{};
+    fillTriLanes4(X.data(), tri.data(), normal.data(), L, 0, lanes);
+    fillTriLanes4(X.data(), tri.data(), normal.data(), L + 4, 1, lanes);
+    for (int l = 0; l < kTriLanes; ++l) {
+        const int32_t* c = &tri[3 * L[l]];
+        for (int d = 0; d < 3; ++d) {
+            EXPECT_EQ(lanes.a[d][l], X[3 * c[0] + d]) << "lane " << l;
+            EXPECT_EQ(lanes.b[d][l], X[3 * c[1] + d]) << "lane " << l;
+            EXPECT_EQ(lanes.c[d][l], X[3 * c[2] + d]) << "lane " << l;
+            EXPECT_EQ(lanes.n[d][l], normal[3 * L[l] + d]) << "lane " << l;
+        }
+    }
 }
