@@ -140,6 +140,8 @@ def restoreWorld(blob, into=None):
     for k, v in meta["settings"].items():
         setattr(w.core, k, v)
     w.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
+    from .restart import _markLoaded
+    _markLoaded(w)  # a VtkRecorder made after O.load goes on with the saved run's series
     return w, meta["engines"]
 
 

@@ -3,6 +3,8 @@ loaded into the same scene built again goes on exactly as if it had not
 stopped - same positions and velocities to the bit, contact springs,
 sleeping pieces and energies included; a different scene or a broken file is
 refused with a message and leaves the world as it was."""
+import os
+
 import numpy as np
 import pytest
 
@@ -130,3 +132,15 @@ def test_a_yade_script_restarted_goes_on_asleep_and_on_the_qdem_clock(scene, tmp
     assert core.iter == iter0 + 500 and core.time == pytest.approx(time0 + 500 * scene.dt)
     line = [s for s in capsys.readouterr().out.splitlines() if s.startswith("qdem: step")][-1]
     assert line.startswith("qdem: step %d " % core.iter) and "nan" not in line
+
+
+def test_save_state_into_a_missing_directory_names_the_path(tmp_path):
+    """The error named the temporary file ('s.npz.tmp.npz'), not the path
+    given, and did not say what was wrong."""
+    w = _scene()
+    path = str(tmp_path / "missing_dir" / "s.npz")
+    with pytest.raises(FileNotFoundError) as e:
+        qdem.saveState(path, world=w)
+    msg = str(e.value)
+    assert path in msg and ".tmp.npz" not in msg and "does not exist" in msg and "makedirs" in msg
+    assert not os.path.exists(tmp_path / "missing_dir")

@@ -182,3 +182,173 @@ def test_snapshot_focus_front_fills_the_picture_with_the_front(tmp_path):
         render.snapshot(w, str(tmp_path / "x.png"), focus="fastest")
     with pytest.raises(ValueError, match="focus"):
         render.snapshot(w, str(tmp_path / "x.png"), focus=[9])
+
+
+# ---------------------------------------------------------------------------
+# Where the frames go: restarts, two recorders, yade-batch, odd fileBases
+
+
+def _pvd(path):
+    """[(time, file)] of a .pvd, in its order."""
+    return [(float(t), f) for t, f in re.findall(r'timestep="([^"]+)" part="0" file="([^"]+)"', open(path).read())]
+
+
+def _dropScene(O, base, iterPeriod=50, virtPeriod=0.0, label=""):
+    """A small block dropped on a floor, with a VtkRecorder: what a script
+    builds again in each process of a restarted run (O.iter from 0)."""
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O.reset()
+    qdem.reset()
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.05), (2, 2, 1)), rubber(young=2e6, viscosity=5.0, radius=0.004),
+                  pos=(0, 0, 0.06), vel=(0.2, 0, 0))
+    rec = qdem.VtkRecorder(fileBase=base, iterPeriod=iterPeriod, virtPeriod=virtPeriod, label=label)
+    O.engines = [ForceResetter(), qdem.QdemEngine(), rec, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    return rec
+
+
+def test_a_restarted_run_goes_on_with_the_series_of_the_run_before(scene, tmp_path):
+    """qdem.loadState in a new process (here: the scene built again, a new
+    recorder with the same fileBase): the .pvd keeps the earlier run's frames
+    up to the step loaded whose files are still there, drops those the
+    earlier run wrote past it (the restart writes its own), and the next frame
+    is on the period grid (before: the .pvd listed only the restart's frames,
+    the first at step 202).  A run from step 0 starts a new .pvd."""
+    O = scene
+    base = str(tmp_path / "r-")
+    state = str(tmp_path / "r.npz")
+    _dropScene(O, base, iterPeriod=50)
+    O.run(200, True)
+    qdem.saveState(state)
+    t200 = qdem.defaultWorld().core.time
+    O.run(60, True)                     # frame 250: written past the save, by a run that then died
+    os.remove(base + "000050.vtu")      # a frame the user deleted: not listed again
+    rec = _dropScene(O, base, iterPeriod=100)
+    qdem.loadState(state)
+    O.run(110, True)                    # QDEM steps 200..310
+    names = [f for _, f in _pvd(tmp_path / "r.pvd")]
+    assert names == ["r-000000.vtu", "r-000100.vtu", "r-000150.vtu", "r-000200.vtu", "r-000300.vtu"]
+    assert [f for _, f in rec.frames] == names
+    times = [t for t, _ in _pvd(tmp_path / "r.pvd")]
+    assert times == sorted(times) and times[3] == t200
+    assert not [f for f in os.listdir(tmp_path) if f.endswith(".vtu") and int(f[2:8]) % 50]  # on the grid
+    _dropScene(O, base, iterPeriod=100)  # a fresh run (step 0) into the same fileBase: a new series
+    O.run(110, True)
+    assert [f for _, f in _pvd(tmp_path / "r.pvd")] == ["r-000000.vtu", "r-000100.vtu"]
+
+
+def test_a_run_rewound_by_load_state_rewrites_its_series_in_order(scene, tmp_path):
+    """The same recorder through a qdem.loadState to an earlier step (one
+    process): frames past it leave the .pvd and are written again, on the
+    time grid too (before: the later frames stayed listed ahead of the new
+    ones, and virtPeriod wrote nothing until the old last time was passed)."""
+    O = scene
+    base = str(tmp_path / "w-")
+    state = str(tmp_path / "w.npz")
+    rec = _dropScene(O, base, iterPeriod=0, virtPeriod=0.0)
+    rec.virtPeriod = 60 * O.dt
+    O.run(130, True)
+    qdem.saveState(state)
+    O.run(200, True)
+    assert len(rec.frames) == 6         # t = 0, 60, 120, 180, 240, 300 dt
+    qdem.loadState(state)
+    O.run(70, True)                     # back at 130: frames at 180 dt again (not 130, not 132)
+    times = [t for t, _ in _pvd(tmp_path / "w.pvd")]
+    assert len(times) == 4 and times == sorted(times)
+    np.testing.assert_allclose(np.array(times) / O.dt, [0, 60, 120, 180], atol=1.5)
+    assert rec.frames == _pvd(tmp_path / "w.pvd")
+
+
+def test_o_load_puts_the_recorder_back_with_its_series(scene, tmp_path):
+    """O.load of a saved scene brings the recorder back with the frames it
+    had at O.save: the loaded run lists those and writes the later ones
+    again."""
+    O = scene
+    base = str(tmp_path / "s-")
+    _dropScene(O, base, iterPeriod=50, label="rec")
+    O.run(100, True)
+    O.save(str(tmp_path / "s.yade.gz"))
+    O.run(100, True)
+    O.load(str(tmp_path / "s.yade.gz"))
+    O.run(60, True)
+    rec = [e for e in O.engines if isinstance(e, qdem.VtkRecorder)][0]
+    names = ["s-000000.vtu", "s-000050.vtu", "s-000100.vtu", "s-000150.vtu"]
+    assert [f for _, f in rec.frames] == names and [f for _, f in _pvd(tmp_path / "s.pvd")] == names
+
+
+def test_two_recorders_writing_one_pvd_are_refused(scene, tmp_path):
+    """'a-' and 'a_' both give a.pvd: each recorder would rewrite it with its
+    own frames only.  Refused at the first frame, naming both fileBases; a
+    dead one, or recorders with their own .pvd, are fine."""
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber())
+    a, b = str(tmp_path / "a-"), str(tmp_path / "a_")
+    O.engines = [ForceResetter(), qdem.QdemEngine(), qdem.VtkRecorder(fileBase=a, iterPeriod=10),
+                 qdem.VtkRecorder(fileBase=b, iterPeriod=25), NewtonIntegrator(gravity=(0, 0, 0))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    with pytest.raises(qdem.SetupError) as e:
+        O.run(5, True)
+    assert repr(a) in str(e.value) and repr(b) in str(e.value) and "own fileBase" in str(e.value)
+    assert str(tmp_path / "a.pvd") in str(e.value) and not os.path.exists(tmp_path / "a.pvd")
+    O.engines[3].dead = True
+    O.engines = O.engines[:3] + [qdem.VtkRecorder(fileBase=str(tmp_path / "b-"), iterPeriod=25)] + O.engines[3:]
+    O.run(30, True)
+    assert sorted(f for f in os.listdir(tmp_path) if f.endswith(".pvd")) == ["a.pvd", "b.pvd"]
+
+
+def test_default_file_base_under_yade_batch_holds_the_job_description(scene, tmp_path, monkeypatch):
+    """yade-batch runs every line of a table in one directory: with the
+    default fileBase each job wrote out/qdem-* and the last one won.  Under
+    yade-batch (YADE_BATCH=table:line) the default is out/<description>/qdem-;
+    a fileBase given is kept."""
+    O = scene
+    from yade import ForceResetter, NewtonIntegrator
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.table").write_text("description young\nsoft 2e6\nstiff 5e6\n")
+    monkeypatch.delenv("YADE_BATCH", raising=False)
+    assert qdem.VtkRecorder().fileBase == "out/qdem-"
+    monkeypatch.setenv("YADE_BATCH", "t.table:3")  # how yade-batch starts the job of the table's 3rd line
+    rec, mine = qdem.VtkRecorder(iterPeriod=10), qdem.VtkRecorder(fileBase="mine-", iterPeriod=10)
+    assert rec.fileBase == "out/stiff/qdem-" and mine.fileBase == "mine-"
+    O.tags["description"] = "young=5e6/b"          # readParamsFromTable's tag, when set, is the one used
+    assert rec.fileBase == "out/young=5e6_b/qdem-"
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine(), rec, mine, NewtonIntegrator(gravity=(0, 0, 0))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    O.run(10, True)
+    assert sorted(os.listdir(tmp_path / "out" / "young=5e6_b")) == ["qdem-000000.vtu", "qdem-000010.vtu",
+                                                                   "qdem.pvd"]
+    assert os.path.exists(tmp_path / "mine.pvd")
+
+
+def _twoFrames(O, recorders):
+    from yade import ForceResetter, NewtonIntegrator
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber())
+    O.engines = [ForceResetter(), qdem.QdemEngine()] + recorders + [NewtonIntegrator(gravity=(0, 0, 0))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    O.run(10, True)
+
+
+def test_file_base_with_tilde_is_in_the_home_directory(scene, tmp_path, monkeypatch):
+    """'~/h-' is in the home directory, as in a shell (it made a literal ./~/ before)."""
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.chdir(tmp_path)
+    os.makedirs(tmp_path / "home")
+    rec = qdem.VtkRecorder(fileBase="~/h-", iterPeriod=10)
+    assert rec.fileBase == str(tmp_path / "home" / "h-")
+    _twoFrames(scene, [rec])
+    assert sorted(os.listdir(tmp_path / "home")) == ["h-000000.vtu", "h-000010.vtu", "h.pvd"]
+    assert os.listdir(tmp_path) == ["home"]
+
+
+def test_file_base_naming_an_existing_directory_writes_into_it(scene, tmp_path, monkeypatch):
+    """An existing directory named without a trailing '/' gets the frames
+    inside it, as 'd/' would (they were written beside it, as d000000.vtu)."""
+    monkeypatch.chdir(tmp_path)
+    os.makedirs(tmp_path / "d")
+    rec = qdem.VtkRecorder(fileBase="d", iterPeriod=10)
+    _twoFrames(scene, [rec])
+    assert sorted(os.listdir(tmp_path / "d")) == ["000000.vtu", "000010.vtu", "frames.pvd"]
+    assert os.listdir(tmp_path) == ["d"] and rec.pvdPath() == os.path.join("d", "frames.pvd")
