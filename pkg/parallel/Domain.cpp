@@ -183,6 +183,22 @@ void Domain::checkSameEverywhere(const PartitionInput& in) const {
 }
 
 
+void Domain::agreeOnCall(Call c) const {
+    static const char* const names[] = {
+        "at the end of the script", "in a step (O.run, O.step)",
+        "in gatherAll (a VtkRecorder frame, a piece array read, QdemEngine's gather)",
+        "in gatherState (O.save, qdem.saveState)", "in a rebalance"};
+    double v[2] = {double(static_cast<int>(c)), -double(static_cast<int>(c))};
+    comm_->allreduceMin(v, 2);
+    const int lo = static_cast<int>(v[0]), hi = static_cast<int>(-v[1]);
+    if (lo != hi)
+        throw InputError(std::string("QDEM under MPI: the ranks reached different collective operations: some are ") +
+                         names[lo] + ", others " + names[hi] +
+                         ", so each would wait for the other for good. Every rank runs the same script: give every "
+                         "rank the same O.run steps, and call O.save, qdem.saveState, VtkRecorder and piece reads on "
+                         "every rank, not inside `if rank == 0:` (rank 0 alone writes the files)");
+}
+
 void Domain::checkYadeAlike(double dt) const {
     enum { kBodies, kDt, kGravity, kSettings, kMaterials, kN };
     static const char* const names[kN] = {"YADE bodies (walls, boxes, facets or spheres, or their states)",

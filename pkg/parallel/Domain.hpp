@@ -96,6 +96,15 @@ public:
     // (never a mismatched message).  Collective.
     void checkYadeAlike(double dt) const;
 
+    // The collective operations a script reaches, for agreeOnCall.
+    enum class Call : int { ScriptEnd = 0, Step = 1, GatherAll = 2, GatherState = 3, Rebalance = 4 };
+    // Every rank must enter the same collective operation (a script that
+    // steps or saves on some ranks only, inside `if rank == 0:`, or runs more
+    // steps on one rank, left the others waiting for good): one reduction of
+    // the call's id before it, refused on every rank naming the calls
+    // otherwise.  Collective.
+    void agreeOnCall(Call c) const;
+
     // Nodes whose state is current on this rank: owned, element ghosts and
     // contact ghosts.  version() changes whenever the set does (the contact
     // lists are then rebuilt: PieceContactPhase).

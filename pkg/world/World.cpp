@@ -279,6 +279,7 @@ void World::prepareDomain(double dt) {
 
 void World::rebalance() {
     if (!domain_ || !domain_->built()) return;
+    domain_->agreeOnCall(Domain::Call::Rebalance);
     domain_->rebalance(partitionOptions);
     sleepPhase_.awakeSetChanged();
     gatheredIter_ = iter;  // rebalance gathered every node
@@ -286,6 +287,7 @@ void World::rebalance() {
 
 void World::gatherState() {
     if (domain_ && domain_->built()) {
+        domain_->agreeOnCall(Domain::Call::GatherState);
         domain_->gatherAll();
         domain_->gatherRows();
     }
@@ -293,8 +295,15 @@ void World::gatherState() {
 }
 
 void World::gatherAll() {
-    if (domain_ && domain_->built()) domain_->gatherAll();
+    if (domain_ && domain_->built()) {
+        domain_->agreeOnCall(Domain::Call::GatherAll);
+        domain_->gatherAll();
+    }
     gatheredIter_ = iter;
+}
+
+void World::agreeOnScriptEnd() const {
+    if (domain_) domain_->agreeOnCall(Domain::Call::ScriptEnd);
 }
 
 std::string World::agreeOnError(const std::string& error) const {

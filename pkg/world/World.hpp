@@ -162,6 +162,10 @@ public:
     // whole state, as one process would (saveState needs it under MPI).
     // Collective; a no-op on one process.
     void gatherState();
+    // Under MPI, at the end of a script (qdem's exit hook): collective, so a
+    // rank still stepping or saving there is told so, as is this one
+    // (Domain::agreeOnCall).  A no-op on one process.
+    void agreeOnScriptEnd() const;
     // Every node's position, velocity and force is current on this rank
     // (always on one process; under MPI right after gatherAll()).
     bool stateCurrent() const;

@@ -24,7 +24,10 @@ inline void runTimed(Phase& p, double dt) {
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
-    if (domain_) prepareDomain(dt);
+    if (domain_) {
+        domain_->agreeOnCall(Domain::Call::Step);
+        prepareDomain(dt);
+    }
     // Under MPI a phase's error is kept and the step goes on through its
     // exchanges, so every rank reaches the end-of-step agreement and throws
     // the same error (Domain::finishStep) instead of waiting for the failed one.

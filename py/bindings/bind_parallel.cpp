@@ -110,6 +110,14 @@ void bindParallel(py::module_& m, py::class_<World>& world) {
         "moving every node's state and contact history to its new owner (collective: every rank calls it; the "
         "step does so by itself when the load drifts past rebalanceThreshold).  A no-op on one process.");
     world.def(
+        "agreeOnScriptEnd",
+        [](const World& w) {
+            py::gil_scoped_release nogil;
+            w.agreeOnScriptEnd();
+        },
+        "Under MPI: every rank has reached the end of the script (collective; qdem calls it at exit).  A rank "
+        "still stepping or saving raises, naming both calls.  A no-op on one process.");
+    world.def(
         "gatherState",
         [](World& w) {
             py::gil_scoped_release nogil;

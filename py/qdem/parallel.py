@@ -77,6 +77,8 @@ def attach(world):
         return
     from mpi4py import MPI
     core.setCommunicator(MPI.COMM_WORLD)
+    global _plainSplit
+    _plainSplit = True
 
 
 def _plainMpiRanks():
@@ -143,15 +145,86 @@ def abortOnError():
             sys.stderr.flush()
             from mpi4py import MPI
             MPI.COMM_WORLD.Abort(code if isinstance(code, int) else 1)
+        _agreeOnScriptEnd()  # (yade -x ends by sys.exit(0) and runs no atexit handler)
         plainExit(code)
     exitOrAbort._qdemAbort = True
     sys.exit = exitOrAbort
+    import atexit
+    atexit.register(_agreeOnScriptEnd)  # (plain Python scripts under mpiexec)
+    if "yade.mpy" not in sys.modules:
+        sys.meta_path.insert(0, _MpyEndHook())
     plainHook = sys.excepthook
 
     def hookThenAbort(t, v, tb):
         plainHook(t, v, tb)
         exitOrAbort(1)
     sys.excepthook = hookThenAbort
+
+
+_endAgreed = False
+_plainSplit = False  # a world was split over plain mpiexec's ranks (not yade.mpy's)
+
+
+class _MpyEndHook:
+    """Under plain mpiexec YADE ends a script by importing yade.mpy (whose
+    import waits for every rank) and calling mp.disconnect() on rank 0 and
+    mp.spawnedProcessWaitCommand() on the others; it runs no atexit handler.
+    This import hook makes every rank first agree that it is at the end
+    (_agreeOnScriptEnd), before the import and before those two: a rank still
+    stepping is told so, instead of waiting for good."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "yade.mpy":
+            return None
+        import sys
+        for f in sys.meta_path:
+            if f is self or not hasattr(f, "find_spec"):
+                continue
+            spec = f.find_spec(name, path, target)
+            if spec is not None and spec.loader is not None and hasattr(spec.loader, "exec_module"):
+                plainExec = spec.loader.exec_module
+
+                def execThenWrap(module):
+                    _agreeOnScriptEnd()  # (the import itself waits for every rank)
+                    plainExec(module)
+                    _wrapMpyEnd(module)
+                spec.loader.exec_module = execThenWrap
+                return spec
+        return None
+
+
+def _wrapMpyEnd(mp):
+    for name in ("disconnect", "spawnedProcessWaitCommand"):
+        f = getattr(mp, name, None)
+        if not callable(f):
+            continue
+
+        def agreedFirst(*a, _f=f, **k):
+            _agreeOnScriptEnd()
+            return _f(*a, **k)
+        setattr(mp, name, agreedFirst)
+
+
+def _agreeOnScriptEnd():
+    """At exit: every rank must be at the end of the script too.  A rank still
+    stepping or saving (more O.run steps on one rank, a save inside
+    ``if rank == 0:``) raised on both sides, naming the two calls; here that
+    ends the job (MPI_Abort) rather than leave MPI's finalisation waiting."""
+    global _endAgreed
+    if not _plainSplit or _endAgreed:
+        return
+    _endAgreed = True
+    import sys
+    from . import world as _world
+    w = _world._default
+    try:
+        if w is not None and w.core.mpiSize > 1:
+            w.core.agreeOnScriptEnd()
+    except Exception as e:  # the other ranks were told the same
+        sys.stderr.write("qdem: rank %d of %d: %s\n" % (rank(), launchedSize(), e))
+        sys.stderr.flush()
+        from mpi4py import MPI
+        MPI.COMM_WORLD.Abort(1)
 
 
 # (these counts are per run, not per rank: the same on every rank)

@@ -4,6 +4,9 @@ argv: CASE [DIR]
   typo     an AttributeError inside `if rank == 0:` between two O.run calls
   save     O.save into a directory that does not exist (rank 0 writes)
   savecaught  the same, caught by the script on every rank: the run goes on
+  steps    rank 0 runs fewer steps than the others, then ends
+  save0    O.save inside `if rank == 0:` (a collective on one rank)
+  state0   qdem.saveState inside `if rank == 0:`
 """
 import os
 import sys
@@ -31,5 +34,9 @@ elif case == "savecaught":
         O.save(missing)
     except (OSError, RuntimeError) as e:
         print("RANK %d CAUGHT %s" % (rank, type(e).__name__), flush=True)
-O.run(20, True)
+elif case in ("save0", "state0"):
+    if rank == 0:
+        O.save(os.path.join(sys.argv[2], "s.yade")) if case == "save0" else qdem.saveState(
+            os.path.join(sys.argv[2], "s.npz"))
+O.run(10 if case == "steps" and rank == 0 else 20, True)
 print("RANK %d FINISHED iter %d" % (rank, O.iter), flush=True)

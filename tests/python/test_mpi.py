@@ -90,6 +90,20 @@ def test_script_error_on_some_ranks_ends_the_job(case, tmp_path):
         assert "does not exist" in out and "no_such_dir" in out
 
 
+@pytest.mark.parametrize("case", ["steps", "save0", "state0"])
+def test_collectives_reached_on_some_ranks_only_end_the_job(case, tmp_path):
+    """More steps on one rank, or O.save / saveState inside `if rank == 0:`:
+    each rank waited for the other for good.  Every QDEM collective (a step,
+    a gather, the script's end) is agreed first, and a mismatch ends the job
+    naming both calls."""
+    requireMpi()
+    rc, out = mpirun(2, ["yade", "-n", "-x", "tests/mpi/yade_rank_errors.py", case, str(tmp_path)], timeout=90)
+    assert rc not in (0, 124, 137), "the job %s:\n%s" % ("hung" if rc in (124, 137) else "did not fail", out[-4000:])
+    assert "reached different collective operations" in out, out[-4000:]
+    want = "at the end of the script" if case == "steps" else "in gatherState"
+    assert want in out and "in a step" in out, out[-4000:]
+
+
 def test_failed_save_is_raised_on_every_rank(tmp_path):
     """The writer's failure reaches every rank as an exception the script can
     catch, and the run goes on alike."""
