@@ -162,14 +162,23 @@ inline void gatherEdges(const double* A, const int32_t (&node)[4][kLanes], doubl
 // buf[kForceStride * (node[k][l] - lo) + i] += f[k][i][l] for the first count
 // lanes, lane by lane, corners in order.  buf: a force buffer with
 // kForceStride doubles per node from node lo on, aligned to 32 bytes.
+// Corner 0's force is not read: it is formed here as the kernel forms it,
+// -((f1 + f2) + f3) (the element is in balance), on the rows after the
+// transpose of corners 1..3: three vector additions where a fourth transpose
+// took 8 shuffles (element_parts, AVX2: arithmetic + scatter 0.96-0.98 of its
+// time).  (Session 14 measured no gain on the AVX-512 host: kept as one code.)
 inline void scatterForces(const double (&f)[4][3][kLanes], const int32_t (&node)[4][kLanes], int count, double* buf,
                           int32_t lo) {
 #if defined(__AVX__)
     for (int h = 0; h < 2 && 4 * h < count; ++h) {
         __m256d r[4][4];  // [corner][lane of the four]
-        for (int k = 0; k < 4; ++k)
+        for (int k = 1; k < 4; ++k)
             simd::columnsToRows(_mm256_load_pd(f[k][0] + 4 * h), _mm256_load_pd(f[k][1] + 4 * h),
                                 _mm256_load_pd(f[k][2] + 4 * h), r[k]);
+        // Corner 0 as the lanes form it, -((f1 + f2) + f3), but on the rows:
+        // three additions instead of a transpose (8 shuffles).
+        for (int j = 0; j < 4; ++j)
+            r[0][j] = _mm256_sub_pd(_mm256_setzero_pd(), _mm256_add_pd(_mm256_add_pd(r[1][j], r[2][j]), r[3][j]));
         const int lanes = count - 4 * h < 4 ? count - 4 * h : 4;
         for (int j = 0; j < lanes; ++j)
             for (int k = 0; k < 4; ++k) {
@@ -181,9 +190,8 @@ inline void scatterForces(const double (&f)[4][3][kLanes], const int32_t (&node)
     for (int l = 0; l < count; ++l)
         for (int k = 0; k < 4; ++k) {
             double* o = buf + kForceStride * (node[k][l] - lo);
-            o[0] += f[k][0][l];
-            o[1] += f[k][1][l];
-            o[2] += f[k][2][l];
+            for (int i = 0; i < 3; ++i)
+                o[i] += k > 0 ? f[k][i][l] : 0.0 - ((f[1][i][l] + f[2][i][l]) + f[3][i][l]);
         }
 #endif
 }

@@ -1,8 +1,9 @@
 // The element kernel's node gather and force scatter (NodeGather.hpp) against
 // plain scalar loops: the same numbers to the bit, including a node at the
 // very end of the array (read with a masked vector load: nothing past it),
-// lanes that share nodes (the scatter's store-to-load chain), and partial
-// blocks (lanes past `count` add nothing).
+// lanes that share nodes (the scatter's store-to-load chain), partial blocks
+// (lanes past `count` add nothing), and corner 0's force formed from the
+// other three as the kernel forms it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -25,6 +26,16 @@ void makeBlock(int32_t (&node)[4][kLanes], int32_t nNodes) {
                                         {2, 6, 5, nNodes - 1, 12, 4, 13, 3},
                                         {nNodes - 1, 7, 6, 9, 14, 15, 1, 0}};
     std::memcpy(node, pattern, sizeof(pattern));
+}
+
+// The scatter forms corner 0's force from the other three, as the kernel
+// does (the element is in balance), and never reads f[0]: NaN there.
+void unbalance(double (&f)[4][3][kLanes]) {
+    for (int i = 0; i < 3; ++i)
+        for (int l = 0; l < kLanes; ++l) f[0][i][l] = std::nan("");
+}
+double force(const double (&f)[4][3][kLanes], int k, int i, int l) {
+    return k > 0 ? f[k][i][l] : 0.0 - ((f[1][i][l] + f[2][i][l]) + f[3][i][l]);
 }
 
 }  // namespace
@@ -55,12 +66,13 @@ TEST(NodeGather, ScatterAddsLaneByLaneLikeTheScalarCode) {
     for (int k = 0; k < 4; ++k)
         for (int i = 0; i < 3; ++i)
             for (int l = 0; l < kLanes; ++l) f[k][i][l] = 1.0 / (1 + k + 7 * i + 13 * l) - 0.03 * l;
+    unbalance(f);
     for (int count : {1, 3, 4, 5, 8}) {
         AlignedVector<double> buf(kForceStride * N, 0.25), want(kForceStride * N, 0.25);
         scatterForces(f, node, count, buf.data(), lo);
         for (int l = 0; l < count; ++l)  // the scalar order: lanes, then corners
             for (int k = 0; k < 4; ++k)
-                for (int i = 0; i < 3; ++i) want[kForceStride * node[k][l] + i] += f[k][i][l];
+                for (int i = 0; i < 3; ++i) want[kForceStride * node[k][l] + i] += force(f, k, i, l);
         for (int32_t n = 0; n < N; ++n) {
             for (int i = 0; i < 3; ++i)
                 EXPECT_EQ(buf[kForceStride * n + i], want[kForceStride * n + i])
@@ -80,11 +92,12 @@ TEST(NodeGather, ScatterIntoABufferStartingAtNodeLo) {
     for (int k = 0; k < 4; ++k)
         for (int i = 0; i < 3; ++i)
             for (int l = 0; l < kLanes; ++l) f[k][i][l] = k + 0.5 * i + 0.25 * l;
+    unbalance(f);
     AlignedVector<double> buf(kForceStride * N, 0.0), want(kForceStride * N, 0.0);
     scatterForces(f, node, kLanes, buf.data(), lo + 100);
     for (int l = 0; l < kLanes; ++l)
         for (int k = 0; k < 4; ++k)
-            for (int i = 0; i < 3; ++i) want[kForceStride * (node[k][l] - 100) + i] += f[k][i][l];
+            for (int i = 0; i < 3; ++i) want[kForceStride * (node[k][l] - 100) + i] += force(f, k, i, l);
     for (std::size_t j = 0; j < buf.size(); ++j) EXPECT_EQ(buf[j], want[j]) << j;
 }
 
