@@ -99,8 +99,8 @@ void IntegrationPhase::run(double dt) {
         constexpr bool Damp = decltype(dampTag)::value;
         constexpr bool EnergyOn = decltype(energyTag)::value;
         constexpr bool SleepOn = decltype(sleepTag)::value;
-        double ekT = 0, egT = 0, edT = 0, sumT = 0;
-#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT, sumT)
+        double ekT = 0, egT = 0, edT = 0, ebT = 0, sumT = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT, ebT, sumT)
         {
             double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
@@ -128,6 +128,12 @@ void IntegrationPhase::run(double dt) {
                         const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
                         ekT += 0.5 * M[n] * vMid * vMid;
                         egT -= M[n] * g[d] * vOld * dt;
+                        // Booked as gravity is: -(work of the external force),
+                        // and on a blocked DOF -(work of the constraint),
+                        // whose force -f keeps the velocity (ledger closed for
+                        // loaded and driven pieces: doc/formulation.md §2).
+                        ebT -= Fext[3 * n + d] * vOld * dt;
+                        if (!free) ebT += f[d] * vOld * dt;
                     }
                     V[3 * n + d] = vOld + dt * a;
                     if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
@@ -145,13 +151,13 @@ void IntegrationPhase::run(double dt) {
                 }
             }
         }
-        return std::array<double, 4>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0};
+        return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
     };
     // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
     const auto withFlag = [](bool on, auto&& next) {
         return on ? next(std::true_type{}) : next(std::false_type{});
     };
-    const std::array<double, 4> e = withFlag(Fq != nullptr, [&](auto im) {
+    const std::array<double, 5> e = withFlag(Fq != nullptr, [&](auto im) {
         return withFlag(damp > 0, [&](auto dm) {
             return withFlag(energyOn, [&](auto en) {
                 return withFlag(sleepOn, [&](auto sl) { return advance(im, dm, en, sl); });
@@ -159,6 +165,7 @@ void IntegrationPhase::run(double dt) {
         });
     });
     ek = e[0], eg = e[1], ed = e[2];
+    const double eb = e[4];
     if (e[3] == 0) reportNotFinite(ids, all, count, Fout);
     if (dV) {
         w_.energy.viscous += viscous_.dissipation(dt, V);
@@ -172,6 +179,7 @@ void IntegrationPhase::run(double dt) {
         w_.energy.kinetic = ek;
         w_.energy.gravity += eg;
         w_.energy.localDamping += ed;
+        w_.energy.boundaryWork += eb;
     }
 }
 

@@ -14,7 +14,8 @@ struct Energy {
     double contactElastic = 0;  // state: energy in contact springs
     double contactDamping = 0;  // accumulated: dashpot dissipation
     double friction = 0;        // accumulated: Coulomb slip dissipation
-    double boundaryWork = 0;    // accumulated: -(work of moving obstacles on the nodes)
+    double boundaryWork = 0;    // accumulated: -(work of moving obstacles, external forces (extForce) and
+                                //   blocked DOFs' constraints on the nodes)
     double localDamping = 0;    // accumulated: Cundall's non-viscous damping (when switched on)
     double sleep = 0;           // accumulated: kinetic energy zeroed when pieces fell asleep
 
