@@ -13,8 +13,8 @@ namespace qdem {
 // (masked) vector load and turned into columns by in-register transposes
 // (NodeGather.hpp), instead of 48 scalar loads and 48 scalar stores.  Same
 // values: the kernel's results are unchanged.
-__attribute__((always_inline)) inline void fillTriLanes4(const double* X, const int32_t* tri, const double* normal, const int32_t* L, int h,
-                          TriLanes& lanes) {
+__attribute__((always_inline)) inline void fillTriLanes4(const double* X, const int32_t* tri, const double* normal,
+                                                         const int32_t* L, int h, TriLanes& lanes) {
 #if defined(__AVX__)
     const int32_t *t0 = tri + 3 * L[0], *t1 = tri + 3 * L[1], *t2 = tri + 3 * L[2], *t3 = tri + 3 * L[3];
     const auto rows = [&](const double* r0, const double* r1, const double* r2, const double* r3,
