@@ -57,8 +57,9 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
         if (!(mass[i] > 0) || !std::isfinite(mass[i]))
             throw InputError(cat("sphere ", id[i], ": mass must be positive and finite, got ", mass[i],
                                  " (a non-dynamic sphere needs a mass for the contact dashpot)"));
-        if (!(friction[i] >= 0) || !std::isfinite(friction[i]))
-            throw InputError(cat("sphere ", id[i], ": friction must be >= 0, got ", friction[i]));
+        if (!((friction[i] >= 0 && std::isfinite(friction[i])) || friction[i] == -1))
+            throw InputError(cat("sphere ", id[i], ": friction must be >= 0 (or -1: none, the piece's alone), got ",
+                                 friction[i]));
         if (!(restitution[i] <= 1) || std::isnan(restitution[i]))
             throw InputError(cat("sphere ", id[i], ": restitution must be <= 1, got ", restitution[i]));
         if (pairStart[i + 1] < pairStart[i]) throw InputError("setSpheres: pair offsets must not decrease");

@@ -352,6 +352,11 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         if coupling is not None:
             t0 = time.perf_counter()
             coupling.margin = float(self.sphereMargin)
+            # spheres edited by the script: every sphere at the start of a run and every checkPeriod
+            # steps, their materials' values every step
+            fullCheck = self._runStart is not None and (self._runStart[0] == O.iter or (
+                self.checkPeriod and O.iter % self.checkPeriod == 0))
+            coupling.checkChanged(O, fullCheck)
             coupling.beforeStep(O)
             coupling.seconds += time.perf_counter() - t0
         elif core.nSpheres and self._mpy is None:

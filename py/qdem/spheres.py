@@ -14,9 +14,11 @@ the listed spheres are read every step, and forces written back with
 reads nothing but one counter per step."""
 import warnings
 
+import math
+
 import numpy as np
 
-from . import _core
+from . import _core, yadeglue
 
 TAN = np.tan
 _PROXY_MASK_DEFAULT = -1
@@ -39,7 +41,16 @@ def sphereProperties(O, b):
         raise ValueError("QdemEngine: sphere #%d: its material %s has no positive 'young'; sphere-QDEM contacts "
                          "need FrictMat, ViscElMat or another ElastMat" % (b.id, type(m).__name__))
     ratio = float(getattr(m, "poisson", -1.0))  # YADE's FrictMat.poisson is ks/kn
-    friction = float(TAN(getattr(m, "frictionAngle", 0.0)))
+    angle = getattr(m, "frictionAngle", None)
+    if angle is None:
+        friction = -1.0  # none: the piece's frictionPiece alone (as an obstacle's material without one)
+    else:
+        angle = float(angle)
+        if not (0.0 <= angle < 0.5 * math.pi):
+            raise ValueError("QdemEngine: sphere #%d: its material's frictionAngle = %r rad is not in [0, pi/2): "
+                             "give it the angle in radians, e.g. math.atan(0.5) for a coefficient of 0.5"
+                             % (b.id, angle))
+        friction = float(TAN(angle))
     en = getattr(m, "en", None)  # ViscElMat: restitution coefficient
     restitution = float(en) if en is not None and 0 < en <= 1 else -1.0
     mass = b.state.mass
@@ -62,6 +73,7 @@ class SphereCoupling:
         self.proxyBox = []       # (lo, hi) each
         self.states = []         # YADE State objects of the listed spheres
         self.props = {}          # body id -> sphereProperties (cleared when bodies change)
+        self._materials = {}     # id(material) -> (material, its values when read): checkChanged
         self.collider = None
         self._numAction = None
         self._dirty = True
@@ -217,6 +229,8 @@ class SphereCoupling:
                 ok = b is not None and b.shape is not None and type(b.shape).__name__ == "Sphere"
                 # walls, facets, boxes: QDEM sees them as obstacles, not here
                 props[bid] = (sphereProperties(O, b), b.state) if ok else False
+                if ok:
+                    self._noteMaterial(b)
         ids = [bid for bid in allIds.tolist() if props[bid] is not False]
         idArr = np.array(ids, dtype=np.int32)
         # CSR of the pieces each sphere may touch (pieces in proxy order).
@@ -249,6 +263,8 @@ class SphereCoupling:
                 b = O.bodies[bid]
                 ok = b is not None and b.shape is not None and type(b.shape).__name__ == "Sphere"
                 self.props[bid] = (sphereProperties(O, b), b.state) if ok else False
+                if ok:
+                    self._noteMaterial(b)
         ids = [bid for bid, p in self.props.items() if p is not False]
         props = np.array([self.props[bid][0] for bid in ids], dtype=float).reshape(-1, 6)
         n, np_ = len(ids), self.world.core.nPieces
@@ -260,9 +276,38 @@ class SphereCoupling:
         self._dirty = True
         self.version += 1
 
+    def checkChanged(self, O, full):
+        """Applies changes the script made to listed spheres since they were
+        read (their properties are cached per body): the values of their
+        materials every step (a few objects: utils.setContactFriction, an
+        edited frictionAngle), and with `full` each sphere's radius, material
+        and mass (utils.growParticles, a new material; at the start of each
+        O.run and every checkPeriod steps).  These were read once and kept:
+        a grown sphere sat inside the piece, a sphere made frictionless
+        stuck."""
+        mats = self._materials
+        changed = any(yadeglue.materialSignature(m) != sig for m, sig in mats.values())
+        if not changed and full:
+            for bid, p in self.props.items():
+                if p is False:
+                    continue
+                b = O.bodies[bid] if bid < len(O.bodies) else None
+                if b is None or b.shape is None or sphereProperties(O, b) != p[0]:
+                    changed = True
+                    break
+        if changed:
+            self.props.clear()
+            self._materials = {}
+            self._dirty = True
+
+    def _noteMaterial(self, b):
+        m = b.material
+        self._materials.setdefault(id(m), (m, yadeglue.materialSignature(m)))
+
     def bodiesChanged(self):
         """Bodies were added or erased: forget cached properties and re-list."""
         self.props.clear()
+        self._materials = {}
         self._dirty = True
         self.collider = None  # engines may have changed too: look again
 

@@ -87,19 +87,28 @@ def hasSpheres(O):
     return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)
 
 
+def materialSignature(m):
+    """The material values the contacts read (young, poisson, frictionAngle,
+    en): a change made by the script mid-run (utils.setContactFriction, a new
+    material) must reach QDEM's copy; it was read once and kept."""
+    return tuple(getattr(m, k, None) for k in ("young", "poisson", "frictionAngle", "en"))
+
+
 def bodySignature(b):
-    """What the obstacle's core copy was built from: its shape and whether YADE
-    moves it (None: not an obstacle)."""
+    """What the obstacle's core copy was built from: its shape, whether and
+    how YADE moves it (dynamic, blockedDOFs, mass) and its material's values
+    (None: not an obstacle)."""
     shape = b.shape
     kind = KIND.get(type(shape).__name__) if shape is not None else None
+    if kind is None:
+        return None
+    moved = (b.dynamic, b.state.blockedDOFs, b.state.mass) + materialSignature(b.material)
     if kind == 0:
-        return (0, int(shape.axis), int(shape.sense), b.dynamic)
+        return (0, int(shape.axis), int(shape.sense)) + moved
     if kind == 1:
         e = shape.extents
-        return (1, e[0], e[1], e[2], b.dynamic)
-    if kind == 2:
-        return (2, b.dynamic) + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
-    return None
+        return (1, e[0], e[1], e[2]) + moved
+    return (2,) + moved + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
 
 
 def obstacleStates(O, ids, out, signatures=None, reshaped=None):

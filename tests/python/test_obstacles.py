@@ -70,6 +70,25 @@ def test_the_facets_friction_acts_when_smaller_than_frictionWall(scene):
     assert _slideAcceleration(scene, block, down) == pytest.approx(expected, rel=0.02)
 
 
+@pytest.mark.parametrize("how", ["edit", "newMaterial"])
+def test_a_slope_made_frictionless_mid_run_lets_the_block_slide(scene, how):
+    """An obstacle's material was read once when QDEM first saw the body: a
+    slope whose friction the script set to 0 mid-run still held the block."""
+    from yade import FrictMat
+    O = scene
+    theta = math.radians(20)
+    block, down = _facetSlope(O, theta, math.atan(0.8), 0.8)
+    O.run(int(0.1 / O.dt), True)
+    assert abs(block.velocity() @ down) < 0.02, "friction 0.8 holds the block (sliding: 0.34 m/s by now)"
+    facets = [b for b in O.bodies if b is not None and type(b.shape).__name__ == "Facet"]
+    for b in facets:
+        if how == "edit":
+            b.material.frictionAngle = 0.0
+        else:
+            b.material = FrictMat(frictionAngle=0.0)
+    assert _slideAcceleration(O, block, down) == pytest.approx(9.81 * math.sin(theta), rel=0.02)
+
+
 def test_a_bad_friction_angle_is_refused_naming_the_body(scene):
     from yade import FrictMat, utils
     O = scene

@@ -407,3 +407,78 @@ assert 0.1 + 0.004 + 0.009 < z < 0.1 + 0.004 + 0.011, z
 print("OK")
 """)
     assert r.returncode == 0 and "OK" in r.stdout, r.stdout[-2000:] + r.stderr[-2000:]
+
+
+def _pushedSphere(O, fric=0.5, material=None):
+    """A sphere (rotations blocked) resting on a slab, pushed sideways by 0.2 of
+    its weight: it sticks at friction 0.5.  Returns (sphere, its x)."""
+    from yade import FrictMat, PyRunner, utils
+    _slab(O, young=1e7, frictionPiece=0.5)
+    m = material or FrictMat(young=1e7, poisson=0.3, density=2600, frictionAngle=math.atan(fric))
+    s = O.bodies.append(utils.sphere((0, 0, 0.04 + 2 * 0.002 + 0.01 + 1e-4), 0.01, material=m))
+    O.bodies[s].state.blockedDOFs = "XYZ"
+    O.engines = _engines() + [PyRunner(command="O.forces.addF(%d, (0.2 * 9.81 * O.bodies[%d].state.mass, 0, 0))"
+                                       % (s, s), iterPeriod=1)]
+    O.engines = O.engines[:-2] + [O.engines[-1], O.engines[-2]]  # (the push before NewtonIntegrator)
+    O.dt = 0.5 * O.engines[3].stableTimeStep()
+    O.run(int(0.1 / O.dt), True)
+    return O.bodies[s], O.bodies[s].state.pos[0]
+
+
+@pytest.mark.parametrize("how", ["setContactFriction", "material", "newMaterial"])
+def test_a_sphere_made_frictionless_mid_run_slides(scene, how):
+    """Sphere properties were read once and kept: after utils.setContactFriction(0)
+    (the triaxial 'compact without friction' recipe) or a material edit the
+    sphere stayed stuck.  Now it slides at 0.2 g."""
+    from yade import FrictMat, utils
+    O = scene
+    b, x0 = _pushedSphere(O)
+    assert abs(b.state.vel[0]) < 1e-3, "friction 0.5 holds a push of 0.2 of the weight"
+    if how == "setContactFriction":
+        utils.setContactFriction(0.0)
+    elif how == "material":
+        b.material.frictionAngle = 0.0
+    else:
+        b.material = FrictMat(young=1e7, poisson=0.3, density=2600, frictionAngle=0.0)
+    T = 0.1
+    O.run(int(T / O.dt), True)
+    assert b.state.vel[0] == pytest.approx(0.2 * 9.81 * T, rel=0.03)
+
+
+def test_a_grown_sphere_rests_at_its_new_radius(scene):
+    """utils.growParticles changed the radius YADE uses but not QDEM's copy: the
+    sphere sat a centimetre inside the piece."""
+    from yade import FrictMat, utils
+    O = scene
+    mat, slab, floor = _slab(O, young=1e7)
+    s = O.bodies.append(utils.sphere((0, 0, 0.04 + 2 * 0.002 + 0.01), 0.01,
+                                     material=FrictMat(young=1e7, poisson=0.3, density=2600, frictionAngle=0.5)))
+    O.engines = _engines()
+    O.dt = 0.5 * O.engines[3].stableTimeStep()
+    O.run(int(0.1 / O.dt), True)
+    utils.growParticles(1.5, updateMass=True)
+    O.dt = 0.5 * O.engines[3].stableTimeStep()
+    O.run(int(0.4 / O.dt), True)
+    top = slab.pos[:, 2].max()
+    assert O.bodies[s].shape.radius == pytest.approx(0.015)
+    assert O.bodies[s].state.pos[2] - top > 0.015 + 0.002 - 0.003, "the sphere rests on the piece, not inside it"
+
+
+def test_a_sphere_material_without_friction_angle_takes_the_piece_friction(scene):
+    """ElastMat has no frictionAngle: as for walls, the piece's friction alone
+    (it was taken as frictionless for spheres)."""
+    from yade import ElastMat
+    O = scene
+    b, x0 = _pushedSphere(O, material=ElastMat(young=1e7, poisson=0.3, density=2600))
+    O.run(int(0.1 / O.dt), True)
+    assert abs(b.state.pos[0] - x0) < 1e-3, "frictionPiece 0.5 holds a push of 0.2 of the weight"
+
+
+def test_a_sphere_friction_angle_in_degrees_is_refused_naming_radians(scene):
+    from yade import FrictMat, utils
+    O = scene
+    _slab(O)
+    O.bodies.append(utils.sphere((0, 0, 0.06), 0.01, material=FrictMat(young=1e7, frictionAngle=30)))
+    O.engines = _engines()
+    with pytest.raises(ValueError, match="frictionAngle = 30.0 rad is not in"):
+        O.dt = O.engines[3].stableTimeStep()
