@@ -210,8 +210,18 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
 
     def stableTimeStep(self):
         """The largest O.dt [s] QDEM accepts in this scene (a number, as YADE's
-        utils.PWaveTimeStep()): stableDt()['combined']."""
-        return float(self.stableDt()["combined"])
+        utils.PWaveTimeStep()): stableDt()['combined'].  A scene where no step is
+        stable (a dynamic body of zero mass) raises, naming it (O.dt = 0.8 * 0
+        failed at the first step with a message that named nothing)."""
+        d = self.stableDt()
+        dt = float(d["combined"])
+        if not dt > 0:
+            raise _core.StabilityError(
+                "QdemEngine.stableTimeStep(): no time step is stable in this scene: it is limited by %s, which "
+                "allows none. A dynamic YADE body of zero mass or moment of inertia (YADE's facets have none) "
+                "cannot be integrated: make it fixed (utils.facet(..., fixed=True), or body.dynamic = False) or "
+                "give it a mass and an inertia" % d.get("limitedBy", "?"))
+        return dt
 
     # -- save / load (lifecycle.py) ------------------------------------------------
     def savedState(self):
