@@ -2,10 +2,15 @@
 // check period; a law that cannot push them back stops the run.  So does a
 // node sunk into another piece beyond the contact reach (checkDeepOverlap,
 // the scan in pkg/phases/PieceStartOverlap.cpp).
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
+#include "../contact/Geometry.hpp"
+#include "../contact/WindingNumber.hpp"
 #include "../element/MaterialLaw.hpp"
 #include "World.hpp"
 
@@ -61,6 +66,53 @@ void World::checkDeepOverlap() {
         error = e.what();
     }
     error = agreeOnError(error);  // (the ranks' start-overlap exemptions are their own nodes')
+    if (!error.empty()) throw StabilityError(error);
+}
+
+void World::checkSpheresInside() const {
+    requireGathered("checkSpheresInside");
+    const SphereSet& S = spheres;
+    const std::size_t ns = S.id.size();
+    if (ns == 0 || pieces.empty()) return;
+    const SurfaceIndex& surf = surfaceIndex();
+    // Each piece's box from its nodes (the same on every rank: all gathered).
+    std::vector<double> lo(3 * pieces.size(), 1e300), hi(3 * pieces.size(), -1e300);
+    for (std::size_t p = 0; p < pieces.size(); ++p)
+        for (int32_t n = pieces[p].nodeBegin; n < pieces[p].nodeEnd; ++n)
+            for (int d = 0; d < 3; ++d) {
+                lo[3 * p + d] = std::min(lo[3 * p + d], pos[3 * n + d]);
+                hi[3 * p + d] = std::max(hi[3 * p + d], pos[3 * n + d]);
+            }
+    std::string error;
+    for (std::size_t i = 0; i < ns && error.empty(); ++i) {
+        const Eigen::Vector3d c(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]);
+        for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1] && error.empty(); ++q) {
+            const int32_t p = S.pairPiece[q];
+            bool inBox = true;
+            for (int d = 0; d < 3; ++d) inBox = inBox && lo[3 * p + d] < c[d] && c[d] < hi[3 * p + d];
+            if (!inBox) continue;
+            const int32_t t0 = surf.pieceTriStart[p], t1 = surf.pieceTriStart[p + 1];
+            if (!(windingNumber(c, surf.tri.data(), t0, t1, pos.data()) > 0.5)) continue;
+            double depth = 1e300;
+            for (int32_t t = t0; t < t1; ++t) {
+                const int32_t* k = &surf.tri[3 * t];
+                const TriPoint cp = closestOnTriangle(c, Eigen::Map<const Eigen::Vector3d>(&pos[3 * k[0]]),
+                                                      Eigen::Map<const Eigen::Vector3d>(&pos[3 * k[1]]),
+                                                      Eigen::Map<const Eigen::Vector3d>(&pos[3 * k[2]]));
+                depth = std::min(depth, (c - cp.point).norm());
+            }
+            const double r = materials[pieces[p].material].radius, reach = S.radius[i] + r;
+            if (depth <= reach) continue;  // in the contact's range: pushed out
+            error = cat("QDEM: YADE sphere #", S.id[i], " (radius ", S.radius[i], " m) is inside piece ", p,
+                        ", its centre ", depth, " m below the piece's surface, beyond the contact's reach (sphere "
+                        "radius + node radius = ", reach, " m): nothing pushes it out, and it would stay there or "
+                        "sink on. Either it was placed inside the piece (place it outside), or its contact was too "
+                        "soft for its load or impact (its material's young = ", S.young[i],
+                        " Pa gives a contact stiffness young x radius = ", S.young[i] * S.radius[i],
+                        " N/m): give the sphere a stiffer material, or slow it down (doc/spheres.md)");
+        }
+    }
+    error = agreeOnError(error);
     if (!error.empty()) throw StabilityError(error);
 }
 

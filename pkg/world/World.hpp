@@ -125,6 +125,12 @@ public:
     // PieceStartOverlap.cpp).  Reads every node: gatherAll() first under MPI.
     // Collective under MPI: every rank raises the lowest failing rank's error.
     void checkDeepOverlap();
+    // A coupled YADE sphere whose centre lies inside a piece deeper than the
+    // contact's reach (placed there, or sunk in through a contact too soft
+    // for its load) is out of every contact's sight: StabilityError naming
+    // it and the fixes.  Reads every node: gatherAll() first under MPI.
+    // Collective under MPI.
+    void checkSpheresInside() const;
     // Box and Facet edges that cross a piece's surface triangles: an obstacle
     // edge narrower than the node spacing passed between the nodes
     // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.

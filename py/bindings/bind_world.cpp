@@ -153,6 +153,9 @@ void bindWorld(py::module_& m) {
             py::arg("dt"), py::arg("n") = 1)
         .def("checkDt", &World::checkDt, py::arg("dt"))
         .def("checkFinite", &World::checkFinite)
+        .def("checkSpheresInside", &World::checkSpheresInside,
+             "Raise StabilityError if a coupled YADE sphere's centre lies inside a piece deeper than the contact's "
+             "reach (QdemEngine calls it every checkPeriod steps).")
         .def("checkDeepOverlap", &World::checkDeepOverlap,
              "Raise StabilityError when a surface node of a piece lies inside another piece deeper than their "
              "contact reach r_a + r_b (the contact cannot see it: the pieces interpenetrate for good).")

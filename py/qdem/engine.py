@@ -413,6 +413,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.checkFinite()
             if core.nPieces > 1:  # a node sunk into another piece beyond the contact's reach
                 core.checkDeepOverlap()
+            if core.nSpheres and core.nPieces:  # a YADE sphere sunk into (or placed in) a piece
+                core.checkSpheresInside()
             if core.nObstacles and core.nPieces:
                 self._checkObstacleEdges(core)
         if self.progressPeriod and core.iter % self.progressPeriod == 0:

@@ -482,3 +482,22 @@ def test_a_sphere_friction_angle_in_degrees_is_refused_naming_radians(scene):
     O.engines = _engines()
     with pytest.raises(ValueError, match="frictionAngle = 30.0 rad is not in"):
         O.dt = O.engines[3].stableTimeStep()
+
+
+@pytest.mark.parametrize("case", ["soft", "placedInside"])
+def test_a_sphere_inside_a_piece_beyond_the_reach_stops_the_run(scene, case):
+    """A sphere whose contact was too soft for its weight sank through the
+    block and on through the floor, and one appended deep inside a piece
+    stayed there, both with no word: out of every contact's reach."""
+    from yade import FrictMat, utils
+    O = scene
+    mat, slab, floor = _slab(O, young=1e7, size=(0.2, 0.2, 0.1), cells=(4, 4, 2), radius=0.005)
+    top = slab.pos[:, 2].max()
+    young, z = (2e2, top + 0.005 + 0.02 + 0.005) if case == "soft" else (1e7, top - 0.05)
+    O.bodies.append(utils.sphere((0.01, 0.01, z), 0.02 if case == "soft" else 0.01,
+                                 material=FrictMat(young=young, poisson=0.3, density=2600, frictionAngle=0.5)))
+    O.engines = _engines()
+    O.dt = 0.5 * O.engines[3].stableTimeStep()
+    with pytest.raises(qdem.StabilityError, match=r"YADE sphere #\d+ .* is inside piece 0.*beyond the contact's "
+                                                  r"reach.*stiffer material"):
+        O.run(int(0.6 / O.dt), True)
