@@ -112,13 +112,7 @@ template <class Law, bool Viscous, bool Energy>
 __attribute__((noinline)) void elementBlock(const Law& law, const TetBlock& blk, const double* X, const double* V,
                                             int32_t last, const ElementParams& p, BatchOut& out) {
     alignas(64) double dx[3][3][kLanes], dv[3][3][kLanes];
-    if (plainGatherSafe(blk.node, last)) {
-        gatherEdges<true>(X, blk.node, dx);
-        if constexpr (Viscous) gatherEdges<true>(V, blk.node, dv);
-    } else {
-        gatherEdges(X, blk.node, dx);
-        if constexpr (Viscous) gatherEdges(V, blk.node, dv);
-    }
+    gatherBlockEdges<Viscous>(X, V, last, blk.node, dx, dv);
     elementLanes<Law, Viscous, Energy>(law, blk, dx, dv, p, out);
 }
 

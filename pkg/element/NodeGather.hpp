@@ -159,6 +159,21 @@ inline void gatherEdges(const double* A, const int32_t (&node)[4][kLanes], doubl
 #endif
 }
 
+// The edges of positions X and, when Viscous, velocities V of a block whose
+// node arrays hold last + 1 nodes: plain loads where plainGatherSafe allows
+// them (last < 0: sizes unknown, masked loads).
+template <bool Viscous>
+inline void gatherBlockEdges(const double* X, const double* V, int32_t last, const int32_t (&node)[4][kLanes],
+                             double (&dx)[3][3][kLanes], double (&dv)[3][3][kLanes]) {
+    if (plainGatherSafe(node, last)) {
+        gatherEdges<true>(X, node, dx);
+        if constexpr (Viscous) gatherEdges<true>(V, node, dv);
+    } else {
+        gatherEdges(X, node, dx);
+        if constexpr (Viscous) gatherEdges(V, node, dv);
+    }
+}
+
 // buf[kForceStride * (node[k][l] - lo) + i] += f[k][i][l] for the first count
 // lanes, lane by lane, corners in order.  buf: a force buffer with
 // kForceStride doubles per node from node lo on, aligned to 32 bytes.

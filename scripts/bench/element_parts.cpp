@@ -67,13 +67,7 @@ __attribute__((noinline)) void lanesOnly(const Law& law, const TetBlock& b, cons
 template <bool Viscous>
 __attribute__((noinline)) void gatherOnly(const TetBlock& b, const double* X, const double* V, int32_t last,
                                           double (&dx)[3][3][kLanes], double (&dv)[3][3][kLanes]) {
-    if (plainGatherSafe(b.node, last)) {
-        gatherEdges<true>(X, b.node, dx);
-        if constexpr (Viscous) gatherEdges<true>(V, b.node, dv);
-    } else {
-        gatherEdges(X, b.node, dx);
-        if constexpr (Viscous) gatherEdges(V, b.node, dv);
-    }
+    gatherBlockEdges<Viscous>(X, V, last, b.node, dx, dv);
 }
 
 enum Variant { kWhole, kGatherArith, kArithScatter, kArith, kGather, kScatter, kNVariants };
