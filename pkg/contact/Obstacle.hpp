@@ -35,6 +35,10 @@ struct Obstacle {
     Eigen::Quaterniond ori = Eigen::Quaterniond::Identity();
     Eigen::Vector3d vel = Eigen::Vector3d::Zero();
     Eigen::Vector3d angVel = Eigen::Vector3d::Zero();
+    // The point whose velocity vel + angVel x (spinCentre - pos) is: a clump
+    // member's clump centre (YADE sets a member's vel from its clump's at the
+    // member's current place), else pos itself.
+    Eigen::Vector3d spinCentre = Eigen::Vector3d::Zero();
 
     // Derived from the state.
     Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();
@@ -58,7 +62,18 @@ struct Obstacle {
         const double arm = r + armOffset;
         return invMass + (invInertia > 0 ? invInertia * arm * arm : 0.0);
     }
-    Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return vel + angVel.cross(p - pos); }
+    // Velocity of the obstacle's material point now at p, at the time level
+    // of the QDEM nodes' velocities: the step just made, x_n - x_{n-1} over
+    // dt (leapfrog).  YADE's vel is that for the spin centre, but
+    // vel + w x r takes the arm r where the point is now, not where it was
+    // half a step ago (r - w x r dt/2): off by -w x (w x r) dt/2, a
+    // centripetal term.  Against nodes that move on the exact chord, that
+    // bias reads as a steady radial slip: a piece stuck on a turntable crept
+    // towards the axis by w^2 r dt/2 (doc/contacts.md, "Rotating bodies").
+    Eigen::Vector3d velocityAt(const Eigen::Vector3d& p, double dt) const {
+        const Eigen::Vector3d r = p - spinCentre;
+        return vel + angVel.cross(spinCentre - pos) + angVel.cross(r - 0.5 * dt * angVel.cross(r));
+    }
 };
 
 // "box (YADE body 3, mass 0.002 kg)": a dynamic obstacle in error messages.

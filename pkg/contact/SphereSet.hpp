@@ -23,6 +23,9 @@ struct SphereSet {
     std::vector<int32_t> pairPiece;
     // ---- per sphere, every step ------------------------------------------------
     std::vector<double> pos, vel, angVel;  // 3 each, at the time level of the QDEM nodes
+    // 3 each: from pos to the point the sphere spins about (Obstacle::velocityAt
+    // says why it matters): its clump's centre for a clump member, else 0.
+    std::vector<double> spinOffset;
     std::vector<double> forceTorque;       // 6 each: force and torque on the sphere this step
 
     // ---- contact history: kSlots per (sphere, piece) pair -----------------------

@@ -207,7 +207,7 @@ void Domain::checkYadeAlike(double dt) const {
     Fnv f[kN];
     const SphereSet& S = w_.spheres;
     f[kBodies].vec(S.id), f[kBodies].vec(S.radius), f[kBodies].vec(S.mass), f[kBodies].vec(S.pairStart);
-    f[kBodies].vec(S.pairPiece), f[kBodies].vec(S.pos), f[kBodies].vec(S.vel), f[kBodies].vec(S.angVel);
+    f[kBodies].vec(S.pairPiece), f[kBodies].vec(S.pos), f[kBodies].vec(S.vel), f[kBodies].vec(S.angVel), f[kBodies].vec(S.spinOffset);
     const std::size_t no = w_.obstacles.size();
     f[kBodies].bytes(&no, sizeof no);
     for (const Obstacle& o : w_.obstacles) {

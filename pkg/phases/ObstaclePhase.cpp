@@ -177,10 +177,10 @@ void ObstaclePhase::run(double dt) {
                 // step: side memory holds those that did.)
                 if (through.node < 0 || node < through.node) {
                     const bool thinKind = o.kind == ObstacleKind::Facet || (o.kind == ObstacleKind::Wall && o.sense == 0);
-                    const bool thin = slot < 0 && thinKind && crossedThin(o, x - dt * (v - o.velocityAt(x)), x);
+                    const bool thin = slot < 0 && thinKind && crossedThin(o, x - dt * (v - o.velocityAt(x, dt)), x);
                     const double depth = depthBehind(o, x);
                     if (thin || depth > extent[ip]) {
-                        const double speed = (v - o.velocityAt(x)).norm();
+                        const double speed = (v - o.velocityAt(x, dt)).norm();
                         through = Through{node, ip, io, thin, dt * speed, depth, speed, M[node],
                                           W[s] * pairLaw(pairConsts[j], M[node]).kn};
                     }
@@ -202,7 +202,7 @@ void ObstaclePhase::run(double dt) {
                 ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, regVelocity, mEff};
                 Eigen::Vector3d sh = Eigen::Vector3d::Zero();
                 if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
-                const Eigen::Vector3d vo = o.velocityAt(hit.point);
+                const Eigen::Vector3d vo = o.velocityAt(hit.point, dt);
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
                     lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);

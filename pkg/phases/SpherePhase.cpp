@@ -96,6 +96,7 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
     S.pos.assign(3 * n, 0.0);
     S.vel.assign(3 * n, 0.0);
     S.angVel.assign(3 * n, 0.0);
+    S.spinOffset.assign(3 * n, 0.0);
     S.forceTorque.assign(6 * n, 0.0);
     const int32_t nPairs = pairStart[n];
     constexpr int K = SphereSet::kSlots;
@@ -392,6 +393,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
             const Vector3d C(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]);
             const Vector3d v(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]);
             const Vector3d w(S.angVel[3 * i], S.angVel[3 * i + 1], S.angVel[3 * i + 2]);
+            const Vector3d spinOff(S.spinOffset[3 * i], S.spinOffset[3 * i + 1], S.spinOffset[3 * i + 2]);
             const double R = S.radius[i];
             for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
                 const int32_t pb = S.pairPiece[q];
@@ -506,7 +508,10 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     const double mBall = 2.0 / 7.0 * S.mass[i];
                     const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, w_.settings.frictionRegVelocity,
                                             std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT};
-                    const Vector3d vRel = v + w.cross(arm) - vT;
+                    // The sphere's material point at the nodes' time level, half
+                    // a step back along its spin (Obstacle::velocityAt).
+                    const Vector3d fromSpin = arm - spinOff;
+                    const Vector3d vRel = v + w.cross(arm) - 0.5 * dt * w.cross(w.cross(fromSpin)) - vT;
                     // A contact found deep on a sphere already watched was missed,
                     // not made: it stores no energy it was not given (ContactDetail.hpp).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,

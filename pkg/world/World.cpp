@@ -174,7 +174,7 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
 }
 
 void World::setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
-                             const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+                             const Eigen::Vector3d& v, const Eigen::Vector3d& w, const Eigen::Vector3d& c) {
     if (i < 0 || i >= static_cast<int>(obstacles.size()))
         throw InputError(cat("setObstacleState: no obstacle ", i));
     Obstacle& o = obstacles[i];
@@ -182,6 +182,7 @@ void World::setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quate
     o.ori = q;
     o.vel = v;
     o.angVel = w;
+    o.spinCentre = c;
     o.updateDerived();
 }
 

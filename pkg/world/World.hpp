@@ -86,9 +86,15 @@ public:
     // (or from the one of a loaded state) in kind, body, material or shape: the
     // reactions they keep are by obstacle index.
     void setObstacles(const std::vector<Obstacle>& obstacles);
-    // Copies one obstacle's state (from YADE) for the coming step.
+    // Copies one obstacle's state (from YADE) for the coming step; spinCentre:
+    // its clump's centre for a clump member, else pos (Obstacle::velocityAt).
     void setObstacleState(int i, const Eigen::Vector3d& pos, const Eigen::Quaterniond& ori,
-                          const Eigen::Vector3d& vel, const Eigen::Vector3d& angVel);
+                          const Eigen::Vector3d& vel, const Eigen::Vector3d& angVel,
+                          const Eigen::Vector3d& spinCentre);
+    void setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
+                          const Eigen::Vector3d& w) {
+        setObstacleState(i, p, q, v, w, p);
+    }
     // The YADE spheres that may touch pieces (n of them; per-sphere arrays of
     // n, pairStart of n+1 and pairPiece of pairStart[n]: see SphereSet).
     // Contact history is carried over for (sphere id, piece) pairs kept.

@@ -142,24 +142,32 @@ void bindSpheres(py::module_& m) {
             "Box (lo, hi) of each piece's surface, grown by its particle radius: (pieces, 6).")
         .def(
             "setSphereStates",
-            [](World& w, const Reals& pos, const Reals& vel, const Reals& angVel) {
+            [](World& w, const Reals& pos, const Reals& vel, const Reals& angVel, const py::object& spinCentre) {
                 const py::ssize_t n = w.spheres.size();
-                for (const Reals* a : {&pos, &vel, &angVel})
+                const Reals centre = spinCentre.is_none() ? pos : spinCentre.cast<Reals>();
+                for (const Reals* a : {&pos, &vel, &angVel, &centre})
                     if (a->size() != 3 * n)
                         throw InputError("setSphereStates: arrays must hold 3 numbers per sphere (" +
                                          std::to_string(n) + " spheres)");
                 std::copy_n(pos.data(), 3 * n, w.spheres.pos.data());
                 std::copy_n(vel.data(), 3 * n, w.spheres.vel.data());
                 std::copy_n(angVel.data(), 3 * n, w.spheres.angVel.data());
+                for (py::ssize_t j = 0; j < 3 * n; ++j) w.spheres.spinOffset[j] = centre.data()[j] - pos.data()[j];
             },
-            py::arg("pos"), py::arg("vel"), py::arg("angVel"),
-            "Positions, velocities and angular velocities (n, 3) of the spheres, in setSpheres order.")
+            py::arg("pos"), py::arg("vel"), py::arg("angVel"), py::arg("spinCentre") = py::none(),
+            "Positions, velocities and angular velocities (n, 3) of the spheres, in setSpheres order; spinCentre "
+            "(n, 3): a clump member's clump centre, whose velocity vel + angVel x (centre - pos) is (default pos).")
         .def(
             "readSphereStates",
-            [](World& w, const py::list& states) {
+            [](World& w, const py::list& states, const py::object& clumpStates) {
                 const py::ssize_t n = w.spheres.size();
                 if (py::len(states) != static_cast<std::size_t>(n))
                     throw InputError("readSphereStates: one YADE State per sphere expected");
+                // (a list, one entry per sphere: its clump's State for a clump member, else None)
+                const bool clumps = !clumpStates.is_none();
+                if (clumps && (!py::isinstance<py::list>(clumpStates) ||
+                               py::len(clumpStates) != static_cast<std::size_t>(n)))
+                    throw InputError("readSphereStates: clumpStates must be a list with one entry per sphere");
                 static PyObject* pos = PyUnicode_InternFromString("pos");
                 static PyObject* vel = PyUnicode_InternFromString("vel");
                 static PyObject* angVel = PyUnicode_InternFromString("angVel");
@@ -172,6 +180,13 @@ void bindSpheres(py::module_& m) {
                     PyObject* s = PyList_GET_ITEM(states.ptr(), i);
                     double* x = &S.pos[3 * i];
                     readVector(s, pos, x);
+                    PyObject* cs = clumps ? PyList_GET_ITEM(clumpStates.ptr(), i) : Py_None;
+                    double c[3];  // the spin centre
+                    if (cs == Py_None)
+                        std::copy_n(x, 3, c);
+                    else
+                        readVector(cs, pos, c);
+                    for (int d = 0; d < 3; ++d) S.spinOffset[3 * i + d] = c[d] - x[d];
                     bool near = false;
                     for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1] && !near; ++q) {
                         const double* b = &box[6 * S.pairPiece[q]];
@@ -179,7 +194,19 @@ void bindSpheres(py::module_& m) {
                         for (int d = 0; d < 3 && near; ++d)
                             near = x[d] - S.radius[i] <= b[3 + d] && b[d] <= x[d] + S.radius[i];
                     }
-                    if (near) {
+                    if (near && cs != Py_None) {
+                        // A clump member: its clump's motion at the member's place
+                        // (YADE sets a member's own vel only in NewtonIntegrator:
+                        // zero before the first step).
+                        double vc[3], *wv = &S.angVel[3 * i];
+                        readVector(cs, vel, vc);
+                        readVector(cs, angVel, wv);
+                        const double r[3] = {x[0] - c[0], x[1] - c[1], x[2] - c[2]};
+                        S.vel[3 * i] = vc[0] + wv[1] * r[2] - wv[2] * r[1];
+                        S.vel[3 * i + 1] = vc[1] + wv[2] * r[0] - wv[0] * r[2];
+                        S.vel[3 * i + 2] = vc[2] + wv[0] * r[1] - wv[1] * r[0];
+                        ++full;
+                    } else if (near) {
                         readVector(s, vel, &S.vel[3 * i]);
                         readVector(s, angVel, &S.angVel[3 * i]);
                         ++full;
@@ -189,8 +216,10 @@ void bindSpheres(py::module_& m) {
                 }
                 return full;
             },
-            py::arg("states"), "Reads pos from YADE State objects (one per sphere, setSpheres order), and vel, angVel for those "
-            "near a piece; returns how many were near.")
+            py::arg("states"), py::arg("clumpStates") = py::none(),
+            "Reads pos from YADE State objects (one per sphere, setSpheres order), and vel, angVel for those "
+            "near a piece; clumpStates: per sphere its clump's State (a clump member) or None, whose pos is the "
+            "spin centre; returns how many were near.")
         .def(
             "sphereForceTorque",
             [](const World& w) {

@@ -122,15 +122,19 @@ void bindWorld(py::module_& m) {
         .def(
             "setObstacleStates",
             [](World& w, const py::array_t<double, py::array::c_style | py::array::forcecast>& s) {
-                if (s.ndim() != 2 || s.shape(1) != 13 || s.shape(0) != static_cast<py::ssize_t>(w.obstacles.size()))
-                    throw InputError("setObstacleStates: expected shape (nObstacles, 13)");
+                if (s.ndim() != 2 || (s.shape(1) != 13 && s.shape(1) != 16) ||
+                    s.shape(0) != static_cast<py::ssize_t>(w.obstacles.size()))
+                    throw InputError("setObstacleStates: expected shape (nObstacles, 13) or (nObstacles, 16)");
                 auto r = s.unchecked<2>();
+                const int c = s.shape(1) == 16 ? 13 : 0;  // spin centre's columns; 13 columns: pos itself
                 for (py::ssize_t i = 0; i < s.shape(0); ++i)
                     w.setObstacleState(static_cast<int>(i), {r(i, 0), r(i, 1), r(i, 2)},
                                        Eigen::Quaterniond(r(i, 3), r(i, 4), r(i, 5), r(i, 6)),
-                                       {r(i, 7), r(i, 8), r(i, 9)}, {r(i, 10), r(i, 11), r(i, 12)});
+                                       {r(i, 7), r(i, 8), r(i, 9)}, {r(i, 10), r(i, 11), r(i, 12)},
+                                       {r(i, c), r(i, c + 1), r(i, c + 2)});
             },
-            "Rows: pos(3), quaternion w x y z, vel(3), angVel(3).")
+            "Rows: pos(3), quaternion w x y z, vel(3), angVel(3) and optionally the spin centre (3): a clump "
+            "member's clump centre, whose velocity vel + angVel x (centre - pos) is (default pos).")
         .def(
             "obstacleReactions",
             [](const World& w) {

@@ -151,6 +151,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._checkedSetup = None
         self._lastStepAt = None
         self._warnedDamping = False
+        self._warnedTurning = False
         self._runStart = None
         self._nBodies = -1
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
@@ -285,7 +286,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             if self._spheres is not None:
                 self._spheres.bodiesChanged()
             core.setObstacles(obstacles)
-            self._states = np.zeros((len(self._ids), 13))
+            self._states = np.zeros((len(self._ids), 16))
             self._nBodies = len(O.bodies)
             self._dtChecked = None
         if self._ids:

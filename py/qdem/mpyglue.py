@@ -30,7 +30,7 @@ import numpy as np
 from . import yadeglue
 from .spheres import sphereProperties
 
-_ROW = 16  # id, radius, young, ks/kn, friction, restitution, mass, pos (3), vel (3), angVel (3)
+_ROW = 19  # id, radius, young, ks/kn, friction, restitution, mass, pos (3), vel (3), angVel (3), spin centre (3)
 
 
 def module():
@@ -133,10 +133,10 @@ class MpyCoupling:
         self.props = {bid: sphereProperties(O, b) for bid, b in self.sphereBodies}
 
     def _myRows(self, O, boxes):
-        """This rank's obstacle states (k, 14) and its spheres near a piece (n, 16)."""
-        obs = np.zeros((len(self.obstacleIds), 14))
+        """This rank's obstacle states (k, 17) and its spheres near a piece (n, _ROW)."""
+        obs = np.zeros((len(self.obstacleIds), 17))
         if self.obstacleIds:
-            states = yadeglue.obstacleStates(O, self.obstacleIds, np.zeros((len(self.obstacleIds), 13)))
+            states = yadeglue.obstacleStates(O, self.obstacleIds, np.zeros((len(self.obstacleIds), 16)))
             if states is None:
                 return None
             obs[:, 0], obs[:, 1:] = self.obstacleIds, states
@@ -147,12 +147,13 @@ class MpyCoupling:
             r = b.shape.radius
             x = np.array((p[0], p[1], p[2]))
             if len(boxes) and np.any(np.all((x - r <= boxes[:, 3:]) & (boxes[:, :3] <= x + r), axis=1)):
-                v, a = s.vel, s.angVel
+                v, a, sc = s.vel, s.angVel, p
                 if b.isClumpMember:  # the clump's motion at the member (YADE sets member velocities
                     c = O.bodies[b.clumpId].state  # only in NewtonIntegrator: zero before its first step)
-                    a = c.angVel
+                    a, sc = c.angVel, c.pos
                     v = c.vel + a.cross(p - c.pos)
-                rows.append((bid,) + self.props[bid] + (p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2]))
+                rows.append((bid,) + self.props[bid] + (p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2],
+                                                         sc[0], sc[1], sc[2]))
         return obs, np.array(rows, dtype=float).reshape(-1, _ROW)
 
     # -- per step ------------------------------------------------------------------
@@ -214,7 +215,7 @@ class MpyCoupling:
             self.version += 1
         if len(sph):
             core.setSphereStates(np.ascontiguousarray(x), np.ascontiguousarray(sph[:, 10:13]),
-                                 np.ascontiguousarray(sph[:, 13:16]))
+                                 np.ascontiguousarray(sph[:, 13:16]), np.ascontiguousarray(sph[:, 16:19]))
 
     def afterStep(self, O):
         """Reactions and sphere forces to the bodies this rank owns."""

@@ -19,7 +19,11 @@ Each of these runs without complaint in YADE and gives wrong physics:
   wrap across it;
 - NewtonIntegrator.damping > 0 with QDEM pieces and dynamic YADE bodies:
   YADE bodies are damped and QDEM nodes are not (a warning: the momentum
-  they exchange is no longer conserved)."""
+  they exchange is no longer conserved);
+- a RotationEngine (or HelixEngine, ...) turning bodies about its zeroPoint
+  before QdemEngine: QDEM reads the velocities it set for the coming step,
+  not the step just made, and a piece stuck on such a body slips sideways by
+  about w^2 r dt per second (a warning: it converges with dt)."""
 import warnings
 
 from . import lifecycle
@@ -89,6 +93,7 @@ def check(engine, O):
     if others and not engine.dead:
         raise SetupError("Two QdemEngines step the same QDEM world (O.engines[%d] and another): QDEM time would "
                          "run at twice O.time. Keep one QdemEngine per world (set dead=True on the other)." % i)
+    _warnTurningFirst(engine, engines, i)
     damping = float(getattr(engines[newton[0]], "damping", 0.0))
     if damping > 0 and engine.world.pieces and not engine._warnedDamping:
         proxies = set(engine.proxyIds())
@@ -100,3 +105,28 @@ def check(engine, O):
                           "settle at different rates. Set NewtonIntegrator(damping=0) for dynamics, or "
                           "QdemEngine(damping=%g) to damp both alike." % (damping, float(engine.damping), damping),
                           RuntimeWarning, stacklevel=2)
+
+
+def _warnTurningFirst(engine, engines, i):
+    """A kinematic engine that turns bodies about a point off their centres
+    (RotationEngine and its kin with rotateAroundZero) sets their vel to the
+    chord of the coming step.  Run before QdemEngine, QDEM meets nodes that
+    moved on the step just made against a surface velocity a step ahead:
+    off by w x (w x r) dt, a steady sideways slip (a piece stuck on a drum's
+    facets drifted at 1.7 x w^2 r dt / 2, tests/python/test_rotating_bodies.py).
+    After QdemEngine its vel is the step just made's: exact."""
+    if engine._warnedTurning or not engine.world.pieces:
+        return
+    from yade.wrapper import RotationEngine
+    for k in range(i):
+        e = engines[k]
+        if isinstance(e, RotationEngine) and not e.dead and e.rotateAroundZero and len(e.ids) \
+                and float(e.angularVelocity) != 0.0:
+            engine._warnedTurning = True
+            warnings.warn("%s at O.engines[%d] turns its bodies about zeroPoint before QdemEngine (O.engines[%d]) "
+                          "reads them: QDEM then sees the velocities it set for the coming step, not the step just "
+                          "made, and a piece in contact with those bodies slips sideways by about w^2 r dt per "
+                          "second of turning (a piece on a drum drifts). Put QdemEngine before it: "
+                          "[..., QdemEngine(), %s(...), NewtonIntegrator(...)]."
+                          % (type(e).__name__, k, i, type(e).__name__), RuntimeWarning, stacklevel=3)
+            return

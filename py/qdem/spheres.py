@@ -61,6 +61,17 @@ def sphereProperties(O, b):
     return (b.shape.radius, young, ratio, friction, restitution, mass)
 
 
+def _clumpState(O, b):
+    """A clump member's clump State (YADE sets the member's vel from the clump's
+    motion about the clump's centre: QDEM needs that centre), else None."""
+    return O.bodies[b.clumpId].state if b.isClumpMember else None
+
+
+def _clumpStates(states):
+    """The list readSphereStates takes, or None when no sphere is a clump member."""
+    return states if any(s is not None for s in states) else None
+
+
 class SphereCoupling:
     """Per-engine state of the sphere coupling (created by QdemEngine)."""
 
@@ -72,6 +83,7 @@ class SphereCoupling:
         self._bodies = []        # their Body objects (the same Python object while the body lives)
         self.proxyBox = []       # (lo, hi) each
         self.states = []         # YADE State objects of the listed spheres
+        self.clumpStates = None  # their clumps' States (None for a free sphere); None: no clump member listed
         self.props = {}          # body id -> sphereProperties (cleared when bodies change)
         self._materials = {}     # id(material) -> (material, its values when read): checkChanged
         self.collider = None
@@ -183,7 +195,7 @@ class SphereCoupling:
             self._numAction = None
             self._dirty = True
             if self.states:
-                core.readSphereStates(self.states)
+                core.readSphereStates(self.states, self.clumpStates)
             return
         if not core.piecesInside(self._safeLo, self._safeHi):
             self._moveProxies(O, core.pieceBounds())
@@ -195,7 +207,7 @@ class SphereCoupling:
             self._numAction = n
             self._dirty = False
         if self.states:
-            core.readSphereStates(self.states)
+            core.readSphereStates(self.states, self.clumpStates)
 
     def _moveProxies(self, O, bounds):
         """Places new proxies, and moves those whose piece came within half the
@@ -228,7 +240,7 @@ class SphereCoupling:
                 b = O.bodies[bid]
                 ok = b is not None and b.shape is not None and type(b.shape).__name__ == "Sphere"
                 # walls, facets, boxes: QDEM sees them as obstacles, not here
-                props[bid] = (sphereProperties(O, b), b.state) if ok else False
+                props[bid] = (sphereProperties(O, b), b.state, _clumpState(O, b)) if ok else False
                 if ok:
                     self._noteMaterial(b)
         ids = [bid for bid in allIds.tolist() if props[bid] is not False]
@@ -250,6 +262,7 @@ class SphereCoupling:
         self.world.core.setSpheres(idArr, table[:, 0], table[:, 1], table[:, 2], table[:, 3], table[:, 4],
                                    table[:, 5], start, piece[order].astype(np.int32))
         self.states = [props[bid][1] for bid in ids]
+        self.clumpStates = _clumpStates([props[bid][2] for bid in ids])
         self.refreshes += 1
         self.version += 1
 
@@ -262,7 +275,7 @@ class SphereCoupling:
             if bid not in self.props:
                 b = O.bodies[bid]
                 ok = b is not None and b.shape is not None and type(b.shape).__name__ == "Sphere"
-                self.props[bid] = (sphereProperties(O, b), b.state) if ok else False
+                self.props[bid] = (sphereProperties(O, b), b.state, _clumpState(O, b)) if ok else False
                 if ok:
                     self._noteMaterial(b)
         ids = [bid for bid, p in self.props.items() if p is not False]
@@ -273,6 +286,7 @@ class SphereCoupling:
                                    np.arange(0, n * np_ + 1, np_, dtype=np.int32),
                                    np.tile(np.arange(np_, dtype=np.int32), n))
         self.states = [self.props[bid][1] for bid in ids] if withStates else []
+        self.clumpStates = _clumpStates([self.props[bid][2] for bid in ids]) if withStates else None
         self._dirty = True
         self.version += 1
 

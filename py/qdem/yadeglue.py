@@ -112,7 +112,9 @@ def bodySignature(b):
 
 
 def obstacleStates(O, ids, out, signatures=None, reshaped=None):
-    """Fill out (k,13) with pos, quaternion (w x y z), vel, angVel of the bodies;
+    """Fill out (k,16) with pos, quaternion (w x y z), vel, angVel and spin centre
+    of the bodies (the clump's centre for a clump member, whose vel YADE sets
+    from the clump's motion about it; else pos: Obstacle::velocityAt);
     None when one of them was erased (scan again).  With ``signatures`` (one
     bodySignature per body), the index of each body whose shape changed since
     (a Box's extents, a Facet's vertices, a body of another kind after
@@ -128,8 +130,13 @@ def obstacleStates(O, ids, out, signatures=None, reshaped=None):
         axis, angle = q.toAxisAngle()
         h = 0.5 * angle
         sh = np.sin(h)
+        c = p
+        if b.isClumpMember:  # the clump's motion at the member (YADE sets a member's own vel only in
+            cs = O.bodies[b.clumpId].state  # NewtonIntegrator: zero before its first step)
+            c, w = cs.pos, cs.angVel
+            v = cs.vel + w.cross(p - c)
         out[i] = (p[0], p[1], p[2], np.cos(h), axis[0] * sh, axis[1] * sh, axis[2] * sh,
-                  v[0], v[1], v[2], w[0], w[1], w[2])
+                  v[0], v[1], v[2], w[0], w[1], w[2], c[0], c[1], c[2])
     return out
 
 

@@ -336,15 +336,21 @@ TEST(ReferenceForces, WallSpringFrictionStuckAndSliding) {
     }
 }
 
+// Velocity of a body's material point now at arm r from its spin centre,
+// spinning at w, at the time level of the nodes' velocities (the step just
+// made): the arm half a step back, r - (w x r) dt/2 (Obstacle::velocityAt).
+Vector3d spinVelocity(const Vector3d& w, const Vector3d& r, double dt) { return w.cross(r - 0.5 * dt * w.cross(r)); }
+
 // A spinning wall (angular velocity about z through its position): the
-// relative velocity at the contact point is -(w x (pc - pos)).
+// relative velocity at the contact point is -(w x (pc - pos)), the arm taken
+// half a step back.
 TEST(ReferenceForces, WallSpinningDrivesFriction) {
     const Vector3d omega(0, 0, 0.4);
     ObstacleCase c;
     buildObstacleCase(c, wallZ(1), kWallPoint, Vector3d::UnitZ(), kWallPos, Eigen::Quaterniond::Identity(),
                       Vector3d::Zero(), omega);
     c.w.step(kDt);
-    const Vector3d vRel = -omega.cross(kWallPoint - kWallPos);
+    const Vector3d vRel = -spinVelocity(omega, kWallPoint - kWallPos, kDt);
     const Vector3d f = springLaw(wallLaw(c), Vector3d::UnitZ(), kDelta, vRel, kDt, true);
     ASSERT_GT(Vector3d(f.x(), f.y(), 0).norm(), 1e-3 * f.norm());
     checkObstacle(c, f, kWallPoint, kWallPos, "spinning wall");
@@ -415,7 +421,7 @@ TEST(ReferenceForces, BoxMovingDashpotAndFriction) {
     ObstacleCase c;
     buildObstacleCase(c, box(), pc, n, kBoxPos, boxOri(), vBox, wBox);
     c.w.step(kDt);
-    const Vector3d vRel = -(vBox + wBox.cross(pc - kBoxPos));
+    const Vector3d vRel = -(vBox + spinVelocity(wBox, pc - kBoxPos, kDt));
     const Law L = wallLaw(c, 4e6, 0.25);
     const Vector3d f = springLaw(L, n, kDelta, vRel, kDt, true);
     ASSERT_GT(std::abs(vRel.dot(n)), 0.01);  // the dashpot acts
@@ -761,7 +767,8 @@ TEST(ReferenceForces, SphereTriangleStatic) {
 }
 
 // Sliding and spinning: relative velocity v + w x a - v_T at the lever arm
-// a = -(R - delta/2) n (YADE's contact point), the torque a x F.
+// a = -(R - delta/2) n (YADE's contact point; in w x a taken half a step
+// back, spinVelocity), the torque a x F.
 TEST(ReferenceForces, SphereTriangleDashpotFrictionTorque) {
     const Vector3d pc(0.2, -0.5, 0), n = Vector3d::UnitZ();
     for (const Vector3d& v : {Vector3d(0.01, -0.02, -0.05), Vector3d(6, 4, -0.05)}) {
@@ -770,7 +777,7 @@ TEST(ReferenceForces, SphereTriangleDashpotFrictionTorque) {
         buildSphereCase(c, pc, v, omega, 0.4);  // a ViscElMat sphere: its restitution counts
         c.w.step(kDt);
         const Vector3d arm = -(c.s.radius - 0.5 * kDelta) * n;
-        const Vector3d vRel = v + omega.cross(arm);
+        const Vector3d vRel = v + spinVelocity(omega, arm, kDt);
         const Law L = sphereLaw(c, c.mb);
         EXPECT_EQ(slides(L, n, kDelta, vRel, kDt), v.x() > 1) << "stuck and sliding cases";
         const Vector3d f = springLaw(L, n, kDelta, vRel, kDt, true);
