@@ -40,7 +40,6 @@ void ObstaclePhase::checkStartOverlaps() {
     startChecked_.resize(w_.pieces.size(), 0);
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
         if (startChecked_[ip]) continue;
-        startChecked_[ip] = 1;  // checked now; a refused piece is refused once (the script stops)
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
         // The side of two-sided walls and facets the piece is on: that of its centroid.
@@ -153,8 +152,12 @@ void ObstaclePhase::checkStartOverlaps() {
                 m << "move it at least " << clear << " m along (" << normal[0] << ", " << normal[1] << ", "
                   << normal[2] << ")";
             m << " (depth + node radius " << r << " m), or move the obstacle";
+            // (left unchecked: a script that catches this and runs again
+            // unchanged, or moved not far enough, is refused again; it ran
+            // and launched the piece)
             throw InputError(m.str());
         }
+        startChecked_[ip] = 1;  // accepted (its warnings given once)
     }
 }
 

@@ -151,8 +151,11 @@ void PieceContactPhase::finishStartCheck() {
     for (const auto& v : threadStartSeen_) seen.insert(seen.end(), v.begin(), v.end());
     std::sort(seen.begin(), seen.end());
     const DeepNode found = deepestInside(false, seen, nullptr);
-    std::fill(startChecked_.begin(), startChecked_.end(), 1);  // checked now (a refused set-up stops the script)
     if (found.node < 0) {  // accepted: these pairs separate, and the periodic check lets them until they are out
+        // (A refused set-up stays unchecked: a script that catches the error
+        // and runs again without moving the pieces far enough apart is
+        // refused again; it ran on until the periodic check.)
+        std::fill(startChecked_.begin(), startChecked_.end(), 1);
         std::vector<std::pair<int32_t, int32_t>> all;
         std::set_union(startOverlap_.begin(), startOverlap_.end(), seen.begin(), seen.end(), std::back_inserter(all));
         all.erase(std::unique(all.begin(), all.end()), all.end());

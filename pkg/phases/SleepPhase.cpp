@@ -23,11 +23,15 @@ void SleepPhase::awakeSetChanged() {
     awakeTets_.clear();
     awakeNodes_.clear();
     awakeSurf_.clear();
+    heldSurf_.clear();
     nAsleep_ = 0;
     const Domain* d = w_.domain.built();
     for (std::size_t p = 0; p < np; ++p) {
         if (asleep_[p]) {
             ++nAsleep_;
+            if (p < held_.size() && held_[p])
+                for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
+                    if (!d || d->owns(w_.surfNodes[s])) heldSurf_.push_back(s);
             continue;
         }
         if (!d) {

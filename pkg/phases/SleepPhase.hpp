@@ -69,6 +69,9 @@ public:
     const std::vector<TetSegment>& awakeTets() const { return awakeTets_; }  // per awake piece, its tets
     const std::vector<int32_t>& awakeNodes() const { return awakeNodes_; }   // ids of their nodes
     const std::vector<int32_t>& awakeSurf() const { return awakeSurf_; }     // indices into surfNodes
+    // The held pieces' surface nodes (indices into surfNodes; under MPI the
+    // owned ones): they touch obstacles as a fixed body (ObstaclePhase.cpp).
+    const std::vector<int32_t>& heldSurf() const { return heldSurf_; }
     // Squared displacement of a piece's surface since the last Verlet list
     // rebuild, when it fell asleep (other nodes may only move the rest of half
     // the skin before the lists are rebuilt); listsRebuilt() clears it.
@@ -125,6 +128,7 @@ private:
     long version_ = 0;
     std::vector<TetSegment> awakeTets_;
     std::vector<int32_t> awakeNodes_, awakeSurf_;
+    std::vector<int32_t> heldSurf_;  // (heldSurf())
     long sleepCount_ = 0, wakeCount_ = 0;
 };
 

@@ -22,7 +22,10 @@ void World::finishPieceEnergy() {
     double el = 0, contact = 0;
     for (std::size_t p = 0; p < pieces.size(); ++p) {
         for (int c = 0; c < 3; ++c) {
-            const bool computed = c < 2 ? !sleepPhase_.asleep(p) : !pieceContactPhase_.frozen(p);
+            // (obstacle contacts: also a held piece's, ObstaclePhase.cpp)
+            const bool computed = c == 0   ? !sleepPhase_.asleep(p)
+                                  : c == 1 ? !sleepPhase_.asleep(p) || !sleepPhase_.dynamic(p)
+                                           : !pieceContactPhase_.frozen(p);
             if (!computed) continue;
             double sum = 0;
             for (const auto& t : threadPieceEnergy_) sum += t[3 * p + c];

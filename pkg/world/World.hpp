@@ -117,6 +117,8 @@ public:
     void checkCurrentDt(double dt) const;
     // Throws StabilityError when a position or velocity became NaN/infinite.
     void checkFinite() const;
+    // Refuses a blocked value outside the bit mask 0..7 (InputError naming the node).
+    void checkBlockedBits() const;
     // Inverted elements (volume ratio J = det F <= 0) of the awake pieces:
     // how many, and the first one (lowest piece, then element).  One pass of
     // 3x3 determinants: cheap enough for every check period.

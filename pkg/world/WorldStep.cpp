@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "../core/Errors.hpp"
+#include "../core/Format.hpp"
 #include "../core/Threads.hpp"
 #include "../parallel/Domain.hpp"
 #include "World.hpp"
@@ -21,8 +22,29 @@ inline void runTimed(Phase& p, double dt) {
 
 }  // namespace
 
+// Piece.blocked is a writable uint8 view: 8, or -1 (255), would pass and
+// mean nothing (the step reads bits 1, 2, 4 only), so a script that meant
+// another encoding ran unconstrained.  One pass over a byte per node.
+void World::checkBlockedBits() const {
+    const uint8_t* b = blocked.data();
+    const std::size_t n = blocked.size();
+    uint8_t any = 0;
+    for (std::size_t i = 0; i < n; ++i) any |= b[i];
+    if (!(any & ~7u)) return;
+    for (std::size_t i = 0; i < n; ++i)
+        if (b[i] & ~7u) {
+            const int32_t p = nodePiece[i];
+            throw InputError(cat("QDEM: node ", static_cast<int64_t>(i) - pieces[p].nodeBegin, " of piece ", p,
+                                 " has blocked = ", static_cast<int>(b[i]),
+                                 ": blocked is a bit mask of the prescribed DOFs, 1 = x, 2 = y, 4 = z (0 to 7; "
+                                 "e.g. 7 = all three, as YADE's blockedDOFs 'xyz'). Set piece.blocked[i] to a "
+                                 "value in 0..7"));
+        }
+}
+
 void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
+    checkBlockedBits();
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
     if (domain_) {
         domain_->agreeOnCall(Domain::Call::Step);

@@ -152,6 +152,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._lastStepAt = None
         self._warnedDamping = False
         self._warnedTurning = False
+        self._syncForces = False  # a force-reading engine follows (setupcheck._checkForceReaders)
         self._runStart = None
         self._nBodies = -1
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
@@ -398,6 +399,10 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             t0 = time.perf_counter()
             coupling.afterStep(O)
             coupling.seconds += time.perf_counter() - t0 + core.sphereSeconds
+        if self._syncForces and len(O.bodies):
+            # A ServoPIDController follows and reads O.forces, which YADE
+            # 2023.02a refuses unsynchronised after addF (setupcheck._checkForceReaders).
+            O.forces.f(0, sync=True)
         if core.trackEnergy:
             for k, v in core.energy.items():
                 if k in ENERGY_KEYS:

@@ -4,6 +4,24 @@ import numpy as np
 from .stress import vonMises
 
 
+class _HeldNodes(np.ndarray):
+    """A read-only node array of a held piece (dynamic = False) whose writes
+    say why they fail and the fix, not only NumPy's "assignment destination
+    is read-only" (a YADE user moves fixed bodies by writing their state)."""
+
+    def _refuse(self, *args, **kw):
+        raise ValueError("piece %d is held (dynamic = False): its %s is read-only while it is held, since the "
+                         "step leaves it where it is and a write would not take effect. Set piece.dynamic = True "
+                         "first, then write (or keep it held and leave it)" % (self._pieceId, self._name))
+
+    __setitem__ = __iadd__ = __isub__ = __imul__ = __itruediv__ = __ifloordiv__ = __ipow__ = __imod__ = _refuse
+    __iand__ = __ior__ = __ixor__ = __ilshift__ = __irshift__ = _refuse
+
+    def __array_finalize__(self, obj):
+        self._pieceId = getattr(obj, "_pieceId", -1)
+        self._name = getattr(obj, "_name", "array")
+
+
 class Piece:
     """One QDEM piece in a world.  The array properties are NumPy *views* of the
     world's storage (writing ``piece.vel[:] = ...`` changes the simulation); take
@@ -62,7 +80,8 @@ class Piece:
         _requireCurrent(core, name)
         a = getattr(core, name)[self.nodeSlice]
         if not core.dynamic(self.id):
-            a = a.view()
+            a = a.view(_HeldNodes)
+            a._pieceId, a._name = self.id, name
             a.flags.writeable = False
         elif core.nAsleep:
             core.wake(self.id)
@@ -125,8 +144,11 @@ class Piece:
     def contactWeight(self):
         """Per node (n,): the factor on its contact stiffness, its share of the
         surface area over the piece's mean share (0 for interior nodes;
-        doc/contacts.md, "Area weights")."""
-        return self.world.core.contactWeight[self.nodeSlice]
+        doc/contacts.md, "Area weights"); read-only view (set from the
+        surface when the piece is added)."""
+        a = self.world.core.contactWeight[self.nodeSlice].view()
+        a.flags.writeable = False
+        return a
 
     @property
     def blocked(self):

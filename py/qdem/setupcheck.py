@@ -20,10 +20,16 @@ Each of these runs without complaint in YADE and gives wrong physics:
 - NewtonIntegrator.damping > 0 with QDEM pieces and dynamic YADE bodies:
   YADE bodies are damped and QDEM nodes are not (a warning: the momentum
   they exchange is no longer conserved);
-- a RotationEngine (or HelixEngine, ...) turning bodies about its zeroPoint
-  before QdemEngine: QDEM reads the velocities it set for the coming step,
-  not the step just made, and a piece stuck on such a body slips sideways by
-  about w^2 r dt per second (a warning: it converges with dt)."""
+- a time stepper (GlobalStiffnessTimeStepper, ...) between QdemEngine and
+  NewtonIntegrator: it changes O.dt after QDEM stepped with the old one, and
+  YADE bodies move with the new one (QDEM's clock falls behind O.time);
+- a ServoPIDController before QdemEngine on a body QDEM touches: it reads
+  O.forces before QDEM adds its reactions (the servo sees none and drives on);
+- a RotationEngine (or HelixEngine, ..., also inside a
+  CombinedKinematicEngine) turning bodies about its zeroPoint before
+  QdemEngine: QDEM reads the velocities it set for the coming step, not the
+  step just made, and a piece stuck on such a body slips sideways by about
+  w^2 r dt per second (a warning: it converges with dt)."""
 import warnings
 
 from . import lifecycle
@@ -93,6 +99,8 @@ def check(engine, O):
     if others and not engine.dead:
         raise SetupError("Two QdemEngines step the same QDEM world (O.engines[%d] and another): QDEM time would "
                          "run at twice O.time. Keep one QdemEngine per world (set dead=True on the other)." % i)
+    _checkTimeSteppers(engines, i, newton[0])
+    _checkForceReaders(O, engine, engines, i, newton[0])
     _warnTurningFirst(engine, engines, i)
     damping = float(getattr(engines[newton[0]], "damping", 0.0))
     if damping > 0 and engine.world.pieces and not engine._warnedDamping:
@@ -117,11 +125,16 @@ def _warnTurningFirst(engine, engines, i):
     After QdemEngine its vel is the step just made's: exact."""
     if engine._warnedTurning or not engine.world.pieces:
         return
-    from yade.wrapper import RotationEngine
+    from yade.wrapper import CombinedKinematicEngine, RotationEngine
+
+    def turning(e):
+        if isinstance(e, CombinedKinematicEngine):  # (YADE's RotationEngine(...) + TranslationEngine(...))
+            return len(e.ids) and any(turning(m) for m in e.comb)
+        return isinstance(e, RotationEngine) and e.rotateAroundZero and len(e.ids) \
+            and float(e.angularVelocity) != 0.0
     for k in range(i):
         e = engines[k]
-        if isinstance(e, RotationEngine) and not e.dead and e.rotateAroundZero and len(e.ids) \
-                and float(e.angularVelocity) != 0.0:
+        if not e.dead and turning(e):
             engine._warnedTurning = True
             warnings.warn("%s at O.engines[%d] turns its bodies about zeroPoint before QdemEngine (O.engines[%d]) "
                           "reads them: QDEM then sees the velocities it set for the coming step, not the step just "
@@ -130,3 +143,52 @@ def _warnTurningFirst(engine, engines, i):
                           "[..., QdemEngine(), %s(...), NewtonIntegrator(...)]."
                           % (type(e).__name__, k, i, type(e).__name__), RuntimeWarning, stacklevel=3)
             return
+
+
+def _checkTimeSteppers(engines, i, newton):
+    """A time stepper between QdemEngine and NewtonIntegrator sets O.dt after
+    QDEM made its step with the old one, and NewtonIntegrator moves YADE
+    bodies with the new one: QDEM's clock falls behind O.time at every
+    change (a piece fell 2.6 mm behind a sphere after one change,
+    tests/python/test_setup_refusals.py).  YADE's own order puts it right
+    before NewtonIntegrator, which is where a user inserting QdemEngine
+    after InteractionLoop leaves it."""
+    from yade.wrapper import TimeStepper
+    for k in range(i + 1, newton):
+        e = engines[k]
+        if isinstance(e, TimeStepper) and not e.dead and getattr(e, "active", True):
+            raise SetupError("%s at O.engines[%d] sets O.dt after QdemEngine (O.engines[%d]) has stepped with the "
+                             "old one, and NewtonIntegrator (O.engines[%d]) then moves YADE bodies with the new "
+                             "one: QDEM's clock would fall behind O.time at every change. Put it before "
+                             "QdemEngine: [ForceResetter(), ..., InteractionLoop(...), %s(...), QdemEngine(), "
+                             "NewtonIntegrator(...)]." % (type(e).__name__, k, i, newton, type(e).__name__))
+
+
+def _checkForceReaders(O, engine, engines, i, newton):
+    """A ServoPIDController reads the force on its bodies from O.forces to
+    drive them: before QdemEngine it reads them without QDEM's reactions (a
+    platen servoed to 20 N on a block read 0 N and pressed on to 134 N).
+    After it, YADE 2023.02a's ForceContainer must be synchronised before
+    the servo reads it (else YADE stops: "ForceContainer not
+    thread-synchronized"), which QdemEngine then does after adding its
+    reactions (engine._syncForces)."""
+    from yade.wrapper import ServoPIDController
+    coupled = ("Wall", "Box", "Facet", "Sphere", "Clump")
+
+    def touches(e):
+        for bid in e.ids:
+            b = O.bodies[bid] if 0 <= bid < len(O.bodies) else None
+            if b is not None and b.shape is not None and type(b.shape).__name__ in coupled:
+                return True
+        return False
+    engine._syncForces = False
+    for k, e in enumerate(engines):
+        if not isinstance(e, ServoPIDController) or e.dead:
+            continue
+        if k < i and engine.world.pieces and touches(e):
+            raise SetupError("ServoPIDController at O.engines[%d] reads the force on its bodies before QdemEngine "
+                             "(O.engines[%d]) adds its reactions: it would see none from QDEM pieces and drive its "
+                             "bodies on. Put it after QdemEngine and before NewtonIntegrator: [..., QdemEngine(), "
+                             "ServoPIDController(...), NewtonIntegrator(...)]." % (k, i))
+        if i < k < newton:
+            engine._syncForces = True

@@ -251,3 +251,27 @@ def test_materials_at_the_edge_of_the_doubles_get_a_finite_limit_that_refuses_dt
     assert 0 <= sd["combined"] < 1e-100
     with pytest.raises(qdem.StabilityError, match="exceeds the stable time step"):
         w.core.checkDt(1e-6)
+
+
+@pytest.mark.parametrize("value", [8, 255])
+def test_a_blocked_value_outside_the_bit_mask_is_refused(value):
+    """Piece.blocked is a bit mask (1 = x, 2 = y, 4 = z): 8, or -1 (255),
+    were accepted and meant nothing, so the piece ran unconstrained."""
+    w = qdem.World()
+    p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat())
+    p.blocked[3] = value
+    before = w.core.pos.copy()
+    with pytest.raises(ValueError, match=r"node 3 of piece 0 has blocked = %d: blocked is a bit mask of the "
+                                         r"prescribed DOFs, 1 = x, 2 = y, 4 = z \(0 to 7" % value):
+        w.core.step(1e-6, 1)
+    assert np.array_equal(w.core.pos, before)
+    p.blocked[3] = 7
+    w.core.step(1e-6, 1)
+
+
+def test_contact_weights_are_read_only():
+    """A copy computed from the surface: a write would go nowhere."""
+    w = qdem.World()
+    p = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), qdem.QdemMat())
+    with pytest.raises(ValueError, match="read-only"):
+        p.contactWeight[0] = 2.0

@@ -114,3 +114,22 @@ def test_turning_engine_before_qdem_engine_warns(scene):
                                             r"QdemEngine before it"):
         drift, creep = _drift(O, "facets", 0.8, kinematicsFirst=True)
     assert drift < -1.3 * creep, (drift, creep)
+
+
+def test_a_combined_kinematic_engine_turning_first_warns_too(scene):
+    """YADE's RotationEngine(...) + TranslationEngine(...) idiom makes a
+    CombinedKinematicEngine: its RotationEngine is looked at too (it drifted
+    the piece as much as a bare one, unwarned)."""
+    from yade import ForceResetter, NewtonIntegrator, TranslationEngine
+    O = scene
+    _, kinematics = _table(O, "facets")
+    turn = kinematics[0]
+    combined = turn + TranslationEngine(ids=list(turn.ids), translationAxis=(1, 0, 0), velocity=0.0)
+    assert type(combined).__name__ == "CombinedKinematicEngine"
+    qdem.addPiece(qdem.boxMesh((SIDE, SIDE, SIDE), (3, 3, 3)), _material(), pos=(R, 0, SIDE / 2 + 0.005))
+    engine = qdem.QdemEngine()
+    O.engines = [ForceResetter(), combined, engine, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.8 * engine.stableTimeStep()
+    with pytest.warns(RuntimeWarning, match=r"CombinedKinematicEngine at O.engines\[1\] turns its bodies about "
+                                            r"zeroPoint before QdemEngine"):
+        O.run(3, True)

@@ -110,6 +110,15 @@ def test_a_piece_started_inside_an_obstacle_is_refused_naming_depth_and_fix(make
                                          r"0.025 m higher" % (o.bodyId, kind)):
         w.core.step(1e-6, 1)
     assert np.array_equal(w.core.pos, before)            # refused before anything moved
+    # A script that catches the refusal and runs again (moved not far enough,
+    # or not at all) is refused again: the check was marked done and the
+    # retry launched the piece.
+    w.core.pos[:, 2] += 0.01
+    before = w.core.pos.copy()
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body %d.*the deepest by 0.01 m"
+                                         % o.bodyId):
+        w.core.step(1e-6, 1)
+    assert np.array_equal(w.core.pos, before)
 
 
 @pytest.mark.parametrize("make", [lambda: _wall(1), lambda: _wall(0), _box, _facet])
@@ -207,6 +216,9 @@ def test_a_piece_started_inside_another_beyond_the_contacts_sight_is_refused(ove
                                          r"0.12 m"):
         w.core.step(1e-5, 1)
     assert np.array_equal(w.core.pos, before)
+    with pytest.raises(ValueError, match=r"starts inside piece [01], deeper than the contact can see"):
+        w.core.step(1e-5, 1)  # caught and run again unchanged: refused again (it ran on)
+    assert np.array_equal(w.core.pos, before)
 
 
 def test_pieces_started_interpenetrated_within_the_contacts_sight_separate():
@@ -257,3 +269,74 @@ def test_a_piece_added_into_a_running_scene_is_checked_and_a_loaded_deep_contact
     w2.addPiece(qdem.boxMesh((0.03, 0.03, 0.03), (2, 2, 2)), mat, pos=a.centroid())  # wholly inside piece 0
     with pytest.raises(ValueError, match=r"piece 2 starts inside piece 0"):
         w2.core.step(dt, 1)
+
+
+# --- engines whose place in O.engines matters ------------------------------------
+
+def _fallingPieceAndSphere(O, order):
+    from yade import (Bo1_Sphere_Aabb, ForceResetter, GlobalStiffnessTimeStepper, InsertionSortCollider,
+                      InteractionLoop, Ig2_Sphere_Sphere_ScGeom, Ip2_FrictMat_FrictMat_FrictPhys,
+                      Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator, utils)
+    qdem.addPiece(_cube(2), rubber(radius=R), pos=(0, 0, 1.0))
+    O.bodies.append(utils.sphere((1.0, 0, 1.0), 0.05))
+    stepper = GlobalStiffnessTimeStepper(timeStepUpdateInterval=1, defaultDt=1e-5)
+    engine = qdem.QdemEngine()
+    middle = [engine, stepper] if order == "qdem first" else [stepper, engine]
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
+                                 [Law2_ScGeom_FrictPhys_CundallStrack()])] + middle + [
+                     NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 1e-5
+
+
+def test_a_time_stepper_between_qdem_engine_and_newton_is_refused(scene):
+    """GlobalStiffnessTimeStepper where YADE's scripts put it, right before
+    NewtonIntegrator, with QdemEngine inserted after InteractionLoop: it set
+    O.dt after QDEM had stepped with the old one, and a falling piece ended
+    2.6 mm behind a sphere falling beside it (QDEM's clock 2.3e-4 s behind
+    O.time after one change).  Before QdemEngine, both fall alike."""
+    O = scene
+    _fallingPieceAndSphere(O, "qdem first")
+    with pytest.raises(Exception, match=r"GlobalStiffnessTimeStepper at O.engines\[4\] sets O.dt after "
+                                        r"QdemEngine \(O.engines\[3\]\).*Put it before QdemEngine"):
+        O.run(5, True)
+    O.reset()
+    _fallingPieceAndSphere(O, "stepper first")
+    O.run(200, True)
+    w = qdem.defaultWorld()
+    assert w.core.time == pytest.approx(O.time, rel=1e-12)
+    z = w.pieces[0].centroid()[2]
+    assert z - 1.0 == pytest.approx(O.bodies[0].state.pos[2] - 1.0, rel=1e-9)
+
+
+def _servoedPlaten(O, servoFirst):
+    from yade import ForceResetter, NewtonIntegrator, ServoPIDController, utils
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=50, radius=0.004, restitution=0.3,
+                       frictionWall=0.0)
+    qdem.addPiece(_cube(3), mat, pos=(0, 0, L / 2 + 0.004))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    top = O.bodies.append(utils.box((0, 0, L + 0.008 + 0.011), (0.1, 0.1, 0.01), fixed=True))
+    servo = ServoPIDController(ids=[top], axis=(0, 0, 1), target=20.0, kP=2e-4, kI=0, kD=0, maxVelocity=0.02,
+                               iterPeriod=1)
+    engine = qdem.QdemEngine()
+    middle = [servo, engine] if servoFirst else [engine, servo]
+    O.engines = [ForceResetter()] + middle + [NewtonIntegrator(gravity=(0, 0, 0))]
+    O.dt = 0.5 * engine.stableTimeStep()
+    return top
+
+
+def test_a_servo_controller_reads_qdem_reactions_after_qdem_engine(scene):
+    """ServoPIDController drives a platen to a force it reads from O.forces.
+    Before QdemEngine it read none of QDEM's reactions and pressed on for
+    ever (134 N against a 20 N target): refused, naming the order.  After
+    it, YADE 2023.02a stopped on an unsynchronised ForceContainer unless
+    synchronised; QdemEngine does so, and the platen settles on the target."""
+    O = scene
+    _servoedPlaten(O, servoFirst=True)
+    with pytest.raises(Exception, match=r"ServoPIDController at O.engines\[1\] reads the force on its bodies "
+                                        r"before QdemEngine \(O.engines\[2\]\).*Put it after QdemEngine"):
+        O.run(5, True)
+    O.reset()
+    top = _servoedPlaten(O, servoFirst=False)
+    O.run(int(1.2 / O.dt), True)
+    assert O.forces.f(top, sync=True)[2] == pytest.approx(20.0, rel=0.02)

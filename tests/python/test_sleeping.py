@@ -305,3 +305,52 @@ def test_a_piece_held_in_the_air_falls_freely_once_dynamic_again(tmp_path):
     assert z0 - b2.centroid()[2] == pytest.approx(0.5 * 9.81 * t * t, rel=0.01)
     with pytest.raises(Exception, match="piece"):
         w2.core.setDynamic(5, False)
+
+
+@pytest.mark.parametrize("hold", [False, True])
+def test_a_box_dropped_on_a_held_piece_rests_on_it(scene, hold):
+    """YADE's Body.dynamic = False is a fixed body that others still hit.  A
+    held piece touched obstacles only with its push at the hold: a dynamic
+    YADE box dropped on a held block fell through it in free fall (z = -0.39
+    m at t = 0.4 s), and a platen driven into it met no force.  Its contacts
+    with obstacles are now computed every step: the box rests on it as on
+    the free block, its weight carried (O.forces on the box = m g)."""
+    from yade import ForceResetter, FrictMat, NewtonIntegrator, utils
+    O = scene
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=10, radius=0.005)
+    p = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.1), (2, 2, 2)), mat, pos=(0, 0, 0.055))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    bm = O.materials.append(FrictMat(young=1e7, poisson=0.3, frictionAngle=0.3, density=1000))
+    box = O.bodies.append(utils.box((0, 0, 0.25), (0.03, 0.03, 0.03), fixed=False, material=bm))
+    engine = qdem.QdemEngine()
+    O.engines = [ForceResetter(), engine, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 0.5 * engine.stableTimeStep()
+    O.run(20, True)
+    if hold:
+        p.dynamic = False
+    top = p.pos[:, 2].max()
+    O.run(int(1.2 / O.dt), True)                                           # it bounces for about 1 s
+    b = O.bodies[box]
+    assert b.state.pos[2] - top == pytest.approx(0.03 + 0.005, abs=1e-3)   # on the block, not through it
+    assert abs(b.state.vel[2]) < 0.01
+    assert O.forces.f(box)[2] == pytest.approx(b.state.mass * 9.81, rel=0.02)
+    if hold:
+        assert p.pos[:, 2].max() == top and p.asleep                       # the held block did not move
+
+
+def test_writing_to_a_held_piece_names_the_piece_and_the_fix():
+    """NumPy's bare "assignment destination is read-only" named neither the
+    piece, nor why, nor dynamic = True."""
+    w = _world(False)
+    b = _block(w, rubber(**MAT), z=0.5)
+    b.dynamic = False
+    for name in ("pos", "vel", "extForce", "blocked"):
+        with pytest.raises(ValueError, match=r"piece 0 is held \(dynamic = False\): its %s is read-only while it "
+                                             r"is held.*Set piece.dynamic = True first" % name):
+            getattr(b, name)[:] = 0
+    with pytest.raises(ValueError, match=r"its vel is read-only"):
+        b.vel[0] += 1.0
+    with pytest.raises(ValueError, match=r"its pos is read-only"):
+        b.pos[:, 2] *= 2
+    b.dynamic = True
+    b.vel[:] = 0.0                                                          # and writable again
