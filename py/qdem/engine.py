@@ -152,6 +152,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._lastStepAt = None
         self._warnedDamping = False
         self._warnedTurning = False
+        self._posDriven = yadeglue.PosDrivenWatch()
         self._syncForces = False  # a force-reading engine follows (setupcheck._checkForceReaders)
         self._runStart = None
         self._nBodies = -1
@@ -311,6 +312,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                 core.setObstacles(self._obstacles)
                 self._dtChecked = None
                 states = yadeglue.obstacleStates(O, self._ids, self._states)
+            self._posDriven.watch(O, self._ids, states)
             core.setObstacleStates(states)
 
     def _run(self):

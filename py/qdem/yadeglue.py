@@ -147,3 +147,50 @@ def applyReactions(O, ids, reactions):
         if r[0] or r[1] or r[2] or r[3] or r[4] or r[5]:
             O.forces.addF(bid, Vector3(r[0], r[1], r[2]))
             O.forces.addT(bid, Vector3(r[3], r[4], r[5]))
+
+
+class PosDrivenWatch:
+    """Warns, once per body, when a script moves an obstacle by writing its
+    state.pos with a velocity that does not match the move (typically 0): QDEM
+    takes an obstacle's surface velocity from state.vel and angVel, so its
+    contact dashpots and friction see the body still and qdemBoundaryWork
+    books none of its work (a wall pushed down by pos += each step did
+    0.094 J of work on a block that the ledger never saw).  Judged over
+    consecutive steps: a body placed once between runs is not a driven one.
+    A move matches when it is the step's chord of the body's vel at either
+    end (YADE's kinematic engines set vel to it, before or after QdemEngine)."""
+
+    STEPS = 3  # consecutive mismatched moves before the warning
+
+    def __init__(self):
+        self.prev = None      # (ids, O.iter, pos, vel, dt) of the last step
+        self.count = {}       # body id -> consecutive mismatched moves
+        self.warned = set()
+
+    def watch(self, O, ids, states):
+        import warnings
+        pos, vel = states[:, 0:3].copy(), states[:, 7:10].copy()
+        prev, key = self.prev, tuple(ids)
+        self.prev = (key, O.iter, pos, vel, O.dt)
+        if prev is None or prev[0] != key or prev[1] != O.iter - 1:
+            self.count.clear()
+            return
+        moved = pos - prev[2]
+        dist = np.linalg.norm(moved, axis=1)
+        off = np.minimum(np.linalg.norm(moved - vel * prev[4], axis=1),
+                         np.linalg.norm(moved - prev[3] * prev[4], axis=1))
+        for k in np.nonzero(off > 0.1 * dist + 1e-12)[0]:
+            bid = ids[k]
+            self.count[bid] = self.count.get(bid, 0) + 1
+            if self.count[bid] >= self.STEPS and bid not in self.warned:
+                self.warned.add(bid)
+                v = vel[k]
+                warnings.warn("qdem: YADE body %d (%s) moved %.3g m in the last step while its state.vel is "
+                              "(%.3g, %.3g, %.3g): it is driven by writing state.pos. QDEM takes an obstacle's "
+                              "surface velocity from state.vel and angVel, so its contact dashpots and friction "
+                              "see it moving at that velocity and qdemBoundaryWork books none of the work the "
+                              "move does. Drive it by velocity (a TranslationEngine, or state.vel with "
+                              "blockedDOFs) instead." % (bid, type(O.bodies[bid].shape).__name__, dist[k],
+                                                         v[0], v[1], v[2]), RuntimeWarning, stacklevel=4)
+        for k in np.nonzero(off <= 0.1 * dist + 1e-12)[0]:
+            self.count.pop(ids[k], None)

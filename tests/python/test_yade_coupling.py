@@ -247,3 +247,37 @@ def test_a_kicked_block_books_its_kinetic_energy_as_friction(scene, speed):
     assert min(np.diff([0.0] + friction)) >= -1e-9 * given                   # friction never gives energy back
     assert books() - e0 == pytest.approx(given, rel=2e-3)                    # all of it booked
     assert friction[-1] == pytest.approx(given, rel=0.01)                    # as friction
+
+
+@pytest.mark.parametrize("drive", ["pos", "TranslationEngine"])
+def test_a_wall_driven_by_writing_its_pos_is_named(scene, drive):
+    """QDEM reads an obstacle's surface velocity from state.vel: a platen
+    pushed down by `pos -= ...` every step (vel 0) pressed the block right
+    but its dashpots and friction saw it still and qdemBoundaryWork booked
+    none of its 0.094 J.  Named once, with the fix; a TranslationEngine's
+    wall, whose vel is its move, is not."""
+    import warnings
+    from yade import ForceResetter, NewtonIntegrator, PyRunner, TranslationEngine, utils
+    O = scene
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(radius=0.004), pos=(0, 0, 0.054))
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    top = O.bodies.append(utils.wall(0.11, axis=2, sense=-1))
+    engine = qdem.QdemEngine()
+    O.engines = [ForceResetter(), engine]
+    O.dt = 0.5 * engine.stableTimeStep()
+    speed = 0.05
+    if drive == "pos":
+        O.engines += [PyRunner(command="O.bodies[%d].state.pos -= (0, 0, %r * O.dt)" % (top, speed),
+                               iterPeriod=1)]
+    else:
+        O.engines += [TranslationEngine(ids=[top], translationAxis=(0, 0, -1), velocity=speed)]
+    O.engines += [NewtonIntegrator(gravity=(0, 0, 0))]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        O.run(50, True)
+    named = [str(w.message) for w in caught if "driven by writing state.pos" in str(w.message)]
+    if drive == "pos":
+        assert len(named) == 1 and ("YADE body %d (Wall) moved" % top) in named[0]
+        assert "Drive it by velocity (a TranslationEngine" in named[0]
+    else:
+        assert not named
