@@ -10,6 +10,14 @@
 
 namespace qdem {
 
+// Velocity about a spin centre of the material point now at arm r, spinning
+// at w, at the time level of the QDEM nodes' velocities (the step just
+// made): the arm taken half a step back, w x (r - (w x r) dt/2)
+// (Obstacle::velocityAt says why; the sphere contact uses it too).
+inline Eigen::Vector3d spinVelocity(const Eigen::Vector3d& w, const Eigen::Vector3d& r, double dt) {
+    return w.cross(r - 0.5 * dt * w.cross(r));
+}
+
 enum class ObstacleKind : int { Wall = 0, Box = 1, Facet = 2 };
 
 struct Obstacle {
@@ -72,7 +80,7 @@ struct Obstacle {
     // towards the axis by w^2 r dt/2 (doc/contacts.md, "Rotating bodies").
     Eigen::Vector3d velocityAt(const Eigen::Vector3d& p, double dt) const {
         const Eigen::Vector3d r = p - spinCentre;
-        return vel + angVel.cross(spinCentre - pos) + angVel.cross(r - 0.5 * dt * angVel.cross(r));
+        return vel + angVel.cross(spinCentre - pos) + spinVelocity(angVel, r, dt);
     }
 };
 

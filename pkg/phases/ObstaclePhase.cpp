@@ -29,12 +29,8 @@ void ObstaclePhase::run(double dt) {
     // body: their contacts are computed every step, below.  With only
     // their push at the hold, a box dropped on a held block fell through
     // it and a platen driven into it met no force.
-    bool anyHeld = false;
     for (std::size_t p = 0; p < w_.pieces.size(); ++p) {
-        if (!w_.sleeping.dynamic(p)) {
-            anyHeld = true;
-            continue;
-        }
+        if (!w_.sleeping.dynamic(p)) continue;
         const std::vector<double>& fr = w_.sleeping.frozenReaction(p);
         for (std::size_t k = 0; k + 7 <= fr.size(); k += 7) {
             Obstacle& o = w_.obstacles[static_cast<int>(fr[k])];
@@ -99,15 +95,9 @@ void ObstaclePhase::run(double dt) {
     // held pieces' are not (above).  (Their velocities are zero: a held
     // node is a fixed point.)
     const bool all = w_.sleeping.everything();
-    const int32_t* awakeSurf = w_.sleeping.awakeSurf().data();
-    auto nSurf = all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping.awakeSurf().size());
-    if (!all && anyHeld) {
-        const std::vector<int32_t>& held = w_.sleeping.heldSurf();
-        liveSurf_.assign(awakeSurf, awakeSurf + nSurf);  // (capacity kept: allocates on growth only)
-        liveSurf_.insert(liveSurf_.end(), held.begin(), held.end());
-        awakeSurf = liveSurf_.data();
-        nSurf = static_cast<int32_t>(liveSurf_.size());
-    }
+    const int32_t* awakeSurf = w_.sleeping.obstacleSurf().data();
+    const auto nSurf =
+        all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping.obstacleSurf().size());
     // Raw pointers in locals: the loop stores through int8_t pointers, which
     // may alias anything, so members read through w_ would be reloaded.
     const int32_t* surfNodes = w_.surfNodes.data();

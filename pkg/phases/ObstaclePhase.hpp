@@ -98,7 +98,6 @@ private:
     std::vector<double> threadDynamic_;
     std::vector<Through> threadThrough_;  // per thread: its first
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
-    std::vector<int32_t> liveSurf_;       // the awake pieces' surface nodes and the held pieces' (run)
 
     Data w_;
 

@@ -23,7 +23,7 @@ void SleepPhase::awakeSetChanged() {
     awakeTets_.clear();
     awakeNodes_.clear();
     awakeSurf_.clear();
-    heldSurf_.clear();
+    std::vector<int32_t> held;  // (built only when the awake set changes)
     nAsleep_ = 0;
     const Domain* d = w_.domain.built();
     for (std::size_t p = 0; p < np; ++p) {
@@ -31,7 +31,7 @@ void SleepPhase::awakeSetChanged() {
             ++nAsleep_;
             if (p < held_.size() && held_[p])
                 for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
-                    if (!d || d->owns(w_.surfNodes[s])) heldSurf_.push_back(s);
+                    if (!d || d->owns(w_.surfNodes[s])) held.push_back(s);
             continue;
         }
         if (!d) {
@@ -49,6 +49,8 @@ void SleepPhase::awakeSetChanged() {
         for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
             if (d->owns(w_.surfNodes[s])) awakeSurf_.push_back(s);
     }
+    obstacleSurf_.assign(awakeSurf_.begin(), awakeSurf_.end());
+    obstacleSurf_.insert(obstacleSurf_.end(), held.begin(), held.end());
     everything_ = nAsleep_ == 0 && !d;
 }
 

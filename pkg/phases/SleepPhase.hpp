@@ -69,9 +69,11 @@ public:
     const std::vector<TetSegment>& awakeTets() const { return awakeTets_; }  // per awake piece, its tets
     const std::vector<int32_t>& awakeNodes() const { return awakeNodes_; }   // ids of their nodes
     const std::vector<int32_t>& awakeSurf() const { return awakeSurf_; }     // indices into surfNodes
-    // The held pieces' surface nodes (indices into surfNodes; under MPI the
-    // owned ones): they touch obstacles as a fixed body (ObstaclePhase.cpp).
-    const std::vector<int32_t>& heldSurf() const { return heldSurf_; }
+    // The surface nodes whose obstacle contacts are computed: the awake
+    // pieces' (awakeSurf) and then the held pieces', which touch obstacles
+    // as a fixed body (ObstaclePhase.cpp).  Indices into surfNodes; under
+    // MPI the owned ones.
+    const std::vector<int32_t>& obstacleSurf() const { return obstacleSurf_; }
     // Squared displacement of a piece's surface since the last Verlet list
     // rebuild, when it fell asleep (other nodes may only move the rest of half
     // the skin before the lists are rebuilt); listsRebuilt() clears it.
@@ -128,7 +130,7 @@ private:
     long version_ = 0;
     std::vector<TetSegment> awakeTets_;
     std::vector<int32_t> awakeNodes_, awakeSurf_;
-    std::vector<int32_t> heldSurf_;  // (heldSurf())
+    std::vector<int32_t> obstacleSurf_;  // (obstacleSurf())
     long sleepCount_ = 0, wakeCount_ = 0;
 };
 

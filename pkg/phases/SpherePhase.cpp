@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/Obstacle.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
@@ -511,7 +512,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     // The sphere's material point at the nodes' time level, half
                     // a step back along its spin (Obstacle::velocityAt).
                     const Vector3d fromSpin = arm - spinOff;
-                    const Vector3d vRel = v + w.cross(arm) - 0.5 * dt * w.cross(w.cross(fromSpin)) - vT;
+                    const Vector3d vRel = v + w.cross(spinOff) + spinVelocity(w, fromSpin, dt) - vT;
                     // A contact found deep on a sphere already watched was missed,
                     // not made: it stores no energy it was not given (ContactDetail.hpp).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
