@@ -189,8 +189,9 @@ def _rebind(O, engineStates):
     return changed
 
 
-def afterLoad(O):
-    """Bring QDEM in line with a scene YADE has just loaded."""
+def afterLoad(O, how="O.load"):
+    """Bring QDEM in line with a scene YADE has just loaded (by `how`, the
+    method the script called: named in the refusal of stale Piece handles)."""
     from . import world as worldModule
     blob = _blob(O)
     qdemEngines = [e for e in O.engines if _idOf(e)]
@@ -220,7 +221,7 @@ def afterLoad(O):
                 p.world, p._material = new, new.pieces[i]._material
                 new.pieces[i] = p
         if old is not None:
-            old._replacedBy = "O.load" if not same else None
+            old._replacedBy = how if not same else None
     O.tags[TAG] = ""  # the live scene keeps no stale copy (YADE's tags cannot be deleted)
     _rebind(O, states)
 
@@ -350,12 +351,14 @@ def _wrapSave(orig, toFile=True):
 
 
 def _wrapAfter(after):
-    """A wrapper that calls YADE's method, then after(O)."""
+    """A wrapper that calls YADE's method, then after(O, "O.<method>")."""
     def wrap(orig):
+        how = "O." + getattr(orig, "__name__", "load")
+
         def wrapped(self, *a, **k):
             _settle(self)
             r = orig(self, *a, **k)
-            after(self)
+            after(self, how)
             return r
         wrapped.__doc__ = orig.__doc__
         wrapped._qdemOrig = orig
@@ -363,7 +366,7 @@ def _wrapAfter(after):
     return wrap
 
 
-def _resetWorld(O):
+def _resetWorld(O, how=None):
     from . import world as worldModule
     worldModule.reset()
 

@@ -287,6 +287,13 @@ def test_piece_handles_follow_a_rewind_and_refuse_another_scene(scene, tmp_path)
         block2.centroid()
     with pytest.raises(RuntimeError, match="before O.load"):
         block2.vel[:] = 0
+    # O.loadTmp of a scene with other pieces: the refusal names the method called
+    O.saveTmp("one")
+    qdem.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2)), rubber(), pos=(0, 0, 1.0))
+    extra = qdem.defaultWorld().pieces[-1]
+    O.loadTmp("one")
+    with pytest.raises(RuntimeError, match="before O.loadTmp,"):
+        extra.centroid()
 
 
 def test_uncaught_error_ends_yade_with_a_nonzero_exit(tmp_path):
