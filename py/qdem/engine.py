@@ -289,11 +289,13 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                 self._spheres.bodiesChanged()
             core.setObstacles(obstacles)
             self._states = np.zeros((len(self._ids), 16))
+            self._seen = [None] * len(self._ids)  # (obstacleStates: what the rows were written from)
             self._nBodies = len(O.bodies)
             self._dtChecked = None
         if self._ids:
-            reshaped = []
-            states = yadeglue.obstacleStates(O, self._ids, self._states, self._signatures, reshaped)
+            reshaped, written = [], []
+            states = yadeglue.obstacleStates(O, self._ids, self._states, self._signatures, reshaped, self._seen,
+                                             written)
             if states is None:  # a body was erased (O.bodies keeps its length): scan again
                 self._nBodies = -1
                 return self._syncObstacles()
@@ -311,8 +313,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                     self._signatures[i] = yadeglue.bodySignature(b)
                 core.setObstacles(self._obstacles)
                 self._dtChecked = None
-                states = yadeglue.obstacleStates(O, self._ids, self._states)
-            self._posDriven.watch(O, self._ids, states)
+                self._seen = [None] * len(self._ids)
+                states = yadeglue.obstacleStates(O, self._ids, self._states, seen=self._seen, written=written)
+            self._posDriven.watch(O, self._ids, states, bool(written))
             core.setObstacleStates(states)
 
     def _run(self):

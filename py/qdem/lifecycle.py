@@ -29,6 +29,7 @@ import json
 import threading
 import time
 import uuid
+import weakref
 
 import numpy as np
 
@@ -193,6 +194,7 @@ def afterLoad(O, how="O.load"):
     """Bring QDEM in line with a scene YADE has just loaded (by `how`, the
     method the script called: named in the refusal of stale Piece handles)."""
     from . import world as worldModule
+    _found.clear()
     blob = _blob(O)
     qdemEngines = [e for e in O.engines if _idOf(e)]
     if blob is None:
@@ -241,13 +243,23 @@ def _inEngines(O, qid):
     return None
 
 
+_found = {}  # qid -> weakref of the engine engineFor found; emptied when a scene is loaded or reset
+
+
 def engineFor(qid):
     """The engine object whose PyRunner command names `qid`, found in
     O.engines; rebuilt from O.tags when a scene was loaded without qdem's
-    wrappers (e.g. qdem imported after O.load)."""
+    wrappers (e.g. qdem imported after O.load).  Every QDEM step asks: the
+    answer is kept (a search of O.engines cost ~15 us a step) until a scene
+    is loaded or reset, the only ways another object takes the id."""
+    ref = _found.get(qid)
+    obj = ref() if ref is not None else None
+    if obj is not None:
+        return obj
     from yade import O
     obj = _inEngines(O, qid)
     if obj is not None:
+        _found[qid] = weakref.ref(obj)
         return obj
     if _blob(O):
         afterLoad(O)
@@ -367,6 +379,7 @@ def _wrapAfter(after):
 
 
 def _resetWorld(O, how=None):
+    _found.clear()
     from . import world as worldModule
     worldModule.reset()
 

@@ -14,17 +14,24 @@ import os
 from . import _core
 
 
+_launched = None  # launchedSize(): mpiexec's environment does not change within a process
+
+
 def launchedSize():
     """Number of ranks mpiexec started (1 without mpiexec), read from the
-    environment so that a serial run never loads MPI."""
-    for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"):
-        v = os.environ.get(var)
-        if v:
-            try:
-                return int(v)
-            except ValueError:
-                pass
-    return 1
+    environment so that a serial run never loads MPI (once: every step asks)."""
+    global _launched
+    if _launched is None:
+        _launched = 1
+        for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"):
+            v = os.environ.get(var)
+            if v:
+                try:
+                    _launched = int(v)
+                    break
+                except ValueError:
+                    pass
+    return _launched
 
 
 def rank():

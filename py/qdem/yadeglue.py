@@ -87,63 +87,97 @@ def hasSpheres(O):
     return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)
 
 
+_MATERIAL_KEYS = ("young", "poisson", "frictionAngle", "en")
+_materialKeys = {}  # material class -> which of _MATERIAL_KEYS it has (getattr with a default raises inside)
+
+
 def materialSignature(m):
     """The material values the contacts read (young, poisson, frictionAngle,
-    en): a change made by the script mid-run (utils.setContactFriction, a new
-    material) must reach QDEM's copy; it was read once and kept."""
-    return tuple(getattr(m, k, None) for k in ("young", "poisson", "frictionAngle", "en"))
+    en; None for those the class lacks): a change made by the script mid-run
+    (utils.setContactFriction, a new material) must reach QDEM's copy; it was
+    read once and kept."""
+    keys = _materialKeys.get(type(m))
+    if keys is None:
+        keys = _materialKeys[type(m)] = tuple(k if hasattr(m, k) else None for k in _MATERIAL_KEYS)
+    return tuple(getattr(m, k) if k is not None else None for k in keys)
 
 
-def bodySignature(b):
+def bodySignature(b, materials=None, state=None):
     """What the obstacle's core copy was built from: its shape, whether and
     how YADE moves it (dynamic, blockedDOFs, mass) and its material's values
-    (None: not an obstacle)."""
+    (None: not an obstacle).  materials: a dict kept over one pass through
+    the obstacles, so that a material shared by many bodies (a facet
+    container's) is read once (it holds the material object, so its id is
+    not reused meanwhile); state: b.state when the caller has it."""
     shape = b.shape
     kind = KIND.get(type(shape).__name__) if shape is not None else None
     if kind is None:
         return None
-    moved = (b.dynamic, b.state.blockedDOFs, b.state.mass) + materialSignature(b.material)
+    s, m = state or b.state, b.material
+    if materials is None:
+        ms = materialSignature(m)
+    else:
+        known = materials.get(id(m))
+        if known is None:
+            known = materials[id(m)] = (m, materialSignature(m))
+        ms = known[1]
+    moved = (b.dynamic, s.blockedDOFs, s.mass, ms)
     if kind == 0:
-        return (0, int(shape.axis), int(shape.sense)) + moved
-    if kind == 1:
-        e = shape.extents
-        return (1, e[0], e[1], e[2]) + moved
-    return (2,) + moved + tuple(x for p in shape.vertices for x in (p[0], p[1], p[2]))
+        return (0, shape.axis, shape.sense, moved)
+    if kind == 1:  # (extents is a live reference to the shape's: its numbers are kept)
+        return (1, shape.extents.__getinitargs__(), moved)
+    return (2, moved, shape.vertices)  # (a list of Vector3 copies, compared by value)
 
 
-def obstacleStates(O, ids, out, signatures=None, reshaped=None):
+def obstacleStates(O, ids, out, signatures=None, reshaped=None, seen=None, written=None):
     """Fill out (k,16) with pos, quaternion (w x y z), vel, angVel and spin centre
     of the bodies (the clump's centre for a clump member, whose vel YADE sets
     from the clump's motion about it; else pos: Obstacle::velocityAt);
     None when one of them was erased (scan again).  With ``signatures`` (one
     bodySignature per body), the index of each body whose shape changed since
     (a Box's extents, a Facet's vertices, a body of another kind after
-    O.bodies.clear()) or that was made dynamic or fixed is appended to ``reshaped``."""
+    O.bodies.clear()) or that was made dynamic or fixed is appended to ``reshaped``.
+
+    Every step reads every obstacle (a facet container has hundreds), so this
+    is written for few Python operations per body: with ``seen`` (a list kept
+    by the caller for this ``out``, one entry per body) a row is written only
+    when the body's pos, ori, vel or angVel differ from the last call's; the
+    index of each row written is appended to ``written``."""
+    bodies = O.bodies
+    n = len(bodies)
+    materials = {} if signatures is not None else None
     for i, bid in enumerate(ids):
-        b = O.bodies[bid] if bid < len(O.bodies) else None
+        b = bodies[bid] if bid < n else None
         if b is None:  # erased since the last scan
             return None
-        if signatures is not None and bodySignature(b) != signatures[i]:
-            reshaped.append(i)
         s = b.state
-        p, q, v, w = s.pos, s.ori, s.vel, s.angVel
-        axis, angle = q.toAxisAngle()
-        h = 0.5 * angle
-        sh = np.sin(h)
-        c = p
+        if signatures is not None and bodySignature(b, materials, s) != signatures[i]:
+            reshaped.append(i)
+        # (minieigen's __getinitargs__: the numbers as a tuple of floats, a copy
+        # - vel and angVel are live references into the state - in one call;
+        # a quaternion's as w x y z; the core normalises it)
         if b.isClumpMember:  # the clump's motion at the member (YADE sets a member's own vel only in
-            cs = O.bodies[b.clumpId].state  # NewtonIntegrator: zero before its first step)
-            c, w = cs.pos, cs.angVel
-            v = cs.vel + w.cross(p - c)
-        out[i] = (p[0], p[1], p[2], np.cos(h), axis[0] * sh, axis[1] * sh, axis[2] * sh,
-                  v[0], v[1], v[2], w[0], w[1], w[2], c[0], c[1], c[2])
+            cs = bodies[b.clumpId].state  # NewtonIntegrator: zero before its first step)
+            p, c, w = s.pos, cs.pos, cs.angVel
+            row = (p.__getinitargs__() + s.ori.__getinitargs__() + (cs.vel + w.cross(p - c)).__getinitargs__()
+                   + w.__getinitargs__() + c.__getinitargs__())
+        else:
+            p = s.pos.__getinitargs__()
+            row = p + s.ori.__getinitargs__() + s.vel.__getinitargs__() + s.angVel.__getinitargs__() + p
+        if seen is not None:
+            if row == seen[i]:
+                continue
+            seen[i] = row
+        out[i] = row
+        if written is not None:
+            written.append(i)
     return out
 
 
 def applyReactions(O, ids, reactions):
     """Add each obstacle's reaction force and torque to O.forces."""
     from yade import Vector3
-    for bid, r in zip(ids, reactions):
+    for bid, r in zip(ids, reactions.tolist()):  # (Python floats: indexing a NumPy row costs 10x)
         if r[0] or r[1] or r[2] or r[3] or r[4] or r[5]:
             O.forces.addF(bid, Vector3(r[0], r[1], r[2]))
             O.forces.addT(bid, Vector3(r[3], r[4], r[5]))
@@ -164,18 +198,32 @@ class PosDrivenWatch:
 
     def __init__(self):
         self.prev = None      # (ids, O.iter, pos, vel, dt) of the last step
+        self.still = False    # at the last step nothing moved and every vel was zero
         self.count = {}       # body id -> consecutive mismatched moves
         self.warned = set()
 
-    def watch(self, O, ids, states):
+    def watch(self, O, ids, states, changed=True):
+        """ids: the engine's list of obstacle ids (the same list object until
+        it scans O.bodies again); changed: whether any row of states differs
+        from the last call's (False: only the step is new)."""
         import warnings
+        prev = self.prev
+        if not changed and self.still and prev is not None and prev[0] is ids and prev[1] == O.iter - 1:
+            # Nothing moved and nothing has a velocity, as at the last step:
+            # nothing to judge (walls and facet containers, every step).
+            self.prev = (ids, O.iter, prev[2], prev[3], O.dt)
+            return
         pos, vel = states[:, 0:3].copy(), states[:, 7:10].copy()
-        prev, key = self.prev, tuple(ids)
-        self.prev = (key, O.iter, pos, vel, O.dt)
-        if prev is None or prev[0] != key or prev[1] != O.iter - 1:
+        self.prev = (ids, O.iter, pos, vel, O.dt)
+        self.still = False
+        if prev is None or prev[0] is not ids or prev[1] != O.iter - 1:
             self.count.clear()
             return
         moved = pos - prev[2]
+        if not (moved.any() or vel.any() or prev[3].any()):  # all still: nothing to judge
+            self.still = True
+            self.count.clear()
+            return
         dist = np.linalg.norm(moved, axis=1)
         off = np.minimum(np.linalg.norm(moved - vel * prev[4], axis=1),
                          np.linalg.norm(moved - prev[3] * prev[4], axis=1))
