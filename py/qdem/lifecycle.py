@@ -24,6 +24,7 @@ How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
   itself (``except qdem.StabilityError`` works, message intact), where YADE
   would give a generic ``RuntimeError: PyRunner error.``."""
 import base64
+import functools
 import io
 import json
 import threading
@@ -250,8 +251,8 @@ def engineFor(qid):
     """The engine object whose PyRunner command names `qid`, found in
     O.engines; rebuilt from O.tags when a scene was loaded without qdem's
     wrappers (e.g. qdem imported after O.load).  Every QDEM step asks: the
-    answer is kept (a search of O.engines cost ~15 us a step) until a scene
-    is loaded or reset, the only ways another object takes the id."""
+    answer is kept (a search of O.engines cost ~15 us a step) until O.engines
+    is assigned or a scene is loaded, reset or switched (install())."""
     ref = _found.get(qid)
     obj = ref() if ref is not None else None
     if obj is not None:
@@ -281,18 +282,38 @@ def engineFor(qid):
 # Wrapping Omega's methods
 
 
+_calls = threading.local()  # _callBare: the call in progress, per thread
+
+
+def _callBare():
+    """Calls the innermost pending call (a functools.partial) from a frame
+    with no local variables.  YADE's PyRunner (updateGlobals=True, as
+    QdemEngine) copies the locals of the innermost Python frame into the
+    script's globals after its command: when O.step() runs the engines in
+    the script's thread, that frame was this wrapper's, and a script's
+    variables named a, k, self or orig were overwritten every step (found by
+    a tester).  A partial is called from C, so no frame of its own."""
+    return _calls.stack[-1]()
+
+
 def _wrapErrors(orig):
     def wrapped(self, *a, **k):
         if orig.__name__ != "wait":
             del _pending[:]
+        stack = getattr(_calls, "stack", None)
+        if stack is None:
+            stack = _calls.stack = []
+        stack.append(functools.partial(orig, self, *a, **k))
         try:
-            r = orig(self, *a, **k)
+            r = _callBare()
         except RuntimeError as e:
             if _pending and "PyRunner error" in str(e):
                 err = _pending.pop()
                 del _pending[:]
                 raise err.with_traceback(None) from None
             raise
+        finally:
+            stack.pop()
         if _pending and (orig.__name__ != "run" or (a[1:2] or [k.get("wait", False)])[0]):
             # O.step() logs an engine's error and returns: raise it here
             err = _pending.pop()
@@ -378,6 +399,10 @@ def _wrapAfter(after):
     return wrap
 
 
+def _forgetEngines(O, how=None):
+    _found.clear()
+
+
 def _resetWorld(O, how=None):
     _found.clear()
     from . import world as worldModule
@@ -404,3 +429,17 @@ def install():
         if orig is None or hasattr(orig, "_qdemOrig"):
             continue
         setattr(Omega, name, wrap(orig))
+    # engineFor keeps what it found until the engines change: O.engines = ...
+    # (YADE hands out a copy of the list, so assignment is the only way) or
+    # another scene made current.
+    prop = Omega.__dict__.get("engines")
+    if isinstance(prop, property) and prop.fset is not None and not hasattr(prop.fset, "_qdemOrig"):
+        def setEngines(self, value, _set=prop.fset):
+            _found.clear()
+            _set(self, value)
+        setEngines._qdemOrig = prop.fset
+        Omega.engines = property(prop.fget, setEngines, prop.fdel, prop.__doc__)
+    for name in ("switchScene", "addScene"):
+        orig = getattr(Omega, name, None)
+        if orig is not None and not hasattr(orig, "_qdemOrig"):
+            setattr(Omega, name, _wrapAfter(_forgetEngines)(orig))

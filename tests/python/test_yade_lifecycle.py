@@ -537,3 +537,19 @@ def test_save_during_a_background_run_is_refused_and_works_after_wait(scene, tmp
     assert line, r.stdout + r.stderr
     _, yadeIter, qdemIter = line[0].split()
     assert int(yadeIter) == int(qdemIter) == O.iter
+
+
+def test_o_step_leaves_the_scripts_variables_alone(tmp_path):
+    """YADE's PyRunner copies the innermost Python frame's locals into the
+    script's globals; with qdem's wrapper of O.step that frame was the
+    wrapper's, and every O.step() set the script's a, k, self and orig to the
+    wrapper's arguments (a tester's step loop lost its piece, named a)."""
+    r = _yade(tmp_path, SCENE + """
+from yade import PyRunner
+a, k, self, orig = block, 1e5, "mine", 7
+O.engines = O.engines + [PyRunner(iterPeriod=1, command="pass")]
+for i in range(3):
+    O.step()
+print("KEPT", a is block, k == 1e5, self == "mine", orig == 7)
+""")
+    assert "KEPT True True True True" in r.stdout, r.stdout + r.stderr
