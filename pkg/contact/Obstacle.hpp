@@ -107,13 +107,15 @@ struct ObstacleHit {
     Eigen::Vector3d normal;  // unit, from the obstacle towards the particle
     Eigen::Vector3d point;   // contact point on the obstacle surface
     double overlap;          // > 0 when in contact
-    int side = 0;            // two-sided obstacles: +1/-1 side of the particle, kept as history
+    int side = 0;            // kept as history: two-sided walls and facets, +1/-1 side of the particle;
+                             // boxes, the face +-(local axis + 1)
 };
 
 // Returns false when the particle does not touch the obstacle.  prevSide is
 // the side the particle was on when the contact began (0 = new contact): a
 // particle pushed through a two-sided wall or facet by a hard impact is then
-// still pushed back to where it came from, instead of being let through.
+// still pushed back to where it came from, instead of being let through; one
+// pushed into a box, back out of the face it came in by.
 bool touchObstacle(const Obstacle& o, const Eigen::Vector3d& x, double r, int prevSide, ObstacleHit& hit);
 
 }  // namespace qdem

@@ -298,3 +298,29 @@ def test_a_piece_placed_flush_on_a_floor_is_warned_of_and_one_placed_r_above_is_
         O.run(400, True)
     assert block.velocity()[2] < 0.05
 
+
+
+def test_a_block_hitting_a_thin_box_bounces_as_on_a_thick_one(scene):
+    """A node inside a YADE Box was pushed out through the nearest face: one
+    pushed more than half way into a 4 mm plate (a block at 8 m/s, contact
+    radius 1 cm) went out through its far face, and the block fell through
+    the floor with no word (a tester).  Side memory keeps the face the
+    contact came in by: the thin plate throws the block back as a 10 cm box
+    does."""
+    O = scene
+    from yade import utils
+    out = {}
+    for thickness in (0.004, 0.1):
+        O.reset()
+        mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=20, radius=0.01, restitution=0.5)
+        block = qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4)), mat, pos=(0, 0, 0.111), vel=(0, 0, -8))
+        O.bodies.append(utils.box(center=(0, 0, -thickness / 2), extents=(1, 1, thickness / 2), fixed=True))
+        O.engines = _engines()
+        O.dt = 0.5 * O.engines[1].stableTimeStep()
+        O.run(int(0.06 / O.dt), True)
+        out[thickness] = (block.velocity()[2], block.centroid()[2], np.min(block.pos[:, 2]))
+    thin, thick = out[0.004], out[0.1]
+    assert thick[0] > 5.0  # thrown back up
+    assert thin[0] == pytest.approx(thick[0], rel=1e-3)
+    assert thin[1] == pytest.approx(thick[1], rel=1e-3)
+    assert thin[2] > 0
