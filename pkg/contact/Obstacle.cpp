@@ -93,6 +93,23 @@ bool crossedThin(const Obstacle& o, const Vector3d& from, const Vector3d& to) {
     return true;
 }
 
+double distanceToSurface(const Obstacle& o, const Vector3d& p) {
+    switch (o.kind) {
+        case ObstacleKind::Wall:
+            return std::fabs(p[o.axis] - o.pos[o.axis]);
+        case ObstacleKind::Box: {
+            const Vector3d q = o.rot.transpose() * (p - o.pos);
+            const Vector3d& e = o.halfExtents;
+            const Vector3d clamped = q.cwiseMax(-e).cwiseMin(e);
+            if (clamped != q) return (q - clamped).norm();
+            return (e - q.cwiseAbs()).minCoeff();
+        }
+        case ObstacleKind::Facet:
+            return (p - closestOnTriangle(p, o.worldVerts[0], o.worldVerts[1], o.worldVerts[2]).point).norm();
+    }
+    return std::numeric_limits<double>::infinity();
+}
+
 double depthBehind(const Obstacle& o, const Vector3d& x) {
     if (o.kind != ObstacleKind::Wall || o.sense == 0) return 0;
     return -o.sense * (x[o.axis] - o.pos[o.axis]);

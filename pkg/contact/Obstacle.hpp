@@ -93,6 +93,10 @@ std::string describeDynamic(const Obstacle& o);
 // or inside them is pushed out, not lost.)
 bool crossedThin(const Obstacle& o, const Eigen::Vector3d& from, const Eigen::Vector3d& to);
 
+// Distance from p to the obstacle's surface (a wall's plane, a box's faces,
+// a facet's triangle), whichever side p is on.
+double distanceToSurface(const Obstacle& o, const Eigen::Vector3d& p);
+
 // How far behind a one-sided wall's plane x lies (<= 0: on its side); 0 for
 // the other kinds.
 double depthBehind(const Obstacle& o, const Eigen::Vector3d& x);

@@ -173,6 +173,13 @@ void ObstaclePhase::run(double dt) {
             Eigen::Vector3d newShear[kSlots];
             int used = 0;
             Eigen::Vector3d fNode = Eigen::Vector3d::Zero();
+            // The obstacles this node touches, then (below) which of them
+            // are one touch of one surface.
+            struct Touch {
+                int j, slot;
+                ObstacleHit hit;
+            } touch[kTouches];
+            int nt = 0;
             for (int j = ob0; j < ob1; ++j) {
                 const int io = pieceObstacles[j];
                 const Obstacle& o = obstacles[io];
@@ -193,9 +200,50 @@ void ObstaclePhase::run(double dt) {
                                           W[s] * pairLaw(pairConsts[j], M[node]).kn};
                     }
                 }
-                ObstacleHit hit;
-                if (!touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, hit)) continue;
+                if (nt == kTouches) continue;  // (more than kTouches bodies at once: never seen)
+                if (touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, touch[nt].hit)) {
+                    touch[nt].j = j;
+                    touch[nt].slot = slot;
+                    ++nt;
+                }
+            }
+            // One surface made of several bodies (an STL's facets, boxes side
+            // by side, a facet on a wall's plane) is touched once: a touch
+            // whose contact point lies on another touched body's surface,
+            // that body being nearer (larger overlap; equal: the first),
+            // is that body's touch seen again (the closest point on the
+            // edge they share).  Each body counted for itself, a node near
+            // a seam of a flat facet floor was pushed by both facets: the
+            // seams were stiffer, a block rested tilted and a frictionless
+            // block slid slower over them (a tester).  A touch at a point
+            // of its own (a concave corner, a gap between two boxes) stays.
+            uint32_t dropped = 0;
+            if (nt > 1) {
+                const double onSurface = 1e-6 * m.radius;
+                for (int a = 0; a < nt; ++a)
+                    for (int b = 0; b < nt; ++b) {
+                        if (b == a) continue;
+                        const double oa = touch[a].hit.overlap, ob = touch[b].hit.overlap;
+                        if (ob > oa || (ob == oa && b < a))
+                            if (distanceToSurface(obstacles[pieceObstacles[touch[b].j]], touch[a].hit.point) <= onSurface) {
+                                dropped |= 1u << a;
+                                break;
+                            }
+                    }
+            }
+            bool oldTaken[kSlots] = {false, false, false, false};
+            for (int t = 0; t < nt; ++t)
+                if (!(dropped >> t & 1u) && touch[t].slot >= 0) oldTaken[touch[t].slot] = true;
+            for (int t = 0; t < nt; ++t) {
+                if (dropped >> t & 1u) continue;
                 if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
+                const int j = touch[t].j;
+                const Obstacle& o = obstacles[pieceObstacles[j]];
+                const ObstacleHit& hit = touch[t].hit;
+                int slot = touch[t].slot;
+                if (slot < 0)  // a new touch takes the spring of one that ended this step: a node sliding
+                    for (int k = 0; k < kSlots && slot < 0; ++k)  // from facet to facet keeps its friction
+                        if (body[k] >= 0 && !oldTaken[k]) oldTaken[slot = k] = true;
                 // Springs scaled by the node's share of the surface area
                 // (surfWeight, World.hpp); the dashpots keep their damping ratio.
                 // Their mass is the node's, reduced with a dynamic obstacle's

@@ -73,6 +73,8 @@ public:
 
     // Contact history: kSlots (obstacle body id, side, tangential spring) per surface node.
     static constexpr int kSlots = 4;
+    // Bodies one node may touch before the one-touch-per-surface rule (run()).
+    static constexpr int kTouches = 8;
 
 private:
     // Refuses (InputError) a piece whose nodes start inside a wall, box or
