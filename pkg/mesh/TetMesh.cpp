@@ -1,6 +1,9 @@
 #include "TetMesh.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
@@ -35,6 +38,50 @@ static double meanEdgeLength(const TetMesh& m) {
             }
     }
     return nt ? sum / (6.0 * nt) : 0.0;
+}
+
+std::size_t dropFlatSurfaceTets(TetMesh& m, double relTol) {
+    const double h = meanEdgeLength(m);
+    const double minSix = 6.0 * relTol * h * h * h;
+    std::size_t removed = 0;
+    // (A removal can expose a flat neighbour's faces: passes until none.)
+    for (bool again = true; again;) {
+        again = false;
+        const std::size_t nt = m.nTets();
+        std::vector<std::size_t> flat;
+        for (std::size_t t = 0; t < nt; ++t)
+            if (std::fabs(tetSixVolume(m, t)) <= minSix) flat.push_back(t);
+        if (flat.empty()) break;
+        std::map<std::array<int32_t, 3>, int> faceCount;
+        auto face = [&](std::size_t t, int k) {
+            std::array<int32_t, 3> f{};
+            int n = 0;
+            for (int i = 0; i < 4; ++i)
+                if (i != k) f[n++] = m.tets[4 * t + i];
+            std::sort(f.begin(), f.end());
+            return f;
+        };
+        for (std::size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 4; ++k) ++faceCount[face(t, k)];
+        std::vector<char> drop(nt, 0);
+        for (std::size_t t : flat) {
+            int onSurface = 0;
+            for (int k = 0; k < 4; ++k) onSurface += faceCount[face(t, k)] == 1;
+            if (onSurface == 2) drop[t] = 1;
+        }
+        std::size_t out = 0;
+        for (std::size_t t = 0; t < nt; ++t) {
+            if (drop[t]) {
+                ++removed;
+                again = true;
+                continue;
+            }
+            for (int i = 0; i < 4; ++i) m.tets[4 * out + i] = m.tets[4 * t + i];
+            ++out;
+        }
+        m.tets.resize(4 * out);
+    }
+    return removed;
 }
 
 void checkMesh(const TetMesh& m, double relTol) {

@@ -22,6 +22,15 @@ double tetSixVolume(const TetMesh& m, std::size_t t);
 // relTol * mean-edge^3).  Unused nodes are allowed.
 void checkMesh(const TetMesh& m, double relTol = 1e-10);
 
+// Removes the flat tetrahedra (volume at most relTol * mean-edge^3, as
+// checkMesh counts zero) that lie in the surface: two of their faces on the
+// boundary (faces of no other tetrahedron), so all four corners are on it.
+// Removing one exposes its two other faces, which cover the same flat patch:
+// the shape and the surface are unchanged.  (CGAL Mesh_3 leaves such slivers
+// on the flat faces of a plate thinner than its cells.)  Flat tetrahedra
+// inside are left for checkMesh to name.  Returns the number removed.
+std::size_t dropFlatSurfaceTets(TetMesh& m, double relTol = 1e-10);
+
 // Flips every tetrahedron with negative volume (swaps its last two nodes).
 // Returns the number flipped.  Use for files written with the opposite
 // orientation convention, never to hide a mesh that is tangled.

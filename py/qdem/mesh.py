@@ -392,6 +392,48 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     return Mesh(nodes, tets, nodeIds=used)
 
 
+class _Faces:
+    """A block of faces as meshio gives them (type, data)."""
+
+    def __init__(self, type_, data):
+        self.type, self.data = type_, data
+
+
+def _readOff(path):
+    """Points and face blocks of an OFF file (Geomview's format: 'OFF', the
+    counts of vertices, faces and edges, the vertices, then each face as its
+    corner count and corners; '#' starts a comment; colours after a face are
+    ignored).  meshio refuses OFF faces other than triangles ("Can only read
+    triangular faces"), while quads are what many exporters write."""
+    with open(path) as f:
+        lines = [l.split("#", 1)[0].split() for l in f]
+    lines = [l for l in lines if l]
+    try:
+        if not lines or not lines[0][0].endswith("OFF"):
+            raise ValueError("it does not start with OFF")
+        head = lines[0][1:] or lines[1]  # (the counts on the OFF line, or on the next)
+        at = 1 if lines[0][1:] else 2
+        nv, nf = int(head[0]), int(head[1])
+        # One vertex or face per line; what follows its numbers (colours,
+        # normals) is ignored.
+        points = np.array([[float(w) for w in l[:3]] for l in lines[at:at + nv]], dtype=float).reshape(nv, 3)
+        faces = []
+        for l in lines[at + nv:at + nv + nf]:
+            k = int(l[0])
+            if len(l) < 1 + k:
+                raise ValueError("face %d lists fewer than its %d corners" % (len(faces), k))
+            faces.append([int(w) for w in l[1:1 + k]])
+        if len(faces) != nf:
+            raise ValueError("%d faces announced, %d found" % (nf, len(faces)))
+    except (ValueError, IndexError) as e:
+        raise ValueError("loadSurface: cannot read %s as OFF: %s" % (path, e or "too short")) from None
+    blocks = {}
+    for face in faces:
+        blocks.setdefault(len(face), []).append(face)
+    return points, [_Faces("triangle" if k == 3 else "quad" if k == 4 else "polygon%d" % k, np.array(fs))
+                    for k, fs in sorted(blocks.items())]
+
+
 def _faceTriangles(block, verts, path):
     """The triangles of one meshio cell block, as a list of (F,3) arrays.
     Dropping quads or polygons would leave holes (a 'surface is not closed'
@@ -457,9 +499,13 @@ def loadSurface(path, scale=1.0):
     if not os.path.exists(path):
         raise ValueError("loadSurface: no such file: %s" % path)
     scale = _scaleFactor(scale, "loadSurface")
-    m = _meshioRead(path, "loadSurface")
-    verts = np.asarray(m.points, dtype=float)[:, :3] * scale
-    tris = [t for c in m.cells for t in _faceTriangles(c, verts, path)]
+    if str(path).lower().endswith(".off"):
+        points, cells = _readOff(path)  # (meshio reads triangles only from OFF)
+    else:
+        m = _meshioRead(path, "loadSurface")
+        points, cells = m.points, m.cells
+    verts = np.asarray(points, dtype=float)[:, :3] * scale
+    tris = [t for c in cells for t in _faceTriangles(c, verts, path)]
     if not tris:
         raise ValueError("loadSurface: %s contains no triangles, quads or polygons (cell types: %s): a closed "
                          "surface is needed" % (path, ", ".join(sorted({c.type for c in m.cells})) or "none"))

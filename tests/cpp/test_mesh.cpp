@@ -11,6 +11,7 @@
 #include "mesh/BoxMesh.hpp"
 #include "mesh/Hilbert.hpp"
 #include "mesh/Surface.hpp"
+#include "mesh/TetMesh.hpp"
 
 using namespace qdem;
 
@@ -186,4 +187,31 @@ TEST(Mesh, OddBoxMeshesStayNearlyBalanced) {
             const double bound = (k == 6 ? std::sqrt(2.0) / 6 : (k == 12 ? std::sqrt(2.0) / 18 : 0.0)) / n + 1e-12;
             EXPECT_LE(off, bound) << n << " cells, " << k << " tets/cell";
         }
+}
+
+// A square pyramid (two tets) with a flat tet lying on its top face: the flat
+// one has two faces on the surface and goes; the pyramid stays, checked.
+TEST(Mesh, FlatTetInTheSurfaceIsDropped) {
+    TetMesh m;
+    m.nodes = {0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1, 0.5, 0.5, 0};  // a b c d (top), e (apex)
+    m.tets = {4, 0, 1, 2, 4, 0, 2, 3, 0, 1, 2, 3};
+    orientPositive(m);
+    EXPECT_THROW(checkMesh(m), InputError);
+    EXPECT_EQ(dropFlatSurfaceTets(m), 1u);
+    ASSERT_EQ(m.nTets(), 2u);
+    EXPECT_NO_THROW(checkMesh(m));
+    EXPECT_EQ(dropFlatSurfaceTets(m), 0u);
+}
+
+// A flat tet between two pyramids, every face of it shared with one of them
+// (none in the surface): left for checkMesh to name.
+TEST(Mesh, FlatTetInsideIsKept) {
+    TetMesh m;
+    m.nodes = {0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1, 0.5, 0.5, 0, 0.5, 0.5, 2};
+    // lower pyramid on the split abc/acd, upper on abd/bcd, the flat tet abcd between
+    m.tets = {4, 0, 1, 2, 4, 0, 2, 3, 5, 0, 1, 3, 5, 1, 2, 3, 0, 1, 2, 3};
+    orientPositive(m);
+    EXPECT_EQ(dropFlatSurfaceTets(m), 0u);
+    EXPECT_EQ(m.nTets(), 5u);
+    EXPECT_THROW(checkMesh(m), InputError);
 }

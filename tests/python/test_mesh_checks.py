@@ -158,6 +158,32 @@ def test_surfaces_of_quads_and_convex_polygons_are_meshed(tmp_path):
         assert mesh.volumes().sum() == pytest.approx(volume, rel=0.02)
 
 
+def _off(path, verts, faces, colour=""):
+    with open(path, "w") as f:
+        f.write("OFF\n# a comment\n%d %d 0\n" % (len(verts), len(faces)))
+        f.writelines("%r %r %r\n" % tuple(v) for v in verts)
+        f.writelines("%d %s%s\n" % (len(face), " ".join("%d" % i for i in face), colour) for face in faces)
+    return str(path)
+
+
+@pytest.mark.skipif(not qdem._core.haveCgal, reason="built without CGAL")
+def test_an_off_surface_of_quads_and_polygons_is_meshed(tmp_path):
+    """meshio reads only triangles from OFF ("Can only read triangular
+    faces"): a cube of quads written as OFF was refused, as OBJ it loaded (a
+    tester).  OFF is read by qdem itself, colours after a face ignored."""
+    pentagon = [(np.cos(a), np.sin(a)) for a in np.linspace(0, 2 * np.pi, 6)[:-1]]
+    for k, (v, faces, volume, colour) in enumerate([(_CUBE, _QUADS, 1.0, ""), (_CUBE, _QUADS, 1.0, " 255 0 0"),
+                                                    _prism(pentagon) + (_area(pentagon), " 0.5 0.5 0.5 1")]):
+        path = _off(tmp_path / ("s%d.off" % k), v, faces, colour)
+        vv, f = qdem.loadSurface(path)
+        assert len(f) == sum(len(face) - 2 for face in faces)
+        assert qdem.meshSurface(path, 0.25).volumes().sum() == pytest.approx(volume, rel=0.02)
+    bad = tmp_path / "bad.off"
+    bad.write_text("OFF\n8 6 0\n0 0 0\n")
+    with pytest.raises(ValueError, match="cannot read .*bad.off as OFF"):
+        qdem.loadSurface(str(bad))
+
+
 def test_a_non_convex_polygon_face_is_refused_naming_it(tmp_path):
     ell = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
     v, faces = _prism(ell)
