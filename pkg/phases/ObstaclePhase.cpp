@@ -139,11 +139,13 @@ void ObstaclePhase::run(double dt) {
     }
     const double* extent = pieceExtent_.data();
     threadThrough_.assign(nth, Through{});
+    threadDeepest_.assign(nth, Deepest{});
     long nWall = 0;
 #pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
     {
         const int th = omp_get_thread_num();
         Through& through = threadThrough_[th];
+        Deepest& deepest = threadDeepest_[th];
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
         double* dyn = anyDynamic ? threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr;
@@ -270,6 +272,8 @@ void ObstaclePhase::run(double dt) {
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
                     lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
+                if (hit.overlap > deepest.ratio * m.radius)
+                    deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
                 newBody[used] = o.bodyId;
                 newSide[used] = static_cast<int8_t>(hit.side);
                 newShear[used] = sh;
@@ -310,6 +314,10 @@ void ObstaclePhase::run(double dt) {
         }
     }
     contacts_ = nWall;
+    Deepest deepest;
+    for (const Deepest& d : threadDeepest_)
+        if (d.ratio > deepest.ratio) deepest = d;
+    if (deepest.ratio > 0.5) warnSoftObstacle(deepest);
     const Through* first = nullptr;
     for (const Through& t : threadThrough_)
         if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
@@ -363,6 +371,29 @@ void ObstaclePhase::checkDynamicObstacles(double dt, std::size_t stride) const {
                 : "give the body a mass and moment of inertia (b.state.mass, b.state.inertia)",
             ", or fix it (fixed=True, or b.dynamic = False)."));
     }
+}
+
+void ObstaclePhase::warnSoftObstacle(const Deepest& d) {
+    // A YADE body's material sets the contact's stiffness with the piece's
+    // (the harmonic mean of E r, ContactModel.hpp): a body left with YADE's
+    // default material (E = 1e7 Pa) under a stiff or large piece lets its
+    // nodes sink most of their radius into it (a 100 m piece, E = 5e8:
+    // 4.1 m of 5 m; a tester), as the materials say but rarely as meant.
+    // Named when the body is ten times softer than the piece and a node sinks
+    // more than half its radius: impacts of a piece on a body as stiff as
+    // itself sink that deep and are not warned of.
+    const Obstacle& o = w_.obstacles[d.obstacle];
+    const Material& m = w_.materials[w_.pieces[d.piece].material];
+    if (!(o.young > 0 && o.young < 0.1 * m.young)) return;
+    if (!softWarned_.insert({o.bodyId, d.piece}).second) return;
+    const char* kind = o.kind == ObstacleKind::Wall ? "wall" : o.kind == ObstacleKind::Box ? "box" : "facet";
+    startWarnings_.push_back(cat(
+        "qdem: nodes of piece ", d.piece, " sink ", static_cast<int>(std::lround(100 * d.ratio)),
+        " % of their contact radius (", m.radius, " m) into YADE body ", o.bodyId, " (", kind,
+        "), whose material (young = ", o.young, " Pa) is ", std::lround(m.young / o.young),
+        " times softer than the piece's (", m.young, " Pa): the contact takes the softer stiffness. If the body "
+        "is meant to be stiff, give it a material as stiff as the piece, e.g. mat = O.materials.append(FrictMat("
+        "young=", m.young, ")) and utils.", kind, "(..., material=mat)"));
 }
 
 void ObstaclePhase::reportThrough(const Through& t, double dt) const {

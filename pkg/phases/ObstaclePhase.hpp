@@ -2,9 +2,10 @@
 // step.  Owns the node-obstacle contact history and the per-(piece,
 // obstacle) reactions that sleeping pieces keep pushing with.
 #pragma once
+#include <cstdint>
+#include <set>
 #include <string>
 #include <utility>
-#include <cstdint>
 #include <vector>
 
 #include "../contact/ContactLaw.hpp"
@@ -99,6 +100,16 @@ private:
     void checkDynamicObstacles(double dt, std::size_t stride) const;
     std::vector<double> threadDynamic_;
     std::vector<Through> threadThrough_;  // per thread: its first
+    // The deepest node contact of the step (overlap / node radius), per
+    // thread: a piece sinking half its radius into a much softer YADE body
+    // is named once per (body, piece) (warnSoftObstacle).
+    struct Deepest {
+        double ratio = 0;
+        int obstacle = -1, piece = -1;
+    };
+    std::vector<Deepest> threadDeepest_;
+    std::set<std::pair<int, int>> softWarned_;  // (YADE body id, piece) already named
+    void warnSoftObstacle(const Deepest& d);
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
 
     Data w_;

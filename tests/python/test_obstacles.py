@@ -384,3 +384,28 @@ def test_a_frictionless_block_slides_over_facet_seams_without_slowing(scene):
     block.vel[:, 0] += 0.5
     O.run(int(0.5 / O.dt), True)
     assert block.velocity()[0] == pytest.approx(0.5, abs=2e-4)
+
+
+@pytest.mark.parametrize("wallYoung, warned", [(1e4, True), (1e7, False)])
+def test_a_piece_sinking_into_a_much_softer_yade_body_is_warned_of(scene, wallYoung, warned):
+    """The contact takes the softer of the two stiffnesses: a large or stiff
+    piece on a body left with YADE's default material (E = 1e7) sank most of
+    its nodes' radius into it, silently (a 100 m piece, E = 5e8: 4.1 m of
+    5 m; a tester).  Named once, with the fix; not for a body as stiff as
+    the piece."""
+    import warnings
+    O = scene
+    from yade import FrictMat, utils
+    mat = rubber(viscosity=200.0)  # E = 1e7
+    qdem.addPiece(qdem.boxMesh((0.2, 0.2, 0.2), (3, 3, 3)), mat, pos=(0, 0, 0.111))
+    soft = O.materials.append(FrictMat(young=wallYoung, poisson=0.3, frictionAngle=0.5))
+    O.bodies.append(utils.wall(0, axis=2, sense=1, material=soft))
+    O.engines = _engines()
+    O.dt = 0.8 * O.engines[1].stableTimeStep()
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        O.run(int(0.5 / O.dt), True)
+    said = [str(w.message) for w in got if "times softer than the piece" in str(w.message)]
+    assert len(said) == (1 if warned else 0), said
+    if warned:
+        assert "YADE body 0 (wall)" in said[0] and "FrictMat(young=1e+07)" in said[0]
