@@ -177,7 +177,8 @@ def obstacleStates(O, ids, out, signatures=None, reshaped=None, seen=None, writt
 def applyReactions(O, ids, reactions):
     """Add each obstacle's reaction force and torque to O.forces."""
     from yade import Vector3
-    for bid, r in zip(ids, reactions.tolist()):  # (Python floats: indexing a NumPy row costs 10x)
+    rows = np.asarray(reactions, dtype=float).reshape(-1, 6).tolist()  # (Python floats: a NumPy row costs 10x)
+    for bid, r in zip(ids, rows):
         if r[0] or r[1] or r[2] or r[3] or r[4] or r[5]:
             O.forces.addF(bid, Vector3(r[0], r[1], r[2]))
             O.forces.addT(bid, Vector3(r[3], r[4], r[5]))
