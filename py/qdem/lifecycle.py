@@ -244,7 +244,7 @@ def _inEngines(O, qid):
     return None
 
 
-_found = {}  # qid -> weakref of the engine engineFor found; emptied when a scene is loaded or reset
+_found = {}  # qid -> weakref of the engine engineFor found; emptied when O.engines is assigned or a scene loaded, reset or switched
 
 
 def engineFor(qid):
