@@ -153,6 +153,18 @@ void IntegrationPhase::run(double dt) {
         }
         return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
     };
+    // The common step (explicit, no damping, no energy or sleep tracking,
+    // every node awake) has a loop of its own, vectorised over DOFs.
+    if (!implicit && !(damp > 0) && !sleepOn && all) {
+        const std::array<double, 4> r = energyOn ? advancePlain<true>(dt) : advancePlain<false>(dt);
+        if (r[3] == 0) reportNotFinite(ids, all, count, Fout);
+        if (energyOn) {
+            w_.energy.kinetic = r[0];
+            w_.energy.gravity += r[1];
+            w_.energy.boundaryWork += r[2];
+        }
+        return;
+    }
     // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
     const auto withFlag = [](bool on, auto&& next) {
         return on ? next(std::true_type{}) : next(std::false_type{});
@@ -181,6 +193,114 @@ void IntegrationPhase::run(double dt) {
         w_.energy.localDamping += ed;
         w_.energy.boundaryWork += eb;
     }
+}
+
+template <bool EnergyOn>
+std::array<double, 4> IntegrationPhase::advancePlain(double dt) {
+    // What the generic loop above does per node and DOF, in tiles of nodes
+    // taken as flat arrays of DOFs: the force summed term by term in the
+    // same order (so the same bits), then one branch-free update that the
+    // compiler vectorises. The generic loop spent ~10 ns per node, mostly
+    // on its per-node test of every thread buffer's range and on reloads
+    // of its captures after each store (issue 16).
+    constexpr int32_t kTile = 256;
+    const auto N = static_cast<int32_t>(w_.mass.size());
+    const ThreadLayout& layout = w_.elements.layout();
+    const int nth = layout.nThreads;
+    const int stride = layout.stride;
+    const double g0 = w_.gravity[0], g1 = w_.gravity[1], g2 = w_.gravity[2];
+    double* const X = w_.pos.data();
+    double* const V = w_.vel.data();
+    double* const Fout = w_.force.data();
+    const double* const Fext = w_.extForce.data();
+    const double* const Fc = w_.contacts.active ? w_.contacts.force.data() : nullptr;
+    const double* const Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
+    const double* const M = w_.mass.data();
+    const uint8_t* const blk = w_.blocked.data();
+    double sum = 0, ek = 0, eg = 0, eb = 0;
+#pragma omp parallel num_threads(nth) reduction(+ : sum, ek, eg, eb)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const auto first = static_cast<int32_t>(static_cast<int64_t>(N) * t / nt);
+        const auto last = static_cast<int32_t>(static_cast<int64_t>(N) * (t + 1) / nt);
+        alignas(64) double inv3[3 * kTile];  // 1/m per DOF, 0 on a blocked one
+        // With the energy ledger: the mass and gravity per DOF.
+        alignas(64) double m3[EnergyOn ? 3 * kTile : 1];
+        alignas(64) double g3[EnergyOn ? 3 * kTile : 1];
+        if constexpr (EnergyOn)
+            for (int32_t j = 0; j < kTile; ++j) g3[3 * j] = g0, g3[3 * j + 1] = g1, g3[3 * j + 2] = g2;
+        for (int32_t s = first; s < last; s += kTile) {
+            const int32_t e = std::min(last, s + kTile);
+            const int32_t len = e - s;
+            double* __restrict f = Fout + 3 * static_cast<std::ptrdiff_t>(s);
+            const double* __restrict fx = Fext + 3 * static_cast<std::ptrdiff_t>(s);
+            const double* __restrict m = M + s;
+            for (int32_t j = 0; j < len; ++j) {
+                f[3 * j] = fx[3 * j] + m[j] * g0;
+                f[3 * j + 1] = fx[3 * j + 1] + m[j] * g1;
+                f[3 * j + 2] = fx[3 * j + 2] + m[j] * g2;
+            }
+            for (int b = 0; b < nth; ++b) {
+                const int32_t lo = std::max(s, layout.nodeLo[b]), hi = std::min(e - 1, layout.nodeHi[b]);
+                if (lo > hi) continue;
+                const double* __restrict src = layout.buffers[b].data() + stride * (lo - layout.nodeLo[b]);
+                double* __restrict dst = f + 3 * (lo - s);
+                for (int32_t j = 0; j <= hi - lo; ++j) {
+                    dst[3 * j] += src[stride * j];
+                    dst[3 * j + 1] += src[stride * j + 1];
+                    dst[3 * j + 2] += src[stride * j + 2];
+                }
+            }
+            if (Fc) {
+                const double* __restrict c = Fc + 3 * static_cast<std::ptrdiff_t>(s);
+                for (int32_t k = 0; k < 3 * len; ++k) f[k] += c[k];
+            }
+            if (Fg) {
+                const double* __restrict c = Fg + 3 * static_cast<std::ptrdiff_t>(s);
+                for (int32_t k = 0; k < 3 * len; ++k) f[k] += c[k];
+            }
+            for (int32_t j = 0; j < len; ++j) {
+                const double im = 1.0 / m[j];
+                const unsigned bl = blk[s + j];
+                inv3[3 * j] = (bl & 1u) ? 0.0 : im;
+                inv3[3 * j + 1] = (bl & 2u) ? 0.0 : im;
+                inv3[3 * j + 2] = (bl & 4u) ? 0.0 : im;
+                if constexpr (EnergyOn) m3[3 * j] = m3[3 * j + 1] = m3[3 * j + 2] = m[j];
+            }
+            // A blocked DOF keeps its velocity: its acceleration f * 0 is 0
+            // (and NaN for a non-finite force, which is then reported).
+            double* __restrict v = V + 3 * static_cast<std::ptrdiff_t>(s);
+            double* __restrict x = X + 3 * static_cast<std::ptrdiff_t>(s);
+            if constexpr (EnergyOn) {
+                // The generic loop's ledger terms, per DOF.
+#pragma omp simd reduction(+ : sum, ek, eg, eb)
+                for (int32_t k = 0; k < 3 * len; ++k) {
+                    const double vOld = v[k];
+                    const double a = f[k] * inv3[k];
+                    const double vMid = vOld + 0.5 * dt * a;
+                    ek += 0.5 * m3[k] * vMid * vMid;
+                    eg -= m3[k] * g3[k] * vOld * dt;
+                    eb -= fx[k] * vOld * dt;
+                    eb += inv3[k] == 0.0 ? f[k] * vOld * dt : 0.0;  // a blocked DOF: -(work of the constraint)
+                    const double vNew = vOld + dt * a;
+                    const double xNew = x[k] + dt * vNew;
+                    v[k] = vNew;
+                    x[k] = xNew;
+                    sum += vNew + xNew;
+                }
+            } else {
+#pragma omp simd reduction(+ : sum)
+                for (int32_t k = 0; k < 3 * len; ++k) {
+                    const double vNew = v[k] + dt * (f[k] * inv3[k]);
+                    const double xNew = x[k] + dt * vNew;
+                    v[k] = vNew;
+                    x[k] = xNew;
+                    sum += vNew + xNew;  // finite iff every value is (see the generic loop)
+                }
+            }
+        }
+    }
+    return {ek, eg, eb, std::isfinite(sum) ? 1.0 : 0.0};
 }
 
 void IntegrationPhase::reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const {

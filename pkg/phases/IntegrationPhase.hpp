@@ -2,6 +2,7 @@
 // phase's thread buffers), contact forces, gravity and external forces.
 #pragma once
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -64,6 +65,12 @@ public:
 private:
     // Throws StabilityError naming the first visited node whose new state or
     // force is not finite and what made it so (called when the update found one).
+    // The update of the common step (explicit, no damping or sleep
+    // tracking, every node awake): kinetic energy, gravity's and the
+    // boundary's work of the step (with EnergyOn), and 1 if every new state
+    // is finite, else 0.
+    template <bool EnergyOn>
+    std::array<double, 4> advancePlain(double dt);
     [[noreturn]] void reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const;
 
     Data w_;
