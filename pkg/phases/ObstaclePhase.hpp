@@ -57,9 +57,18 @@ public:
     void piecesAdded() override;
     // A loaded state continues a run: its contacts with obstacles are not a
     // set-up mistake (a new obstacle list still gets checked).
-    void stateLoaded() override { startChecked_.assign(startChecked_.size(), 1); }
-    // A new obstacle list: every piece is checked against it once.
-    void obstaclesChanged() { startChecked_.assign(startChecked_.size(), 0); }
+    void stateLoaded() override;
+    // The obstacles' shapes go with the state: after a load, the obstacles
+    // the saved run had are not new (O.loadTmp into a fresh world, O.load in
+    // a new process), those added since are.
+    void saveFields(WorldState& s) const override;
+    void loadFields(const WorldState& s) override;
+    // A new obstacle list (now w_.obstacles; `before`: the former one): the
+    // pieces are checked once against the obstacles it adds (a body, or a
+    // shape of it, that `before` did not hold), not against the ones they
+    // already touch: adding a facet elsewhere in the middle of an impact is
+    // no set-up mistake.
+    void obstaclesChanged(const std::vector<Obstacle>& before);
     // Pieces that started pressed into an obstacle by more than a quarter of their
     // node radius (not refused: their node centres are outside), one message
     // each, handed over once (the engine turns them into warnings).
@@ -81,6 +90,8 @@ private:
     // Refuses (InputError) a piece whose nodes start inside a wall, box or
     // facet, once per piece and obstacle list.
     void checkStartOverlaps();
+    // freshObstacle_: 1 for each obstacle that `known` does not hold.
+    void markFresh(const std::vector<Obstacle>& known);
     // A node that went through an obstacle this step: passed a thin one's
     // surface (two-sided wall, facet) without touching it the step before,
     // or lies behind a one-sided wall by more than its piece's largest extent.
@@ -118,6 +129,12 @@ private:
     Column<double> slotShear_;
     Column<int8_t> slotSide_;
     std::vector<uint8_t> startChecked_;     // per piece: start overlap checked for this obstacle list
+    std::vector<uint8_t> freshObstacle_;    // per obstacle: added since the last check (checked against every piece)
+    // After a load: the obstacles of the saved run, which the next new
+    // obstacle list is compared with (empty and `loadedAll_`: a state saved
+    // before they were saved, every obstacle taken as known).
+    std::vector<Obstacle> loadedObstacles_;
+    bool loadedPending_ = false, loadedAll_ = false;
     std::vector<std::string> startWarnings_;
     std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
     std::vector<int> pieceObstacles_, pieceObstacleBegin_;

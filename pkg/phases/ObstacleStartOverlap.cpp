@@ -3,8 +3,8 @@
 // piece out (a one-sided floor launched a cube at 2.9 m/s), or a two-sided
 // wall would hold the nodes past it on the wrong side.
 //
-// The check runs once per piece and obstacle list: the first step after the
-// piece is added or the obstacle list changes (by kind, body or shape), on
+// The check runs once per piece and obstacle: the first step after the
+// piece is added, or the obstacle is (a new body, or a new shape of one), on
 // the obstacles the piece can reach.  Contacts that grow during the run are
 // the contact law's business, and a loaded state keeps its contacts: both are
 // never refused here.  A piece resting on an obstacle overlaps it by less than
@@ -19,6 +19,7 @@
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
+#include "../world/WorldState.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -36,10 +37,80 @@ const char* kindName(const Obstacle& o) {
 
 }  // namespace
 
+void ObstaclePhase::markFresh(const std::vector<Obstacle>& known) {
+    // The same obstacle: the same body, kind and shape (a moved one, or one
+    // of another material, is the same: pieces meet it in the run).
+    const auto sameShape = [](const Obstacle& a, const Obstacle& b) {
+        if (a.bodyId != b.bodyId || a.kind != b.kind || a.axis != b.axis || a.sense != b.sense ||
+            a.halfExtents != b.halfExtents)
+            return false;
+        for (int k = 0; k < 3; ++k)
+            if (a.localVerts[k] != b.localVerts[k]) return false;
+        return true;
+    };
+    freshObstacle_.assign(w_.obstacles.size(), 1);
+    for (std::size_t j = 0; j < w_.obstacles.size(); ++j)
+        for (const Obstacle& b : known)
+            if (sameShape(w_.obstacles[j], b)) {
+                freshObstacle_[j] = 0;
+                break;
+            }
+}
+
+void ObstaclePhase::obstaclesChanged(const std::vector<Obstacle>& before) {
+    // The first list after a load is compared with the saved run's.
+    if (loadedPending_ && loadedAll_) freshObstacle_.assign(w_.obstacles.size(), 0);
+    else markFresh(loadedPending_ ? loadedObstacles_ : before);
+    loadedPending_ = false;
+}
+
+void ObstaclePhase::stateLoaded() {
+    // A loaded state continues a run: its contacts are no set-up mistake.
+    startChecked_.assign(startChecked_.size(), 1);
+    if (loadedAll_) freshObstacle_.assign(w_.obstacles.size(), 0);
+    else markFresh(loadedObstacles_);  // (obstacles set before the load that the saved run did not have)
+}
+
+// 16 numbers per obstacle: body, kind, axis, sense, box half extents, facet vertices.
+void ObstaclePhase::saveFields(WorldState& s) const {
+    std::vector<double> v;
+    v.reserve(16 * w_.obstacles.size());
+    for (const Obstacle& o : w_.obstacles) {
+        v.insert(v.end(), {double(o.bodyId), double(static_cast<int>(o.kind)), double(o.axis), double(o.sense)});
+        v.insert(v.end(), o.halfExtents.data(), o.halfExtents.data() + 3);
+        for (const auto& lv : o.localVerts) v.insert(v.end(), lv.data(), lv.data() + 3);
+    }
+    s.put("obstacleShapes", v.data(), v.size());
+}
+
+void ObstaclePhase::loadFields(const WorldState& s) {
+    loadedPending_ = true;
+    loadedObstacles_.clear();
+    loadedAll_ = s.fields.count("obstacleShapes") == 0;
+    if (loadedAll_) return;
+    const std::vector<double> v = s.getAll<double>("obstacleShapes");
+    for (std::size_t i = 0; i + 16 <= v.size(); i += 16) {
+        Obstacle o;
+        o.bodyId = static_cast<int>(v[i]);
+        o.kind = static_cast<ObstacleKind>(static_cast<int>(v[i + 1]));
+        o.axis = static_cast<int>(v[i + 2]);
+        o.sense = static_cast<int>(v[i + 3]);
+        o.halfExtents = Eigen::Vector3d(v[i + 4], v[i + 5], v[i + 6]);
+        for (int k = 0; k < 3; ++k) o.localVerts[k] = Eigen::Vector3d(v[i + 7 + 3 * k], v[i + 8 + 3 * k], v[i + 9 + 3 * k]);
+        loadedObstacles_.push_back(o);
+    }
+}
+
 void ObstaclePhase::checkStartOverlaps() {
     startChecked_.resize(w_.pieces.size(), 0);
+    // (a list set without obstaclesChanged is the one a loaded state was saved with: known)
+    freshObstacle_.resize(w_.obstacles.size(), 0);
+    bool anyFresh = false;
+    for (const uint8_t f : freshObstacle_) anyFresh = anyFresh || f;
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
-        if (startChecked_[ip]) continue;
+        // A piece checked before meets only the obstacles added since.
+        const bool onlyFresh = startChecked_[ip] != 0;
+        if (onlyFresh && !anyFresh) continue;
         const PieceInfo& p = w_.pieces[ip];
         const double r = w_.materials[p.material].radius;
         // The side of two-sided walls and facets the piece is on: that of its centroid.
@@ -47,6 +118,7 @@ void ObstaclePhase::checkStartOverlaps() {
         for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) c += Eigen::Map<const Eigen::Vector3d>(&w_.pos[3 * n]);
         c /= double(p.nodeEnd - p.nodeBegin);
         for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
+            if (onlyFresh && !freshObstacle_[pieceObstacles_[j]]) continue;
             const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
             int side = 0;
             if (o.kind == ObstacleKind::Wall && o.sense == 0) {
@@ -159,6 +231,7 @@ void ObstaclePhase::checkStartOverlaps() {
         }
         startChecked_[ip] = 1;  // accepted (its warnings given once)
     }
+    std::fill(freshObstacle_.begin(), freshObstacle_.end(), 0);
 }
 
 }  // namespace qdem

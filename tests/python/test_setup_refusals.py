@@ -175,6 +175,78 @@ def test_a_new_piece_or_a_new_obstacle_list_is_checked_again():
         w.core.step(1e-6, 1)
 
 
+def test_an_obstacle_added_elsewhere_during_an_impact_leaves_the_piece_alone():
+    """A tester's case: a cube hitting a floor at 3 m/s overlaps it by 1.5 r, an
+    ordinary impact. A facet added 5 m away at that moment stopped the run
+    ("starts inside obstacle body 0"): every new obstacle list re-checked every
+    piece against every obstacle. Only the new obstacle is checked now, and the
+    run is the one without it, to the bit."""
+    def run(addFacet):
+        w = qdem.World()
+        mat = qdem.QdemMat(young=2e5, poisson=0.3, density=1000, viscosity=20, radius=R, restitution=0.5)
+        p = w.addPiece(_cube(), mat, pos=(0, 0, 0.06), vel=(0, 0, -3.0))
+        w.core.gravity = (0, 0, -9.81)
+        floor = _wall(1)
+        _set(w, *floor)
+        dt = 0.5 * w.core.stableDt()["combined"]
+        while R - p.pos[:, 2].min() < 1.5 * R:
+            w.core.step(dt, 1)
+        if addFacet:
+            far = qdem._core.Obstacle()
+            far.kind, far.bodyId = 2, 7
+            far.setVertices(np.array([5.0, 5, 0.5]), np.array([6.0, 5, 0.5]), np.array([5.0, 6, 0.5]))
+            w.core.setObstacles([floor[0], far])
+            w.core.setObstacleStates(np.array([floor[1], floor[1]], dtype=float))
+        w.core.step(dt, 2000)
+        return p.pos.copy(), p.velocity()
+    (x0, v0), (x1, v1) = run(False), run(True)
+    assert v0[2] > 0.3                                   # it bounced
+    assert np.array_equal(x0, x1) and np.array_equal(v0, v1)
+
+
+def test_a_new_obstacle_inside_a_running_piece_is_still_refused():
+    """The check of a new obstacle is kept: a box put across the top face of a
+    cube resting on a floor is refused, naming the box."""
+    w = qdem.World()
+    w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 + R))
+    floor = _wall(1)
+    _set(w, *floor)
+    w.core.step(1e-6, 5)
+    box = qdem._core.Obstacle()
+    box.kind, box.bodyId, box.halfExtents = 1, 9, (0.02, 0.02, 0.02)
+    w.core.setObstacles([floor[0], box])
+    w.core.setObstacleStates(np.array([floor[1], [0, 0, L + R] + floor[1][3:]], dtype=float))
+    with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body 9 \(box\)"):
+        w.core.step(1e-6, 1)
+
+
+def test_rewinding_with_load_tmp_after_erasing_an_obstacle_warns_of_nothing(scene):
+    """O.loadTmp into a fresh world, after the scene had lost a facet: the
+    obstacles the saved run had are not new, and a cube touching its floor is
+    not "placed pressed into" it (a false RuntimeWarning before)."""
+    import warnings
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O = scene
+    mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=50, radius=R, frictionWall=0.4)
+    qdem.addPiece(_cube(), mat, pos=(0, 0, 0.1), vel=(0.3, 0, 0), angVel=(1, 2, 0))
+    O.bodies.append(utils.wall(0, axis=2))
+    f = O.bodies.append(utils.facet([(-1, -1, 0.0), (1, -1, 0.0), (0, 1, 0.5)]))
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * O.engines[1].stableTimeStep()
+    O.run(800, True)
+    O.saveTmp("rewind")
+    O.run(600, True)
+    ref = qdem.defaultWorld().pieces[0].pos.copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        O.loadTmp("rewind")
+        O.bodies.erase(f)
+        O.run(300, True)
+        O.loadTmp("rewind")
+        O.run(600, True)
+    assert np.array_equal(qdem.defaultWorld().pieces[0].pos, ref)
+
+
 # --- through QdemEngine in YADE ---------------------------------------------
 
 @pytest.mark.parametrize("what", ["floor", "wall", "box", "facet"])
