@@ -31,6 +31,12 @@ ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "q
                "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp", "sleep": "qdemSleep"}
 
 
+def _shapeNames(v):
+    """Validator of QdemEngine.ignoreShapes: a list of shape class names."""
+    if isinstance(v, str) or not all(isinstance(x, str) for x in (v if hasattr(v, "__iter__") else [None])):
+        return "a list of YADE shape class names, e.g. ['Polyhedra'] (not %r)" % (v,)
+    return None
+
 
 @documented
 class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
@@ -78,6 +84,11 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     sphereMargin = Attr(0.1, "Proxy boxes are the pieces' boxes grown by this fraction of their size: "
                              "larger = fewer proxy moves (each forces a collider run), more spheres read.",
                         number(0.01, 10))
+    ignoreShapes = Attr((), "Names of YADE shape classes whose bodies QDEM pieces may pass through, e.g. "
+                            "['Polyhedra'] for grains that never reach a piece.  A body of any other shape "
+                            "pieces cannot collide with (anything but Wall, Box, Facet, Sphere) stops the run "
+                            "at the first step with qdem.SetupError: a piece would fall through it unseen.",
+                        _shapeNames, tuple)
     # The world settings (viscosity, damping, friction, contact kinds, sleeping, ...):
     # declared once in pkg/world/Settings.hpp; read and written on the world directly.
     worldSettings(locals())
@@ -156,6 +167,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._syncForces = False  # a force-reading engine follows (setupcheck._checkForceReaders)
         self._runStart = None
         self._nBodies = -1
+        self._unfelt = []  # (id, shape) of the bodies pieces cannot collide with, at the last scan
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
         self._dtChecked = None
         self._lastProgress = None
@@ -277,9 +289,10 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         if not self.couple:
             if core.nObstacles:
                 core.setObstacles([])
-            self._ids = []
+            self._ids, self._unfelt = [], []  # (couple=False: the script asked for no obstacles)
             return
         if len(O.bodies) != self._nBodies:
+            self._unfelt = yadeglue.unfeltBodies(O)  # (refused by the step, not by stableTimeStep)
             obstacles, self._ids = yadeglue.scanObstacles(O)
             self._obstacles = obstacles
             self._signatures = [yadeglue.bodySignature(O.bodies[i]) for i in self._ids]
@@ -365,6 +378,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             self._mpy.seconds += time.perf_counter() - t0
         else:
             self._syncObstacles()
+            unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
+            if unfelt:
+                raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
             coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
             t0 = time.perf_counter()
@@ -393,6 +409,18 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.iter, core.time = int(O.iter), float(O.time)
             from .recorder import initialFrames
             initialFrames(self.world)
+        elif O.iter > core.iter and self._mpy is None:
+            # QDEM missed steps that YADE made (the engine was dead, or out of
+            # O.engines): its pieces stood still meanwhile.  Its clock follows
+            # YADE's again, so that frames stay named by O.iter and timed by
+            # O.time (a qdem.loadState restart runs ahead of O.iter, never behind).
+            warnings.warn("QdemEngine did not run in the %d steps before O.iter = %d (dead=True, or out of "
+                          "O.engines): the QDEM pieces stood still meanwhile, while YADE's bodies moved on. "
+                          "QDEM's clock jumps from step %d (t = %.6g s) to YADE's (t = %.6g s). To hold pieces "
+                          "still, block their nodes (piece.blocked) instead of stopping the engine."
+                          % (O.iter - core.iter, O.iter, core.iter, core.time, O.time), RuntimeWarning,
+                          stacklevel=3)
+            core.iter, core.time = int(O.iter), float(O.time)
         core.step(dt)
         if self._mpy is not None:
             t0 = time.perf_counter()

@@ -39,6 +39,19 @@ class SetupError(RuntimeError):
     """A scene set up in a way that would silently give wrong physics."""
 
 
+def unfeltMessage(unfelt):
+    """The error for bodies QDEM pieces would pass through ((id, shape) pairs)."""
+    shapes = sorted({name for _, name in unfelt})
+    ids = [i for i, _ in unfelt]
+    listed = ", ".join(str(i) for i in ids[:8]) + (" and %d more" % (len(ids) - 8) if len(ids) > 8 else "")
+    return ("QdemEngine: bod%s %s %s of shape %s, which QDEM pieces do not collide with: a piece would pass "
+            "through %s without a force. Pieces collide with Wall, Box, Facet and Sphere bodies (and clumps of "
+            "spheres). Build such an obstacle from facets (utils.facet, geom.facetBox, ymport.stl) or boxes; "
+            "if no piece can reach these bodies, let QDEM ignore them: QdemEngine(ignoreShapes=%r)."
+            % ("y" if len(ids) == 1 else "ies", listed, "is" if len(ids) == 1 else "are", " and ".join(shapes),
+               "it" if len(ids) == 1 else "them", shapes))
+
+
 def _kinds(O):
     return [type(e).__name__ for e in O.engines]
 

@@ -82,6 +82,33 @@ def scanObstacles(O, bodies=None):
     return obstacles, ids
 
 
+# Shapes QDEM pieces collide with: the obstacles (KIND), spheres (also clump
+# members) and the clumps holding them.
+_FELT = frozenset(KIND) | {"Sphere", "Clump"}
+
+
+def unfeltBodies(O, ignore=(), spheres=True):
+    """(id, shape name) of every body QDEM pieces would pass through: a shape
+    that is not a Wall, Box, Facet or Sphere (Polyhedra, GridNode,
+    GridConnection, PFacet, Tetra, ...), less the shapes named in `ignore`,
+    QDEM's own proxy bodies and yade.mpy's subdomains (spheres too when the
+    sphere coupling is off: the script asked for that)."""
+    from .spheres import _PROXY_LABEL
+    out = []
+    for b in O.bodies:
+        if b is None or b.shape is None:
+            continue
+        name = type(b.shape).__name__
+        if name in _FELT or name in ignore:
+            continue
+        if getattr(b, "isSubdomain", False):
+            continue
+        if name == "Tetra" and b.material is not None and b.material.label == _PROXY_LABEL:
+            continue
+        out.append((b.id, name))
+    return out
+
+
 def hasSpheres(O):
     """Is there any Sphere body (standalone or clump member) in the scene?"""
     return any(b is not None and type(b.shape).__name__ == "Sphere" for b in O.bodies)

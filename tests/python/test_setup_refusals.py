@@ -412,3 +412,68 @@ def test_a_servo_controller_reads_qdem_reactions_after_qdem_engine(scene):
     top = _servoedPlaten(O, servoFirst=False)
     O.run(int(1.2 / O.dt), True)
     assert O.forces.f(top, sync=True)[2] == pytest.approx(20.0, rel=0.02)
+
+
+# --- bodies pieces cannot collide with; a stopped engine --------------------
+
+def _polyhedronSlab(O):
+    import yade
+    from yade import polyhedra_utils
+    b = polyhedra_utils.polyhedra(yade.PolyhedraMat(young=1e8), size=(1, 1, 0.1))   # top at z = 0.05
+    b.state.pos = (0, 0, 0)
+    b.dynamic = False
+    return O.bodies.append(b)
+
+
+def _gridNode(O):
+    import yade
+    from yade import gridpfacet
+    O.materials.append(yade.CohFrictMat(young=1e8, label="gm"))
+    return O.bodies.append(gridpfacet.gridNode((0, 0, 0), 0.05, wire=False, fixed=True, material="gm"))
+
+
+@pytest.mark.parametrize("make, shapes", [(_polyhedronSlab, "Polyhedra"),
+                                          (_gridNode, "GridNode")])
+def test_a_body_pieces_cannot_collide_with_stops_the_run_naming_it_and_the_fix(scene, make, shapes):
+    """A tester's case: a block dropped on a fixed Polyhedra slab (or a grid
+    beam) fell straight through it, unwarned: QDEM reads Wall, Box, Facet and
+    Sphere bodies only.  Such a body is refused at the first step; named in
+    ignoreShapes, it is left alone (the script says no piece reaches it)."""
+    from yade import ForceResetter, NewtonIntegrator
+    O = scene
+    qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.3))
+    bid = make(O)
+    qe = qdem.QdemEngine()
+    O.engines = [ForceResetter(), qe, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * qe.stableTimeStep()
+    with pytest.raises(qdem.SetupError, match=r"bod(y|ies) .*%d.* of shape %s, which QDEM pieces do not collide "
+                                              r"with: a piece would pass through .*facets .*"
+                                              r"QdemEngine\(ignoreShapes=\[" % (bid, shapes)):
+        O.run(5, True)
+    qe.ignoreShapes = shapes.split(" and ")
+    O.run(5, True)
+    assert qe.world.core.iter == O.iter
+    with pytest.raises(ValueError, match=r"ignoreShapes=.*a list of YADE shape class names"):
+        qe.ignoreShapes = "Polyhedra"
+
+
+def test_a_qdem_engine_stopped_for_some_steps_warns_and_its_clock_follows_yades_again(scene, tmp_path):
+    """A tester's case: 100 steps with QdemEngine.dead = True left QDEM's clock
+    100 steps behind O.iter for good, frames named by QDEM's step, unwarned.
+    Now: a RuntimeWarning naming the gap, and the clocks equal again."""
+    from yade import ForceResetter, NewtonIntegrator
+    O = scene
+    qdem.addPiece(_cube(2), rubber(radius=R), pos=(0, 0, 0.5))
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"),
+                 qdem.VtkRecorder(fileBase=str(tmp_path / "f-"), iterPeriod=100), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    qe = O.engines[1]
+    O.dt = 0.5 * qe.stableTimeStep()
+    O.run(100, True)
+    qe.dead = True
+    O.run(100, True)
+    qe.dead = False
+    with pytest.warns(RuntimeWarning, match=r"did not run in the 100 steps before O.iter = 200 .*dead=True.*"
+                                            r"stood still.*jumps from step 100"):
+        O.run(200, True)
+    assert (qe.world.core.iter, qe.world.core.time) == (O.iter, pytest.approx(O.time, rel=1e-12))
+    assert sorted(p.name for p in tmp_path.glob("*.vtu"))[-1] == "f-000400.vtu"
