@@ -76,13 +76,14 @@ def test_two_pieces_topple_and_momentum_balances_with_the_floor(scene):
     floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
     g = np.array([0, 0, -9.81])
     impulse = np.zeros(3)
-    touched = []
+    touched, pushed = [], []
 
     def ledger():
         nonlocal impulse
         f = O.forces.f(floor)
         impulse += (-np.array([f[0], f[1], f[2]]) + (a.totalMass + b.totalMass) * g) * O.dt
         touched.append(qdem.defaultWorld().core.contactCounts["pointPolygon"])
+        pushed.append(b.velocity()[0])
 
     import builtins
     builtins._qdemLedger = ledger
@@ -95,7 +96,7 @@ def test_two_pieces_topple_and_momentum_balances_with_the_floor(scene):
     p1 = a.momentum() + b.momentum()
     del builtins._qdemLedger
     assert max(touched) > 0                                  # the pieces met
-    assert b.velocity()[0] > 0.01                            # ... and the second one was pushed
+    assert max(pushed) > 0.02                                # ... and the second one was pushed (0.024 m/s)
     scale = np.abs(impulse).max()
     assert np.abs((p1 - p0) - impulse).max() < 1e-6 * scale
 
