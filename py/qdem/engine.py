@@ -168,6 +168,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._runStart = None
         self._nBodies = -1
         self._unfelt = []  # (id, shape) of the bodies pieces cannot collide with, at the last scan
+        self._stepMark = None  # (O.iter, O.time) YADE's next step starts at, QDEM's step after the last one
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
         self._dtChecked = None
         self._lastProgress = None
@@ -409,19 +410,24 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.iter, core.time = int(O.iter), float(O.time)
             from .recorder import initialFrames
             initialFrames(self.world)
-        elif O.iter > core.iter and self._mpy is None:
-            # QDEM missed steps that YADE made (the engine was dead, or out of
-            # O.engines): its pieces stood still meanwhile.  Its clock follows
-            # YADE's again, so that frames stay named by O.iter and timed by
-            # O.time (a qdem.loadState restart runs ahead of O.iter, never behind).
-            warnings.warn("QdemEngine did not run in the %d steps before O.iter = %d (dead=True, or out of "
-                          "O.engines): the QDEM pieces stood still meanwhile, while YADE's bodies moved on. "
-                          "QDEM's clock jumps from step %d (t = %.6g s) to YADE's (t = %.6g s). To hold pieces "
-                          "still, block their nodes (piece.blocked) instead of stopping the engine."
-                          % (O.iter - core.iter, O.iter, core.iter, core.time, O.time), RuntimeWarning,
-                          stacklevel=3)
-            core.iter, core.time = int(O.iter), float(O.time)
+        elif self._stepMark is not None and self._mpy is None:
+            # YADE made steps this engine did not (it was dead, or out of
+            # O.engines) while nothing else moved QDEM's clock (a
+            # qdem.loadState would have): the pieces stood still meanwhile.
+            # QDEM's clock skips the missed steps, so that frames stay named
+            # by O.iter and timed by O.time.
+            yadeIter, yadeTime, coreIter = self._stepMark
+            missed = int(O.iter) - yadeIter
+            if missed > 0 and core.iter == coreIter:
+                warnings.warn("QdemEngine did not run in the %d steps before O.iter = %d (dead=True, or out of "
+                              "O.engines): the QDEM pieces stood still meanwhile, while YADE's bodies moved on. "
+                              "QDEM's clock jumps from step %d (t = %.6g s) by those steps (%.6g s). To hold "
+                              "pieces still, block their nodes (piece.blocked) instead of stopping the engine."
+                              % (missed, O.iter, core.iter, core.time, float(O.time) - yadeTime), RuntimeWarning,
+                              stacklevel=3)
+                core.iter, core.time = core.iter + missed, core.time + (float(O.time) - yadeTime)
         core.step(dt)
+        self._stepMark = (int(O.iter) + 1, float(O.time) + dt, core.iter)  # where YADE's next step starts
         if self._mpy is not None:
             t0 = time.perf_counter()
             self._mpy.afterStep(O)
