@@ -36,14 +36,26 @@ struct SettingRange {
     bool hiOpen = false;  // [lo, hi) rather than [lo, hi]
     bool loOpen = false;  // (lo, hi]
     std::vector<std::string> choices;
+    std::string note;  // said with a refusal (an angle's unit)
+    SettingRange withNote(std::string n) const {
+        SettingRange r = *this;
+        r.note = std::move(n);
+        return r;
+    }
 };
 
+// Angles are in radians; a refusal says so (30, meant as degrees, was taken
+// as 30 rad: for edgeFeatureAngle a cosine's wrap, ~81 degrees).
+inline constexpr const char* kRadians = "an angle in radians (30 degrees is 0.5236)";
+
 inline SettingRange anyValue() { return {}; }
-inline SettingRange atLeast(double lo) { return {lo, INFINITY, false, false, {}}; }
-inline SettingRange positive() { return {0, INFINITY, false, true, {}}; }
-inline SettingRange within(double lo, double hi) { return {lo, hi, false, false, {}}; }
-inline SettingRange withinOpenTop(double lo, double hi) { return {lo, hi, true, false, {}}; }
-inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, INFINITY, false, false, std::move(names)}; }
+inline SettingRange atLeast(double lo) { return {lo, INFINITY, false, false, {}, {}}; }
+inline SettingRange positive() { return {0, INFINITY, false, true, {}, {}}; }
+inline SettingRange within(double lo, double hi) { return {lo, hi, false, false, {}, {}}; }
+inline SettingRange withinOpenTop(double lo, double hi) { return {lo, hi, true, false, {}, {}}; }
+inline SettingRange oneOf(std::vector<std::string> names) {
+    return {-INFINITY, INFINITY, false, false, std::move(names), {}};
+}
 
 // X(type, member, engineName, default, range, doc)
 #define QDEM_SETTINGS(X)                                                                                              \
@@ -87,12 +99,13 @@ inline SettingRange oneOf(std::vector<std::string> names) { return {-INFINITY, I
     X(BroadPhase, broadPhase, "broadPhase", BroadPhase::Triangles, oneOf({"triangles", "A", "B", "C"}),             \
       "How surface elements are registered in the cell list: 'triangles' (default), or the seed's Figure 6 "       \
       "cases 'A' (all tets), 'B' (surface tets), 'C' (surface tets, interior faces skipped).")                      \
-    X(double, edgeFadeAngle, "edgeFadeAngle", 0.17453292519943295, within(1e-6, 1.5707963267948966),               \
+    X(double, edgeFadeAngle, "edgeFadeAngle", 0.17453292519943295, within(1e-6, 1.5707963267948966).withNote(kRadians), \
       "Edge-edge forces fade out as edges become parallel (the point-polygon contacts at their ends carry such "    \
       "a contact): full at or above this angle [rad] between the edges, zero when parallel.")                       \
-    X(double, edgeFeatureAngle, "edgeFeatureAngle", 0.5235987755982988, atLeast(0),                                  \
+    X(double, edgeFeatureAngle, "edgeFeatureAngle", 0.5235987755982988,                                              \
+      within(0, 3.141592653589793).withNote(kRadians),                                                             \
       "Edge-edge contacts are sought between feature edges only: those whose two faces meet at more than this "     \
-      "angle [rad] in the reference shape (above pi: none).")                                                       \
+      "angle [rad] in the reference shape (0 to pi; pi: none).")                                                    \
     X(double, verletSkin, "verletSkin", 0.5, atLeast(0),                                                             \
       "Verlet-list skin of the default broad phase, as a fraction of the largest particle radius: larger = "        \
       "rarer rebuilds, longer lists.")                                                                               \

@@ -30,6 +30,7 @@ std::string describe(const SettingRange& r) {
     } else {
         s << "must be finite";
     }
+    if (!r.note.empty()) s << ": " << r.note;
     return s.str();
 }
 

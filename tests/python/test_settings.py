@@ -48,7 +48,11 @@ def test_engine_reads_and_writes_the_world_directly(scene):
     ("damping", 1.0, r"must lie in \[0, 1\)"),
     ("frictionRegVelocity", 0.0, "must be > 0"),
     ("sleepTime", -1, "must be >= 0"),
-    ("edgeFadeAngle", 2.0, r"must lie in \[1e-06, 1.5708\]"),
+    ("edgeFadeAngle", 2.0, r"must lie in \[1e-06, 1.5708\]: an angle in radians"),
+    # A tester's case: 30 (degrees meant) was taken as 30 rad, a cosine's wrap
+    # to ~81 degrees; 6.2 or 12.57 ("above pi: none", the help said) were the default.
+    ("edgeFeatureAngle", 30, r"must lie in \[0, 3.14159\]: an angle in radians \(30 degrees is 0.5236\)"),
+    ("edgeFeatureAngle", 6.2, r"must lie in \[0, 3.14159\]"),
     ("broadPhase", "D", "must be one of"),
     ("frictionModel", "coulomb", "must be one of"),
 ])
