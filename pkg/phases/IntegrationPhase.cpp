@@ -123,7 +123,8 @@ void IntegrationPhase::run(double dt) {
                             f[d] -= fd;
                             if constexpr (EnergyOn) edT += fd * vm * dt;
                         }
-                    const double a = free ? f[d] * invM : 0.0;
+                    // (f * 0 on a blocked DOF: a non-finite force there is reported, as in advancePlain)
+                    const double a = f[d] * (free ? invM : 0.0);
                     if constexpr (EnergyOn) {
                         const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
                         ekT += 0.5 * M[n] * vMid * vMid;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <set>
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -63,12 +64,12 @@ public:
     // a new process), those added since are.
     void saveFields(WorldState& s) const override;
     void loadFields(const WorldState& s) override;
-    // A new obstacle list (now w_.obstacles; `before`: the former one): the
-    // pieces are checked once against the obstacles it adds (a body, or a
-    // shape of it, that `before` did not hold), not against the ones they
-    // already touch: adding a facet elsewhere in the middle of an impact is
-    // no set-up mistake.
-    void obstaclesChanged(const std::vector<Obstacle>& before);
+    // A new obstacle list: the pieces are checked once against the
+    // obstacles it holds that were not checked before (a body, or a shape of
+    // it, new since the last check), not against the ones they already
+    // touch: adding a facet elsewhere in the middle of an impact is no
+    // set-up mistake.
+    void obstaclesChanged() { shapesPending_ = true; }
     // Pieces that started pressed into an obstacle by more than a quarter of their
     // node radius (not refused: their node centres are outside), one message
     // each, handed over once (the engine turns them into warnings).
@@ -90,8 +91,9 @@ private:
     // Refuses (InputError) a piece whose nodes start inside a wall, box or
     // facet, once per piece and obstacle list.
     void checkStartOverlaps();
-    // freshObstacle_: 1 for each obstacle that `known` does not hold.
-    void markFresh(const std::vector<Obstacle>& known);
+    // freshObstacle_ from checkedShapes_, when the list or the state changed
+    // (then true).
+    bool updateFresh();
     // A node that went through an obstacle this step: passed a thin one's
     // surface (two-sided wall, facet) without touching it the step before,
     // or lies behind a one-sided wall by more than its piece's largest extent.
@@ -129,12 +131,15 @@ private:
     Column<double> slotShear_;
     Column<int8_t> slotSide_;
     std::vector<uint8_t> startChecked_;     // per piece: start overlap checked for this obstacle list
-    std::vector<uint8_t> freshObstacle_;    // per obstacle: added since the last check (checked against every piece)
-    // After a load: the obstacles of the saved run, which the next new
-    // obstacle list is compared with (empty and `loadedAll_`: a state saved
-    // before they were saved, every obstacle taken as known).
-    std::vector<Obstacle> loadedObstacles_;
-    bool loadedPending_ = false, loadedAll_ = false;
+    std::vector<uint8_t> freshObstacle_;    // per obstacle: not checked yet (checked against every piece)
+    // The obstacles checked against the pieces (or those the loaded run had),
+    // by identity: body, kind, shape.  By identity, not by index, so that two
+    // list changes before a step, a refused check, or a load whose list is
+    // set before or after it lose no unchecked obstacle and make no known
+    // one new.
+    std::unordered_set<std::string> checkedShapes_;
+    bool shapesPending_ = true;   // the list or the state changed: freshObstacle_ to update
+    bool adoptCurrent_ = false;   // a state saved without its obstacles' shapes: the next list is known
     std::vector<std::string> startWarnings_;
     std::vector<double> threadReaction_;    // per thread x (piece, obstacle) pair x 6
     std::vector<int> pieceObstacles_, pieceObstacleBegin_;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
 
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
@@ -37,74 +38,72 @@ const char* kindName(const Obstacle& o) {
 
 }  // namespace
 
-void ObstaclePhase::markFresh(const std::vector<Obstacle>& known) {
-    // The same obstacle: the same body, kind and shape (a moved one, or one
-    // of another material, is the same: pieces meet it in the run).
-    const auto sameShape = [](const Obstacle& a, const Obstacle& b) {
-        if (a.bodyId != b.bodyId || a.kind != b.kind || a.axis != b.axis || a.sense != b.sense ||
-            a.halfExtents != b.halfExtents)
-            return false;
-        for (int k = 0; k < 3; ++k)
-            if (a.localVerts[k] != b.localVerts[k]) return false;
-        return true;
-    };
-    freshObstacle_.assign(w_.obstacles.size(), 1);
-    for (std::size_t j = 0; j < w_.obstacles.size(); ++j)
-        for (const Obstacle& b : known)
-            if (sameShape(w_.obstacles[j], b)) {
-                freshObstacle_[j] = 0;
-                break;
-            }
+namespace {
+
+// An obstacle's identity for the start check: its body, kind and shape (a
+// moved one, or one of another material, is the same: pieces meet it in the
+// run).  16 numbers, also what the state saves per obstacle.
+constexpr int kShapeNumbers = 16;
+
+void shapeNumbers(const Obstacle& o, double* v) {
+    v[0] = o.bodyId, v[1] = static_cast<int>(o.kind), v[2] = o.axis, v[3] = o.sense;
+    for (int d = 0; d < 3; ++d) v[4 + d] = o.halfExtents[d];
+    for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) v[7 + 3 * k + d] = o.localVerts[k][d];
 }
 
-void ObstaclePhase::obstaclesChanged(const std::vector<Obstacle>& before) {
-    // The first list after a load is compared with the saved run's.
-    if (loadedPending_ && loadedAll_) freshObstacle_.assign(w_.obstacles.size(), 0);
-    else markFresh(loadedPending_ ? loadedObstacles_ : before);
-    loadedPending_ = false;
+std::string shapeKey(const double* v) {
+    return std::string(reinterpret_cast<const char*>(v), kShapeNumbers * sizeof(double));
 }
+
+std::string shapeKey(const Obstacle& o) {
+    double v[kShapeNumbers];
+    shapeNumbers(o, v);
+    return shapeKey(v);
+}
+
+}  // namespace
 
 void ObstaclePhase::stateLoaded() {
-    // A loaded state continues a run: its contacts are no set-up mistake.
+    // A loaded state continues a run: its contacts are no set-up mistake, and
+    // the obstacles its run had are known (loadFields); the list in force at
+    // the next check is compared with them.
     startChecked_.assign(startChecked_.size(), 1);
-    if (loadedAll_) freshObstacle_.assign(w_.obstacles.size(), 0);
-    else markFresh(loadedObstacles_);  // (obstacles set before the load that the saved run did not have)
+    shapesPending_ = true;
 }
 
-// 16 numbers per obstacle: body, kind, axis, sense, box half extents, facet vertices.
 void ObstaclePhase::saveFields(WorldState& s) const {
-    std::vector<double> v;
-    v.reserve(16 * w_.obstacles.size());
-    for (const Obstacle& o : w_.obstacles) {
-        v.insert(v.end(), {double(o.bodyId), double(static_cast<int>(o.kind)), double(o.axis), double(o.sense)});
-        v.insert(v.end(), o.halfExtents.data(), o.halfExtents.data() + 3);
-        for (const auto& lv : o.localVerts) v.insert(v.end(), lv.data(), lv.data() + 3);
-    }
+    std::vector<double> v(kShapeNumbers * w_.obstacles.size());
+    for (std::size_t j = 0; j < w_.obstacles.size(); ++j) shapeNumbers(w_.obstacles[j], &v[kShapeNumbers * j]);
     s.put("obstacleShapes", v.data(), v.size());
 }
 
 void ObstaclePhase::loadFields(const WorldState& s) {
-    loadedPending_ = true;
-    loadedObstacles_.clear();
-    loadedAll_ = s.fields.count("obstacleShapes") == 0;
-    if (loadedAll_) return;
+    checkedShapes_.clear();
+    // (a state saved before the shapes were: every obstacle at the next check taken as known)
+    adoptCurrent_ = s.fields.count("obstacleShapes") == 0;
+    if (adoptCurrent_) return;
     const std::vector<double> v = s.getAll<double>("obstacleShapes");
-    for (std::size_t i = 0; i + 16 <= v.size(); i += 16) {
-        Obstacle o;
-        o.bodyId = static_cast<int>(v[i]);
-        o.kind = static_cast<ObstacleKind>(static_cast<int>(v[i + 1]));
-        o.axis = static_cast<int>(v[i + 2]);
-        o.sense = static_cast<int>(v[i + 3]);
-        o.halfExtents = Eigen::Vector3d(v[i + 4], v[i + 5], v[i + 6]);
-        for (int k = 0; k < 3; ++k) o.localVerts[k] = Eigen::Vector3d(v[i + 7 + 3 * k], v[i + 8 + 3 * k], v[i + 9 + 3 * k]);
-        loadedObstacles_.push_back(o);
+    for (std::size_t i = 0; i + kShapeNumbers <= v.size(); i += kShapeNumbers) checkedShapes_.insert(shapeKey(&v[i]));
+}
+
+bool ObstaclePhase::updateFresh() {
+    if (!shapesPending_) return false;
+    shapesPending_ = false;
+    if (adoptCurrent_) {
+        adoptCurrent_ = false;
+        checkedShapes_.clear();
+        for (const Obstacle& o : w_.obstacles) checkedShapes_.insert(shapeKey(o));
     }
+    freshObstacle_.assign(w_.obstacles.size(), 0);
+    for (std::size_t j = 0; j < w_.obstacles.size(); ++j)
+        freshObstacle_[j] = checkedShapes_.count(shapeKey(w_.obstacles[j])) == 0;
+    return true;
 }
 
 void ObstaclePhase::checkStartOverlaps() {
     startChecked_.resize(w_.pieces.size(), 0);
-    // (a list set without obstaclesChanged is the one a loaded state was saved with: known)
-    freshObstacle_.resize(w_.obstacles.size(), 0);
+    const bool listChanged = updateFresh();
     bool anyFresh = false;
     for (const uint8_t f : freshObstacle_) anyFresh = anyFresh || f;
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
@@ -230,6 +229,12 @@ void ObstaclePhase::checkStartOverlaps() {
             throw InputError(m.str());
         }
         startChecked_[ip] = 1;  // accepted (its warnings given once)
+    }
+    // Every piece accepted: the obstacles in force are the known ones now
+    // (an obstacle erased and added again later is checked again).
+    if (listChanged || anyFresh) {
+        checkedShapes_.clear();
+        for (const Obstacle& o : w_.obstacles) checkedShapes_.insert(shapeKey(o));
     }
     std::fill(freshObstacle_.begin(), freshObstacle_.end(), 0);
 }

@@ -165,11 +165,9 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
     }
     const std::vector<double> sig = obstacleSignature(obs);
     const bool same = sleepPhase_.obstaclesSet(sig, obstacleSignature(obstacles));  // false: all woken
-    std::vector<Obstacle> before;
-    if (!same) before.swap(obstacles);
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
-    if (!same) obstaclePhase_.obstaclesChanged(before);
+    if (!same) obstaclePhase_.obstaclesChanged();
     omegaCache_.clear();
 }
 

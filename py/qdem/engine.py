@@ -33,7 +33,7 @@ ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "q
 
 def _shapeNames(v):
     """Validator of QdemEngine.ignoreShapes: a list of shape class names."""
-    if isinstance(v, str) or not all(isinstance(x, str) for x in (v if hasattr(v, "__iter__") else [None])):
+    if not isinstance(v, (list, tuple)) or not all(isinstance(x, str) for x in v):
         return "a list of YADE shape class names, e.g. ['Polyhedra'] (not %r)" % (v,)
     return None
 
@@ -252,7 +252,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     @classmethod
     def fromSaved(cls, qdemId, st, runner=None):
         """The engine of a loaded scene, from savedState()."""
-        e = cls(qdemId=qdemId, **st["settings"])
+        e = cls(qdemId=qdemId, **lifecycle.savedSettings(st["settings"]))
         e.label, e.dead = st.get("label", ""), st.get("dead", False)
         if st.get("inverted"):
             e.inverted = dict(st["inverted"])
@@ -291,6 +291,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             if core.nObstacles:
                 core.setObstacles([])
             self._ids, self._unfelt = [], []  # (couple=False: the script asked for no obstacles)
+            self._nBodies = -1  # (couple=True again: scan O.bodies anew)
             return
         if len(O.bodies) != self._nBodies:
             self._unfelt = yadeglue.unfeltBodies(O)  # (refused by the step, not by stableTimeStep)
@@ -380,6 +381,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         else:
             self._syncObstacles()
             unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
+            if unfelt:  # (scanned when O.bodies grew: an erased one keeps its length)
+                self._unfelt = yadeglue.unfeltBodies(O)
+                unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
             if unfelt:
                 raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
             coupling = self._spheres if self.spheres and core.nPieces else None

@@ -27,9 +27,11 @@ import base64
 import functools
 import io
 import json
+import math
 import threading
 import time
 import uuid
+import warnings
 import weakref
 
 import numpy as np
@@ -115,6 +117,21 @@ def _sameWorld(w, blob):
     return True
 
 
+def savedSettings(settings):
+    """Settings of a saved scene as this version takes them.  edgeFeatureAngle
+    was accepted above pi before (the help said "above pi: none", but the
+    angle went through a cosine): such a value is the angle it acted as,
+    acos(cos(v)), with a warning, instead of a refused load."""
+    out = dict(settings)
+    v = out.get("edgeFeatureAngle")
+    if v is not None and not 0 <= v <= math.pi and math.isfinite(v):
+        out["edgeFeatureAngle"] = math.acos(math.cos(v))
+        warnings.warn("qdem: the loaded scene has edgeFeatureAngle = %g, above pi (accepted before, now refused); "
+                      "it acted as acos(cos(%g)) = %.6g rad, which is set. Angles are in radians." %
+                      (v, v, out["edgeFeatureAngle"]), RuntimeWarning, stacklevel=3)
+    return out
+
+
 def restoreWorld(blob, into=None):
     """A new default world built from a sceneBlob string; returns (world, engine
     states).  With `into`, a world holding the same pieces (_sameWorld): only
@@ -124,7 +141,7 @@ def restoreWorld(blob, into=None):
     from .piece import Piece
     data, meta = _readBlob(blob)
     if into is not None:
-        for k, v in meta["settings"].items():
+        for k, v in savedSettings(meta["settings"]).items():
             setattr(into.core, k, v)
         into.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
         return into, meta["engines"]
@@ -139,7 +156,7 @@ def restoreWorld(blob, into=None):
         pid = w.core.addPiece(data["refPos%d" % i], data["tets%d" % i], w.materialIndex(mat))
         w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
         mat._inUse = True
-    for k, v in meta["settings"].items():
+    for k, v in savedSettings(meta["settings"]).items():
         setattr(w.core, k, v)
     w.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
     from .restart import _markLoaded

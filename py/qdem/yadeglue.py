@@ -87,19 +87,19 @@ def scanObstacles(O, bodies=None):
 _FELT = frozenset(KIND) | {"Sphere", "Clump"}
 
 
-def unfeltBodies(O, ignore=(), spheres=True):
+def unfeltBodies(O):
     """(id, shape name) of every body QDEM pieces would pass through: a shape
     that is not a Wall, Box, Facet or Sphere (Polyhedra, GridNode,
-    GridConnection, PFacet, Tetra, ...), less the shapes named in `ignore`,
-    QDEM's own proxy bodies and yade.mpy's subdomains (spheres too when the
-    sphere coupling is off: the script asked for that)."""
+    GridConnection, PFacet, Tetra, ...), less QDEM's own proxy bodies and
+    yade.mpy's subdomains.  (Spheres with QdemEngine(spheres=False) are not
+    listed: the script asked for that.)"""
     from .spheres import _PROXY_LABEL
     out = []
     for b in O.bodies:
         if b is None or b.shape is None:
             continue
         name = type(b.shape).__name__
-        if name in _FELT or name in ignore:
+        if name in _FELT:
             continue
         if getattr(b, "isSubdomain", False):
             continue

@@ -4,6 +4,8 @@ and a piece started inside a YADE wall, box or facet (it would be launched,
 or held across a two-sided wall).  Each case is also run the way that must
 still work: each part its own piece, a piece resting on the obstacle, a
 restarted run whose contacts are deep."""
+import math
+
 import numpy as np
 import pytest
 
@@ -218,6 +220,82 @@ def test_a_new_obstacle_inside_a_running_piece_is_still_refused():
     w.core.setObstacleStates(np.array([floor[1], [0, 0, L + R] + floor[1][3:]], dtype=float))
     with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body 9 \(box\)"):
         w.core.step(1e-6, 1)
+
+
+def _far(bodyId, x):
+    o = qdem._core.Obstacle()
+    o.kind, o.bodyId = 2, bodyId
+    o.setVertices(np.array([x, 5, 0.5]), np.array([x + 1, 5, 0.5]), np.array([x, 6, 0.5]))
+    return o
+
+
+def _setAll(w, obstacles, rows=None):
+    w.core.setObstacles(obstacles)
+    rest = _wall(1)[1]
+    w.core.setObstacleStates(np.array(rows if rows is not None else [rest] * len(obstacles), dtype=float))
+
+
+def _impactWorld():
+    """A cube falling at 3 m/s onto a floor, no floor yet."""
+    w = qdem.World()
+    mat = qdem.QdemMat(young=2e5, poisson=0.3, density=1000, viscosity=20, radius=R, restitution=0.5)
+    p = w.addPiece(_cube(), mat, pos=(0, 0, 0.06), vel=(0, 0, -3.0))
+    w.core.gravity = (0, 0, -9.81)
+    return w, p, 0.5 * w.core.stableDt()["combined"]
+
+
+def _intoImpact(w, p, dt):
+    while R - p.pos[:, 2].min() < 1.5 * R:
+        w.core.step(dt, 1)
+
+
+def test_a_loaded_state_knows_its_obstacles_whatever_list_was_in_force_before():
+    """A review's cases. (a) Saved mid-impact with [far facet, floor]; the
+    list replaced by two facets; the state loaded and the saved list set
+    again: the saved run's floor was taken as new and refused. (b) Saved
+    before the floor existed, the floor added, the state loaded, an impact,
+    then a far facet added: the floor, known since the load, was checked
+    again mid-impact and refused."""
+    w, p, dt = _impactWorld()
+    saved_list = [_far(7, 5.0), _wall(1)[0]]
+    _setAll(w, saved_list)
+    _intoImpact(w, p, dt)
+    saved = w.core.saveState()
+    _setAll(w, [_far(7, 5.0), _far(9, 20.0)])
+    w.core.step(dt, 1)
+    w.core.loadState(saved)
+    _setAll(w, saved_list)
+    w.core.step(dt, 5)                                            # (a): no refusal
+    w, p, dt = _impactWorld()
+    _setAll(w, [_far(7, 5.0)])
+    w.core.step(dt, 1)
+    saved = w.core.saveState()                                    # in the air, no floor
+    _setAll(w, [_far(7, 5.0), _wall(9)[0]])
+    w.core.step(dt, 1)
+    w.core.loadState(saved)
+    _intoImpact(w, p, dt)
+    _setAll(w, [_far(7, 5.0), _wall(9)[0], _far(11, 40.0)])
+    w.core.step(dt, 5)                                            # (b): no refusal
+
+
+@pytest.mark.parametrize("twoChanges", [False, True])
+def test_an_obstacle_added_by_one_of_two_list_changes_before_a_step_is_still_checked(twoChanges):
+    """A review's case: a box put into a resting cube, then (before the step)
+    a far facet added as well: the second change forgot the box's check."""
+    w = qdem.World()
+    w.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 + R))
+    floor, rest = _wall(1)
+    _setAll(w, [floor])
+    w.core.step(1e-6, 5)
+    box = qdem._core.Obstacle()
+    box.kind, box.bodyId, box.halfExtents = 1, 9, (0.02, 0.02, 0.02)
+    boxRow = [0, 0, L + R] + rest[3:]
+    _setAll(w, [floor, box], [rest, boxRow])
+    if twoChanges:
+        _setAll(w, [floor, box, _far(11, 40.0)], [rest, boxRow, rest])
+    for _ in range(2):                                            # refused again if run again unchanged
+        with pytest.raises(ValueError, match=r"piece 0 starts inside obstacle body 9 \(box\)"):
+            w.core.step(1e-6, 1)
 
 
 def test_rewinding_with_load_tmp_after_erasing_an_obstacle_warns_of_nothing(scene):
@@ -455,6 +533,44 @@ def test_a_body_pieces_cannot_collide_with_stops_the_run_naming_it_and_the_fix(s
     assert qe.world.core.iter == O.iter
     with pytest.raises(ValueError, match=r"ignoreShapes=.*a list of YADE shape class names"):
         qe.ignoreShapes = "Polyhedra"
+
+
+def test_an_erased_refused_body_is_refused_no_more_and_couple_toggled_scans_again(scene):
+    """A review's cases: a Polyhedra slab refused, then erased (O.bodies keeps
+    its length): the same refusal came again. And couple=False then True
+    never scanned O.bodies again: pieces fell through the floor."""
+    from yade import ForceResetter, NewtonIntegrator, utils
+    O = scene
+    p = qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, L / 2 + R + 0.01))
+    slab = _polyhedronSlab(O)
+    O.bodies.append(utils.wall(0, axis=2, sense=1))
+    qe = qdem.QdemEngine()
+    O.engines = [ForceResetter(), qe, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 0.5 * qe.stableTimeStep()
+    with pytest.raises(qdem.SetupError, match="body %d is of shape Polyhedra" % slab):
+        O.run(1, True)
+    O.bodies.erase(slab)
+    O.run(10, True)
+    qe.couple = False
+    O.run(10, True)
+    assert qe.world.core.nObstacles == 0
+    qe.couple = True
+    O.run(1, True)
+    assert qe.world.core.nObstacles == 1                          # the floor again
+    p.vel[:] = (0, 0, -1.0)
+    O.run(int(0.1 / O.dt), True)
+    assert p.pos[:, 2].min() > 0                                  # on the floor, not through it
+
+
+def test_a_saved_edge_feature_angle_above_pi_loads_as_the_angle_it_acted_as():
+    """A review's case: scenes saved with edgeFeatureAngle above pi (accepted
+    before: "above pi: none", the help said) must still load: the angle went
+    through a cosine, so it acted as acos(cos(v))."""
+    from qdem import lifecycle
+    with pytest.warns(RuntimeWarning, match=r"edgeFeatureAngle = 4, above pi.*acos\(cos\(4\)\) = 2.28319"):
+        s = lifecycle.savedSettings({"edgeFeatureAngle": 4.0, "verletSkin": 0.5})
+    assert s == {"edgeFeatureAngle": pytest.approx(math.acos(math.cos(4.0))), "verletSkin": 0.5}
+    qdem.QdemEngine(**s)                                          # accepted
 
 
 def test_a_qdem_engine_stopped_for_some_steps_warns_and_its_clock_follows_yades_again(scene, tmp_path):
