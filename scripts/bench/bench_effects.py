@@ -18,6 +18,7 @@ spheres (2,025 on the stack's top / none / listed but 1 m above it), and the
 stress output (per recorder frame, not per step: 'on' only)."""
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -68,7 +69,7 @@ def main():
     noVisc = settled(viscosity=0.0)
     noFric = settled(frictionPiece=0.0, frictionWall=0.0)
     noEdges = bench_cubes27.scene()
-    noEdges.core.edgeFeatureAngle = 3.2       # no edge is a feature edge: nothing to test
+    noEdges.core.edgeFeatureAngle = math.pi   # no edge is a feature edge: nothing to test
     noEdges.core.step(DT, 20)
     flat = bench_cubes27.scene()
     flat.core.gravity = (0, 0, 0)

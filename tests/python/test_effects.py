@@ -1,5 +1,7 @@
 """Only the effects a scene calls for: an effect switched off and an effect whose
 value is zero give the same trajectory, to the last bit (issue 6, part 3)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -75,7 +77,7 @@ def test_edge_edge_switched_off_equals_no_feature_edges_and_differs_from_on():
     no feature edges) nothing holds the ridge and it sinks through it."""
     lowOn, nOn, _ = _crossedBars({})
     lowOff, nOff, off = _crossedBars({"edgeEdgeOn": False})
-    lowZero, nZero, zero = _crossedBars({"edgeFeatureAngle": 3.2})
+    lowZero, nZero, zero = _crossedBars({"edgeFeatureAngle": math.pi})
     assert nOn > 0 and nOff == 0 and nZero == 0
     assert np.array_equal(off, zero)
     assert lowOn > -1e-3                       # stopped on the lower ridge (top at 0, within the reach)
