@@ -168,7 +168,6 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._runStart = None
         self._nBodies = -1
         self._unfelt = []  # (id, shape) of the bodies pieces cannot collide with, at the last scan
-        self._stepMark = None  # (O.iter, O.time) YADE's next step starts at, QDEM's step after the last one
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
         self._dtChecked = None
         self._lastProgress = None
@@ -414,13 +413,13 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.iter, core.time = int(O.iter), float(O.time)
             from .recorder import initialFrames
             initialFrames(self.world)
-        elif self._stepMark is not None and self._mpy is None:
+        elif getattr(self.world, "_stepMark", None) is not None and self._mpy is None:
             # YADE made steps this engine did not (it was dead, or out of
             # O.engines) while nothing else moved QDEM's clock (a
             # qdem.loadState would have): the pieces stood still meanwhile.
             # QDEM's clock skips the missed steps, so that frames stay named
             # by O.iter and timed by O.time.
-            yadeIter, yadeTime, coreIter = self._stepMark
+            yadeIter, yadeTime, coreIter = self.world._stepMark
             missed = int(O.iter) - yadeIter
             if missed > 0 and core.iter == coreIter:
                 warnings.warn("QdemEngine did not run in the %d steps before O.iter = %d (dead=True, or out of "
@@ -431,7 +430,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                               stacklevel=3)
                 core.iter, core.time = core.iter + missed, core.time + (float(O.time) - yadeTime)
         core.step(dt)
-        self._stepMark = (int(O.iter) + 1, float(O.time) + dt, core.iter)  # where YADE's next step starts
+        # Where YADE's next step starts, and QDEM's step now: kept with the
+        # world, so that a new engine on it notices steps none made.
+        self.world._stepMark = (int(O.iter) + 1, float(O.time) + dt, core.iter)
         if self._mpy is not None:
             t0 = time.perf_counter()
             self._mpy.afterStep(O)

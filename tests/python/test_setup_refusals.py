@@ -593,3 +593,11 @@ def test_a_qdem_engine_stopped_for_some_steps_warns_and_its_clock_follows_yades_
         O.run(200, True)
     assert (qe.world.core.iter, qe.world.core.time) == (O.iter, pytest.approx(O.time, rel=1e-12))
     assert sorted(p.name for p in tmp_path.glob("*.vtu"))[-1] == "f-000400.vtu"
+    # QDEM taken out of O.engines for 50 steps, then a new engine on the same world
+    O.engines = [ForceResetter(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.run(50, True)
+    qe2 = qdem.QdemEngine()
+    O.engines = [ForceResetter(), qe2, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    with pytest.warns(RuntimeWarning, match=r"did not run in the 50 steps before O.iter = 450"):
+        O.run(10, True)
+    assert (qe2.world.core.iter, qe2.world.core.time) == (O.iter, pytest.approx(O.time, rel=1e-12))
