@@ -154,8 +154,9 @@ void IntegrationPhase::run(double dt) {
         }
         return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
     };
-    // The common step (explicit, no damping, no energy or sleep tracking,
-    // every node awake) has a loop of its own, vectorised over DOFs.
+    // The common step (explicit, no damping or sleep tracking, every node
+    // awake; the energy ledger on or off) has a loop of its own, vectorised
+    // over DOFs.
     if (!implicit && !(damp > 0) && !sleepOn && all) {
         const std::array<double, 4> r = energyOn ? advancePlain<true>(dt) : advancePlain<false>(dt);
         if (r[3] == 0) reportNotFinite(ids, all, count, Fout);

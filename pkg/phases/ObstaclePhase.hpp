@@ -94,6 +94,8 @@ private:
     // freshObstacle_ from checkedShapes_, when the list or the state changed
     // (then true).
     bool updateFresh();
+    // checkedShapes_: the obstacles in force.
+    void knowCurrentObstacles();
     // A node that went through an obstacle this step: passed a thin one's
     // surface (two-sided wall, facet) without touching it the step before,
     // or lies behind a one-sided wall by more than its piece's largest extent.

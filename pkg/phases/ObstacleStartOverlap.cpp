@@ -87,13 +87,17 @@ void ObstaclePhase::loadFields(const WorldState& s) {
     for (std::size_t i = 0; i + kShapeNumbers <= v.size(); i += kShapeNumbers) checkedShapes_.insert(shapeKey(&v[i]));
 }
 
+void ObstaclePhase::knowCurrentObstacles() {
+    checkedShapes_.clear();
+    for (const Obstacle& o : w_.obstacles) checkedShapes_.insert(shapeKey(o));
+}
+
 bool ObstaclePhase::updateFresh() {
     if (!shapesPending_) return false;
     shapesPending_ = false;
     if (adoptCurrent_) {
         adoptCurrent_ = false;
-        checkedShapes_.clear();
-        for (const Obstacle& o : w_.obstacles) checkedShapes_.insert(shapeKey(o));
+        knowCurrentObstacles();
     }
     freshObstacle_.assign(w_.obstacles.size(), 0);
     for (std::size_t j = 0; j < w_.obstacles.size(); ++j)
@@ -232,10 +236,7 @@ void ObstaclePhase::checkStartOverlaps() {
     }
     // Every piece accepted: the obstacles in force are the known ones now
     // (an obstacle erased and added again later is checked again).
-    if (listChanged || anyFresh) {
-        checkedShapes_.clear();
-        for (const Obstacle& o : w_.obstacles) checkedShapes_.insert(shapeKey(o));
-    }
+    if (listChanged || anyFresh) knowCurrentObstacles();
     std::fill(freshObstacle_.begin(), freshObstacle_.end(), 0);
 }
 

@@ -379,12 +379,12 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             self._mpy.seconds += time.perf_counter() - t0
         else:
             self._syncObstacles()
-            unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
-            if unfelt:  # (scanned when O.bodies grew: an erased one keeps its length)
+            if any(name not in self.ignoreShapes for _, name in self._unfelt):
+                # (scanned when O.bodies grew: scanned again, as an erased one keeps its length)
                 self._unfelt = yadeglue.unfeltBodies(O)
                 unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
-            if unfelt:
-                raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
+                if unfelt:
+                    raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
             coupling = self._spheres if self.spheres and core.nPieces else None
         if coupling is not None:
             t0 = time.perf_counter()

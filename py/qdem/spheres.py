@@ -25,6 +25,14 @@ _PROXY_MASK_DEFAULT = -1
 _PROXY_LABEL = "qdemProxy"  # material label of the proxy bodies
 
 
+def looksLikeProxy(b):
+    """Is YADE body b one of QDEM's proxy bodies (a non-dynamic Tetra of the
+    proxy material)?"""
+    mat = b.material
+    return (mat is not None and mat.label == _PROXY_LABEL and type(b.shape).__name__ == "Tetra"
+            and not b.dynamic)
+
+
 def _vertices(lo, hi):
     """Four alternate corners of the box [lo, hi] around its centre: a tetra
     whose axis-aligned bounding box is exactly that box."""
@@ -160,9 +168,7 @@ class SphereCoupling:
             return True
         # Another Python object for the same body (a loaded scene), or another body
         # at this id (O.bodies.clear() and new bodies appended).
-        mat = b.material
-        ok = (mat is not None and mat.label == _PROXY_LABEL and type(b.shape).__name__ == "Tetra"
-              and not b.dynamic)
+        ok = looksLikeProxy(b)
         if ok:
             self._bodies[i] = b
         return ok

@@ -93,7 +93,7 @@ def unfeltBodies(O):
     GridConnection, PFacet, Tetra, ...), less QDEM's own proxy bodies and
     yade.mpy's subdomains.  (Spheres with QdemEngine(spheres=False) are not
     listed: the script asked for that.)"""
-    from .spheres import _PROXY_LABEL
+    from .spheres import looksLikeProxy
     out = []
     for b in O.bodies:
         if b is None or b.shape is None:
@@ -103,7 +103,7 @@ def unfeltBodies(O):
             continue
         if getattr(b, "isSubdomain", False):
             continue
-        if name == "Tetra" and b.material is not None and b.material.label == _PROXY_LABEL:
+        if name == "Tetra" and looksLikeProxy(b):
             continue
         out.append((b.id, name))
     return out
