@@ -4,6 +4,7 @@
 // forceTorque.  Struct of arrays, sized on set-up only.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "CellGrid.hpp"
@@ -42,8 +43,14 @@ struct SphereSet {
 
     // ---- derived on set-up ------------------------------------------------------
     double radiusMax = 0;
-    std::vector<double> pieceKnMax;  // per piece: stiffest sphere contact spring [N/m]
-    double omegaMax = 0;             // stiffest sphere contact on the sphere's side [rad/s]
+    // The stable step (SpherePhase::setSpheres, doc/spheres.md "Time step"):
+    // per piece, the stiffest sphere spring max(kn, kt) [N/m] and, of the
+    // spheres it is paired with, the largest k/m on the sphere's side of the
+    // two-mass mode [1/s^2] (a ball's tangential mass at its surface is 2m/7)
+    // and the largest dashpot rate c/m_eff [1/s]; and the sphere side's own
+    // leapfrog limit [s] (inf: no pair).
+    std::vector<double> pieceKMax, pieceSphereW2, pieceSphereRate;
+    double stableStep = std::numeric_limits<double>::infinity();
 
     // ---- working data of the phase (reused: no allocation per step) -------------
     std::vector<CellGrid> triGrid;       // per piece: its surface triangles by centroid

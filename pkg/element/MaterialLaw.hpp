@@ -4,7 +4,7 @@
 //                                              by s = -V0, and energy,
 //   energyFinish(aux)                          a scalar energy term (log etc.),
 //   piola(F), energy(F), tangent(F)            reference forms (dP/dF 9x9),
-//   stiffening(C, s2)                          frequency-growth estimate,
+//   tangentChangeBound(F, s1)                  bound of ||dP/dF(F) - dP/dF(I)||,
 //   kRecoversFromInversion                     whether J <= 0 is pushed back.
 // withLaw() turns the Material's tag into that type once per call (once per
 // tet segment in the step), so hot loops are templated, never virtual.

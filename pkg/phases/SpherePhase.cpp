@@ -109,17 +109,38 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
     S.pairComputed.assign(nPairs, 0);
     S.active.clear();
     carry(old);
-    // Stiffest springs, for the stable time step.
+    // Stiffest springs, for the stable time step: each pair's spring joins
+    // two masses, the sphere's (m for the normal spring, its tangential mass
+    // at the surface 2m/7 for the tangential one: 1/m + R^2/I = 7/(2m) for a
+    // solid ball) and the triangle point's (at least the piece's lightest
+    // surface node), so omega^2 = k (1/m_s + 1/m_node).  The dashpots are
+    // 2 xi sqrt(k m_red) with m_red the reduced mass of the sphere and the
+    // triangle point (sphereContacts), at most m_red of the heaviest surface
+    // node: on the mode's own mass their damping ratio is xi sqrt(m_red
+    // omega^2 / k), which the half-step-lagged dashpot turns into a lower
+    // limit, leapfrogLimit(omega, xi_eff) (doc/spheres.md, "Time step").
     S.radiusMax = 0;
-    S.omegaMax = 0;
-    S.pieceKnMax.assign(np, 0.0);
+    S.stableStep = std::numeric_limits<double>::infinity();
+    S.pieceKMax.assign(np, 0.0);
+    S.pieceSphereW2.assign(np, 0.0);
+    S.pieceSphereRate.assign(np, 0.0);
     for (int32_t i = 0; i < n; ++i) {
         S.radiusMax = std::max(S.radiusMax, radius[i]);
         for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
-            const Material& b = w_.materials[w_.pieces[pairPiece[q]].material];
-            const double kn = sphereLaw(S, i, b, 1.0).kn;
-            S.pieceKnMax[pairPiece[q]] = std::max(S.pieceKnMax[pairPiece[q]], kn);
-            S.omegaMax = std::max(S.omegaMax, std::sqrt(kn / mass[i]));
+            const int32_t pc = pairPiece[q];
+            const PieceInfo& piece = w_.pieces[pc];
+            const Material& b = w_.materials[piece.material];
+            const PairConst c = mix(sphereSide(S, i), materialSide(b, b.frictionPiece));
+            const double mReduced = mass[i] * piece.maxSurfaceNodeMass / (mass[i] + piece.maxSurfaceNodeMass);
+            double& kMax = S.pieceKMax[pc];
+            kMax = std::max({kMax, c.kn, c.kt});
+            for (const auto& [k, sphereInvMass] : {std::pair{c.kn, 1.0 / mass[i]}, std::pair{c.kt, 3.5 / mass[i]}}) {
+                const double w2 = k * (sphereInvMass + 1.0 / piece.minSurfaceNodeMass);
+                const double xiEff = c.xi * std::sqrt(mReduced * w2 / k);
+                S.pieceSphereW2[pc] = std::max(S.pieceSphereW2[pc], k * sphereInvMass);
+                S.pieceSphereRate[pc] = std::max(S.pieceSphereRate[pc], 2 * xiEff * std::sqrt(w2));
+                S.stableStep = std::min(S.stableStep, leapfrogLimit(std::sqrt(w2), xiEff));
+            }
         }
     }
 }

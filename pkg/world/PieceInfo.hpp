@@ -14,7 +14,7 @@ struct PieceInfo {
     int material;
     Surface surface;             // in global node / tet ids
     double volume = 0, mass = 0;
-    double minSurfaceNodeMass = 0;
+    double minSurfaceNodeMass = 0, maxSurfaceNodeMass = 0;
     // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
     // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.
     double minSurfaceMassPerWeight = 0;

@@ -79,7 +79,7 @@ Mat12 elementStiffness(const Mat3& B, const Mat9& A, double V) {
 // Largest eigenvalue of an element matrix.  GCC 12 (bug 105593, see
 // CMakeLists.txt) reports the deliberately undefined pass-through operand of
 // _mm512_max_pd in avx512fintrin.h as "used uninitialized" once Eigen's
-// solver is inlined here: a false positive, silenced for this function only.
+// solver is inlined here: a false positive, silenced for the solvers below only.
 #if defined(__GNUC__) && !defined(__clang__) && __GNUC__ < 13
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuninitialized"
@@ -88,9 +88,61 @@ __attribute__((noinline)) double largestEigenvalue(const Mat12& K) {
     Eigen::SelfAdjointEigenSolver<Mat12> es(K, Eigen::EigenvaluesOnly);
     return es.eigenvalues().maxCoeff();
 }
+
+// sigma_max(G)^2 = lambda_max(G'G) of the 4x3 shape-function gradients: the
+// largest |grad u|^2 a unit nodal displacement field makes.
+double gradientNorm2(const Mat3& B) {
+    const Eigen::Matrix<double, 4, 3> G = shapeGradients(B);
+    Eigen::SelfAdjointEigenSolver<Mat3> es;
+    es.computeDirect(G.transpose() * G, Eigen::EigenvaluesOnly);
+    return es.eigenvalues()(2);
+}
+
+// The explicit viscous operator of one element on its current shape: the
+// nodal forces of the Kelvin-Voigt stress S_v = beta D0[F' dF/dt], D0[Y] =
+// lambda tr(Y) I + 2 mu sym(Y), P_v = F S_v, are -C v (ViscousOperator.hpp).
+Mat12 viscousMatrix(const Mat3& F, const Mat3& B, double V, double lambda, double mu, double beta) {
+    const Eigen::Matrix<double, 4, 3> G = shapeGradients(B);
+    Mat12 Cm;
+    for (int b = 0; b < 4; ++b)
+        for (int k = 0; k < 3; ++k) {
+            Mat3 Fdot = Mat3::Zero();
+            Fdot.row(k) = G.row(b);
+            const Mat3 Y = F.transpose() * Fdot;
+            Mat3 S = beta * mu * (Y + Y.transpose());
+            S.diagonal().array() += beta * lambda * Y.trace();
+            const Mat3 P = F * S;
+            for (int a = 0; a < 4; ++a) Cm.block<3, 1>(3 * a, 3 * b + k) = V * P * G.row(a).transpose();
+        }
+    return 0.5 * (Cm + Cm.transpose());
+}
+
+// K with its negative eigenvalues set to zero: a softening direction grows
+// whatever the step (a buckling element); the step limits the others.
+Mat12 positivePart(const Mat12& K) {
+    Eigen::SelfAdjointEigenSolver<Mat12> es(0.5 * (K + K.transpose()));
+    return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+}
+
 #if defined(__GNUC__) && !defined(__clang__) && __GNUC__ < 13
 #pragma GCC diagnostic pop
 #endif
+
+// Largest step at which one element's leapfrog update with lagged dashpots
+// is stable by the energy condition M - dt/2 C - dt^2/4 K > 0 (doc/
+// formulation.md, "Stable time step"), its node masses 1, with a node's
+// contact damping rate cRate and frequency squared w2c added: bisection.
+double leapfrogStep(const Mat12& Kpm, const Mat12& Cpm, double cRate, double w2c, double dt) {
+    auto stable = [&](double h) {
+        return 0.5 * h * cRate + 0.25 * h * h * w2c + largestEigenvalue(0.5 * h * Cpm + 0.25 * h * h * Kpm) < 1.0;
+    };
+    double lo = 0, hi = dt;
+    for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (stable(mid) ? lo : hi) = mid;
+    }
+    return lo;
+}
 
 }  // namespace
 
@@ -162,20 +214,13 @@ void World::checkCurrentDt(double dt) const {
         const double beta = settings.viscosityOn && !implicit ? m.beta() : 0.0;
         double wc = 0, xic = 0;
         contactMode(i, wc, xic);  // as in stableDt()
-        auto limitAt = [&](double we) {
-            const double w = std::sqrt(we * we + wc * wc);
-            const double c = beta * we * we + 2 * xic * wc;
-            return leapfrogLimit(w, w > 0 ? c / (2 * w) : 0.0);
-        };
-        if (limitAt(0) < dt) continue;  // the contact limit alone: checkDt's business
-        // Largest element frequency this dt allows (limitAt decreases with it).
-        double lo = 0, hi = std::max(omegaCache_[i], 1e-300);
-        for (int k = 0; k < 2000 && limitAt(hi) >= dt; ++k) hi *= 2;
-        for (int k = 0; k < 100; ++k) {
-            const double mid = 0.5 * (lo + hi);
-            (limitAt(mid) >= dt ? lo : hi) = mid;
-        }
-        const double allow2 = lo * lo;
+        // The contact springs and dashpots on a node, as a share of its mass
+        // (doc/formulation.md, "Stable time step"): what an element may use
+        // of the leapfrog condition M - dt/2 C - dt^2/4 K > 0 is what they leave.
+        const double room = 1.0 - 0.5 * dt * 2 * xic * wc - 0.25 * dt * dt * wc * wc;
+        if (!(room > 0)) continue;  // the contact limit alone: checkDt's business
+        const double lam = m.lambda(), mu = m.mu();
+        const double d0 = std::max(3 * lam + 2 * mu, 2 * mu);  // ||D0||, the Kelvin-Voigt stress per strain rate
         withLaw(m, [&](const auto& law) {
             for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
                 const int32_t* c = &tetNodes[4 * e];
@@ -185,23 +230,37 @@ void World::checkCurrentDt(double dt) const {
                 Eigen::SelfAdjointEigenSolver<Mat3> ec;
                 ec.computeDirect(C, Eigen::EigenvaluesOnly);
                 const double s2 = ec.eigenvalues()(2);  // largest principal stretch, squared
-                // The law's estimate of the stiffening filters; the exact
-                // eigenvalue of its tangent stiffness decides.
-                if (!(omega2Tet_[e] * law.stiffening(C, s2) * 1.1 > allow2)) continue;  // (NaN: checkFinite's)
+                // Filter: bounds of the element's omega^2 and damping rate on
+                // its current shape, from the reference ones by Weyl's
+                // inequality (the change of the tangent, and of the viscous
+                // operator F D0[F' .], times sigma_max(G)^2 per unit mass).
+                const double perMass = 4.0 / m.density * gradientNorm2(B);
+                const double h = (F - Mat3::Identity()).norm(), s1 = std::sqrt(std::max(s2, 0.0));
+                const double w2 = omega2Tet_[e] + perMass * law.tangentChangeBound(F, s1);
+                const double rate = beta * (omega2Tet_[e] + perMass * d0 * h * (s1 + 1.0));
+                if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) continue;  // (NaN: checkFinite's)
+                // The exact condition on the element's own matrices.
+                const double nodeMass = m.density * tetVol0[e] / 4.0;
                 const Mat12 K = elementStiffness(B, law.tangent(F), tetVol0[e]);
-                const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
-                if (w2 <= allow2) continue;
-                const double now = limitAt(std::sqrt(w2)), J = F.determinant();
+                const Mat12 Cv = beta > 0 ? viscousMatrix(F, B, tetVol0[e], lam, mu, beta) : Mat12::Zero();
+                const Mat12 Kp = positivePart(K);
+                if (largestEigenvalue(0.5 * dt * Cv + 0.25 * dt * dt * Kp) / nodeMass < room) continue;
+                const double now = leapfrogStep(Kp / nodeMass, Cv / nodeMass, 2 * xic * wc, wc * wc, dt);
+                const double J = F.determinant();
                 const std::string where = cat("QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i);
-                const std::string limit = cat("the stable time step on the current shape is ", now, " s, below dt=", dt,
-                                              " s by a factor ", dt / now, " (reference shape: ",
-                                              limitAt(omegaCache_[i]), " s)");
+                const double we = omegaCache_[i];
+                const std::string limit =
+                    cat("the stable time step on the current shape is ", now, " s, below dt=", dt, " s by a factor ",
+                        dt / now, " (reference shape: ",
+                        leapfrogLimit(std::sqrt(we * we + wc * wc),
+                                      (beta * we * we + 2 * xic * wc) / (2 * std::max(std::sqrt(we * we + wc * wc), 1e-300))),
+                        " s)");
                 if (J <= 0)
                     throw StabilityError(cat(
                         where, " is inverted (volume ratio ", J, ", law ", lawName(m.law), ") and ", limit,
                         ". The element was crushed through itself: use law='stableNeoHookean' (the default), a "
                         "stiffer material or a smaller impact speed; or lower O.dt."));
-                throw StabilityError(cat(where, " is strained (largest stretch ", std::sqrt(s2), ", volume ratio ", J,
+                throw StabilityError(cat(where, " is strained (largest stretch ", s1, ", volume ratio ", J,
                                          ") and has stiffened: ", limit, ". Lower O.dt, or use a mesh without slivers."));
             }
         });
@@ -249,13 +308,20 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
             shareCacheN_ = pieces.size();
         }
         const double finest = std::min(p.meanSurfaceShare, i == shareArgMin_ ? shareMin2_ : shareMin1_);
-        wc = std::sqrt(pair.kn / (p.minSurfaceMassPerWeight * (finest / p.meanSurfaceShare)));
+        // A node's normal spring kn and tangential spring kt act on it in
+        // different directions: the stiffer one sets the mode (kt > kn for
+        // Poisson ratios below 0, Mindlin's ratio up to 4/3).  Both dashpots
+        // keep the pair's damping ratio (ContactModel.hpp).
+        wc = std::sqrt(std::max(pair.kn, pair.kt) / (p.minSurfaceMassPerWeight * (finest / p.meanSurfaceShare)));
         xic = pair.xi;
     }
-    if (i < spheres.pieceKnMax.size() && spheres.pieceKnMax[i] > 0) {
-        // YADE spheres near the piece: their springs on its lightest node.
-        const double ws = std::sqrt(spheres.pieceKnMax[i] / p.minSurfaceNodeMass);
-        if (ws > wc) wc = ws, xic = dampingRatioFromRestitution(m.restitution);
+    if (i < spheres.pieceKMax.size() && spheres.pieceKMax[i] > 0) {
+        // YADE spheres near the piece: their springs on its lightest node and
+        // on the sphere's own mass (two masses on one spring), their dashpots'
+        // largest rate (SpherePhase::setSpheres).
+        const double w2 = spheres.pieceKMax[i] / p.minSurfaceNodeMass + spheres.pieceSphereW2[i];
+        const double ws = std::sqrt(w2);
+        if (ws > wc) wc = ws, xic = std::max(xic, spheres.pieceSphereRate[i] / (2 * ws));
     }
 }
 
@@ -355,9 +421,10 @@ StableDt World::stableDt() const {
     }
     const bool implicit = settings.viscousIntegration == ViscousIntegration::Implicit;
     r.combined = implicit ? r.combinedImplicit : r.combinedExplicit;
-    if (spheres.omegaMax > 0) {
-        // The same springs on the sphere side (undamped: the conservative bound).
-        const double ds = leapfrogLimit(spheres.omegaMax, 0.0);
+    if (std::isfinite(spheres.stableStep)) {
+        // The same springs on the sphere side, its dashpots lagged half a step
+        // as every dashpot (SpherePhase::setSpheres).
+        const double ds = spheres.stableStep;
         r.contact = std::min(r.contact, ds);
         r.combined = std::min(r.combined, ds);
         r.combinedExplicit = std::min(r.combinedExplicit, ds);

@@ -122,10 +122,11 @@ int World::addPiece(const TetMesh& mesh, int material) {
     double shareSum = 0;
     for (const int32_t v : s.nodes) shareSum += share[v - n0];
     const double meanShare = shareSum / static_cast<double>(s.nodes.size());
-    double mmin = std::numeric_limits<double>::infinity(), mwmin = mmin, mwmax = 0, wmin = mmin;
+    double mmin = std::numeric_limits<double>::infinity(), mmax = 0, mwmin = mmin, mwmax = 0, wmin = mmin;
     for (std::size_t i = 0; i < s.nodes.size(); ++i) {
         surfNodes[p.surfBegin + i] = s.nodes[i];
         mmin = std::min(mmin, mass[s.nodes[i]]);
+        mmax = std::max(mmax, mass[s.nodes[i]]);
         // > 0: every surface node is a corner of a surface face of a checked
         // (non-flat) tetrahedron.
         const double w = share[s.nodes[i] - n0] / meanShare;
@@ -136,6 +137,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     }
     p.surfEnd = static_cast<int32_t>(surfNodes.size());
     p.minSurfaceNodeMass = mmin;
+    p.maxSurfaceNodeMass = mmax;
     p.minSurfaceMassPerWeight = mwmin;
     p.maxSurfaceMassPerWeight = mwmax;
     p.minSurfaceWeight = wmin;

@@ -6,6 +6,7 @@
 // (doc/formulation.md, "Material laws").  Kept by name:
 // QdemMat(law='saintVenantKirchhoff').
 #pragma once
+#include <algorithm>
 #include <cmath>
 
 #include "../../material/Material.hpp"
@@ -101,14 +102,14 @@ struct SaintVenantKirchhoff {
                                                   mu * ((J == L ? FFt(i, k) : 0.0) + F(i, L) * F(k, J));
         return A;
     }
-    // Estimate of how much the element's highest frequency squared has grown
-    // from the reference shape (s2: largest eigenvalue of C = F^T F): exact
-    // for uniaxial strain ((3 s^2 - 1)/2), 1 for a rigid motion.  Only a
-    // filter: the exact eigenvalue decides (StableDt.cpp).
-    double stiffening(const Mat3& C, double s2) const {
-        const double trE = 0.5 * (C.trace() - 3);
-        const double sMax = lam * trE + mu * (s2 - 1);  // largest principal value of S (shares E's axes)
-        return s2 + std::max(sMax, 0.0) / (lam + 2 * mu);
+    // An upper bound of ||A(F) - A(I)||_2 (StableNeoHookean.hpp says what it
+    // is for).  With D0[Y] = lambda tr(Y) I + 2 mu sym(Y), ||D0|| = max(|3
+    // lambda + 2 mu|, 2 mu), the tangent is A(F)[X] = X S + F D0[F'X], so
+    //   A(F)[X] - A(I)[X] = X S + (F - I) D0[F'X] + D0[(F - I)' X]
+    // and ||A(F) - A(I)|| <= |S| + ||D0|| |F - I| (s1 + 1), s1 = ||F||_2.
+    double tangentChangeBound(const Mat3& F, double s1) const {
+        const double d0 = std::max(std::fabs(3 * lam + 2 * mu), 2 * mu);
+        return secondPiola(F).norm() + d0 * (F - Mat3::Identity()).norm() * (s1 + 1.0);
     }
 };
 

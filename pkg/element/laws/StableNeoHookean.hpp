@@ -152,19 +152,26 @@ struct StableNeoHookean {
                     }
         return A;
     }
-    // Estimate of the growth of the element's highest frequency squared from
-    // the reference shape: the ratio of an operator-norm bound of dP/dF at F
-    // to the same bound at F = I (|cof F|^2 = second invariant of C; the
-    // Hessian of J has norm <= the largest singular value of F).  Only a
-    // filter: the exact eigenvalue decides (StableDt.cpp).
-    double stiffening(const Mat3& C, double s2) const {
-        const double Ic = C.trace(), I2 = 0.5 * (Ic * Ic - C.squaredNorm());
-        const double J = std::sqrt(std::max(C.determinant(), 0.0));  // |J|: bound only
-        auto bound = [&](double ic, double i2, double j, double smax) {
-            return muS * (1.0 - 1.0 / (ic + 1.0) + 2.0 * ic / ((ic + 1.0) * (ic + 1.0))) +
-                   lamS * (i2 + (j + alpha) * smax);
-        };
-        return bound(Ic, I2, J, std::sqrt(s2)) / bound(3.0, 3.0, 1.0, 1.0);
+    // An upper bound of ||A(F) - A(I)||_2, the spectral norm of the change of
+    // the tangent dP/dF (9x9) from the reference shape: with it the element's
+    // highest frequency on its current shape is bounded by Weyl's inequality,
+    // omega^2(F) <= omega^2(I) + 4/rho ||A(F) - A(I)|| sigma_max(G)^2
+    // (StableDt.cpp).  Term by term, with H = F - I, f = vec F, c = vec cof F
+    // and the Hessian of J (linear in F, ||Hess J(X)|| <= s1(X) + s2(X) <=
+    // sqrt2 |X|: doc/formulation.md, "Stable time step on a strained shape"):
+    //   (a - a0) I + b (f f' - i i') + (b - b0) i i' + lambda' (c c' - i i')
+    //   + t HessJ(H) + (t - t0) HessJ(I),   ||x x' - y y'|| <= |x - y| |x + y|.
+    // (s1 = ||F||_2, unused here.)  Exact at F = I (zero); a filter only: the element's exact stiffness
+    // decides when the bound does not clear the step.
+    double tangentChangeBound(const Mat3& F, double /*s1*/) const {
+        const double Ic = F.squaredNorm(), J = F.determinant();
+        const Mat3 I = Mat3::Identity(), G = cofactor(F);
+        const double a = muS * (1.0 - 1.0 / (Ic + 1.0)), a0 = 0.75 * muS;
+        const double b = 2.0 * muS / ((Ic + 1.0) * (Ic + 1.0)), b0 = 0.125 * muS;
+        const double t = lamS * (J - alpha), t0 = lamS * (1.0 - alpha);
+        const double h = (F - I).norm();
+        return std::fabs(a - a0) + b * h * (F + I).norm() + 3.0 * std::fabs(b - b0) +
+               lamS * (G - I).norm() * (G + I).norm() + std::sqrt(2.0) * std::fabs(t) * h + 2.0 * std::fabs(t - t0);
     }
 };
 

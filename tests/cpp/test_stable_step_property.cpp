@@ -1,0 +1,404 @@
+// Property test of the stable time step: on thousands of sampled states, the
+// step the engine accepts is never above the exact largest stable step of the
+// linearised update of the small system (doc/formulation.md, "Stable time
+// step", where the histogram of their ratio is).
+//
+// The exact step is found from the amplification matrix of the leapfrog
+// update with the dashpots lagged half a step, as every phase and YADE's
+// NewtonIntegrator integrate them,
+//     v' = v + dt M^-1 (-K x - C v),   x' = x + dt v',
+// by its spectral radius (<= 1 + 1e-6) over dt.  K, C and M are assembled
+// here from the definitions, not from the stable-step code: element forces by
+// central differences of the law's stress (law.piola) and of the Kelvin-Voigt
+// stress (viscousStress), contact springs and dashpots from the contact model
+// (ContactModel.hpp) on the nodes' masses and area weights.  A softening
+// direction (a negative eigenvalue of K: a buckling or inverted element)
+// grows at any step, so the step is judged on K's positive part.
+//
+// Sampled: strained, compressed, sheared and inverted tetrahedra of random
+// shapes for both laws, Poisson ratios -0.9 to 0.49, without and with
+// viscosity (reported: the largest step checkCurrentDt accepts); pieces of
+// 5, 6 and 12 tetrahedra per cell resting on a rigid wall (node contacts,
+// normal and tangential springs and dashpots); YADE spheres resting on a
+// piece (sphere-triangle contacts with the ball's rotation); both reported by
+// stableDt().  QDEM_STABLE_STEP_JSON=<file> writes every ratio (the
+// histogram's data: scripts/doc/stable_step_histogram.py).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "contact/ContactModel.hpp"
+#include "core/Errors.hpp"
+#include "element/ElementKernel.hpp"
+#include "element/MaterialLaw.hpp"
+#include "mesh/BoxMesh.hpp"
+#include "world/World.hpp"
+
+using namespace qdem;
+
+namespace {
+
+using MatX = Eigen::MatrixXd;
+using VecX = Eigen::VectorXd;
+
+// Spectral radius of the update of (x, v) over one step.
+double spectralRadius(const VecX& invMass, const MatX& K, const MatX& C, double dt) {
+    const auto n = K.rows();
+    const MatX MK = invMass.asDiagonal() * K, MC = invMass.asDiagonal() * C;
+    const MatX I = MatX::Identity(n, n);
+    MatX T(2 * n, 2 * n);
+    const MatX vRow = I - dt * MC;  // v' from v
+    T.topLeftCorner(n, n) = I - dt * dt * MK;
+    T.topRightCorner(n, n) = dt * vRow;
+    T.bottomLeftCorner(n, n) = -dt * MK;
+    T.bottomRightCorner(n, n) = vRow;
+    // Zero modes (rigid motions of a free piece, directions without
+    // stiffness) are eigenvalue 1 in Jordan blocks, whose computed values
+    // scatter by sqrt(rounding) around it: they neither grow nor limit the step.
+    const Eigen::VectorXcd ev = Eigen::EigenSolver<MatX>(T, false).eigenvalues();
+    double r = 0;
+    for (Eigen::Index i = 0; i < ev.size(); ++i)
+        if (std::abs(ev[i] - 1.0) > 1e-4) r = std::max(r, std::abs(ev[i]));
+    return r;
+}
+
+// Largest stable step: bisection between a stable and an unstable step
+// found from the hint by halving and doubling (the stable steps of the
+// leapfrog update are an interval from 0).
+double exactStableStep(const VecX& invMass, const MatX& K, const MatX& C, double hint) {
+    const auto stable = [&](double dt) { return spectralRadius(invMass, K, C, dt) <= 1 + 1e-6; };
+    double lo = hint, hi = hint;
+    while (!stable(lo)) lo *= 0.5;
+    if (lo < hint) hi = 2 * lo;
+    for (int k = 0; stable(hi); ++k) {
+        if (k == 60) return std::numeric_limits<double>::infinity();  // nothing limits it
+        hi *= 2;
+    }
+    for (int k = 0; k < 30; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (stable(mid) ? lo : hi) = mid;
+    }
+    return lo;
+}
+
+// K's positive part; eigenvalues within the differences' rounding of zero
+// (1e-8 of the largest) are zero.
+MatX positivePart(const MatX& K) {
+    Eigen::SelfAdjointEigenSolver<MatX> es(0.5 * (K + K.transpose()));
+    VecX l = es.eigenvalues();
+    const double floor = 1e-8 * l.cwiseAbs().maxCoeff();
+    for (Eigen::Index i = 0; i < l.size(); ++i) l[i] = l[i] > floor ? l[i] : 0.0;
+    return es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
+}
+
+// Nodal forces of one element (12) at node positions x (12), node velocities
+// v (12), from the law's first Piola stress and the Kelvin-Voigt stress.
+template <class Law>
+Eigen::Matrix<double, 12, 1> elementForce(const Law& law, const Mat3& B, double V0, const ElementParams& prm,
+                                          const Eigen::Matrix<double, 12, 1>& x, const Eigen::Matrix<double, 12, 1>& v,
+                                          bool elastic) {
+    const Mat3 F = edgeMatrix(&x[0], &x[3], &x[6], &x[9]) * B;
+    const Mat3 Fdot = edgeMatrix(&v[0], &v[3], &v[6], &v[9]) * B;
+    const Mat3 P = elastic ? law.piola(F) : Mat3(F * viscousStress(F, Fdot, prm));
+    double f[4][3];
+    nodalForces(P, B, V0, f);
+    Eigen::Matrix<double, 12, 1> r;
+    for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) r[3 * a + i] = f[a][i];
+    return r;
+}
+
+// Element stiffness -df/dx by central differences of the elastic forces, and
+// the viscous matrix -df/dv (the viscous force is linear in v: one column per
+// unit velocity).
+template <class Law>
+void elementMatrices(const Law& law, const Mat3& B, double V0, const ElementParams& prm,
+                     const Eigen::Matrix<double, 12, 1>& x, double scale, MatX& K, MatX& C) {
+    K.setZero(12, 12);
+    C.setZero(12, 12);
+    const Eigen::Matrix<double, 12, 1> zero = Eigen::Matrix<double, 12, 1>::Zero();
+    const double h = 1e-6 * scale;
+    for (int j = 0; j < 12; ++j) {
+        Eigen::Matrix<double, 12, 1> xp = x, xm = x, u = zero;
+        xp[j] += h, xm[j] -= h, u[j] = 1;
+        K.col(j) = -(elementForce(law, B, V0, prm, xp, zero, true) - elementForce(law, B, V0, prm, xm, zero, true)) /
+                   (2 * h);
+        if (prm.beta > 0) C.col(j) = -elementForce(law, B, V0, prm, x, u, false);
+    }
+    K = 0.5 * (K + K.transpose());
+    C = 0.5 * (C + C.transpose());
+}
+
+// The ratios found, by family, for the histogram (QDEM_STABLE_STEP_JSON).
+std::map<std::string, std::vector<double>>& ratios() {
+    static std::map<std::string, std::vector<double>> r;
+    return r;
+}
+
+void record(const std::string& family, double reported, double exact) {
+    if (std::isfinite(exact)) ratios()[family].push_back(reported / exact);
+    EXPECT_LE(reported, exact * (1 + 1e-6)) << family << ": reported " << reported << " s, exact " << exact << " s";
+}
+
+Eigen::Matrix3d randomRotation(std::mt19937_64& g) {
+    std::normal_distribution<double> n;
+    return Eigen::Quaterniond(n(g), n(g), n(g), n(g)).normalized().toRotationMatrix();
+}
+
+// Assembled elastic stiffness and viscous matrix of every element of world w
+// on its current shape (3 DOF per node).
+void assembleElements(const World& w, MatX& K, MatX& C) {
+    const auto n = static_cast<Eigen::Index>(3 * w.nNodes());
+    K.setZero(n, n);
+    C.setZero(n, n);
+    for (std::size_t e = 0; e < w.nTets(); ++e) {
+        const Material& m = w.materials[w.pieces[w.tetPiece[e]].material];
+        const ElementParams prm{m.lambda(), m.mu(), m.beta()};
+        const int32_t* c = &w.tetNodes[4 * e];
+        Eigen::Matrix<double, 12, 1> x;
+        for (int a = 0; a < 4; ++a)
+            for (int i = 0; i < 3; ++i) x[3 * a + i] = w.pos[3 * c[a] + i];
+        MatX Ke, Ce;
+        withLaw(m, [&](const auto& law) {
+            elementMatrices(law, loadRowMajor(&w.tetB[9 * e]), w.tetVol0[e], prm, x, std::cbrt(w.tetVol0[e]), Ke, Ce);
+        });
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) {
+                K.block<3, 3>(3 * c[a], 3 * c[b]) += Ke.block<3, 3>(3 * a, 3 * b);
+                C.block<3, 3>(3 * c[a], 3 * c[b]) += Ce.block<3, 3>(3 * a, 3 * b);
+            }
+    }
+}
+
+// Adds k g g' to K for a constraint row g.
+void addSpring(MatX& K, const VecX& g, double k) { K += k * g * g.transpose(); }
+
+}  // namespace
+
+// Single tetrahedra on strained, compressed, sheared and inverted shapes: the
+// largest step checkCurrentDt accepts against the exact one of the element.
+TEST(StableStepProperty, StrainedElementsOfEveryLaw) {
+    std::mt19937_64 g(20261128);
+    std::uniform_real_distribution<double> u(0, 1);
+    int states = 0;
+    for (int trial = 0; trial < 1200; ++trial) {
+        // A random tetrahedron (a perturbed regular one), a sliver now and then.
+        TetMesh mesh;
+        mesh.nodes = {0, 0, 0, 1, 0, 0, 0.5, 0.866, 0, 0.5, 0.289, 0.816};
+        for (double& c : mesh.nodes) c += 0.3 * (u(g) - 0.5);
+        if (trial % 10 == 0) mesh.nodes[11] = 0.05 + 0.05 * u(g);  // flat: a sliver
+        mesh.tets = {0, 1, 2, 3};
+        if (tetSixVolume(mesh, 0) < 0) std::swap(mesh.tets[2], mesh.tets[3]);
+        if (std::fabs(tetSixVolume(mesh, 0)) < 1e-3) continue;
+        Material m;
+        m.young = 1e6;
+        m.density = 1000;
+        m.poisson = -0.9 + 1.39 * u(g);
+        if (trial < 8) m.poisson = trial % 2 ? 0.3 : 0.0;
+        m.law = trial % 2 ? MaterialLaw::SaintVenantKirchhoff : MaterialLaw::StableNeoHookean;
+        m.viscosity = 0;
+        World w;
+        w.addPiece(mesh, w.addMaterial(m));
+        if (trial % 3 != 0) {
+            // Kelvin-Voigt damping ratio beta omega / 2 from 1e-3 to 3 at the top mode.
+            const double omega = 2 / w.stableDt().elastic, xi = std::pow(10.0, -3 + 3.5 * u(g));
+            m.viscosity = 2 * xi / omega * m.mu();
+            w.materials[0].viscosity = m.viscosity;
+        }
+        // The shape: F = Q1 diag(s) Q2, stretches from log-normal strains, one
+        // of them negative for an inverted element; the issue's cases first.
+        Eigen::Vector3d s;
+        const double sigma = std::vector<double>{0.05, 0.15, 0.3}[trial % 3];
+        std::normal_distribution<double> n(0, sigma);
+        for (int d = 0; d < 3; ++d) s[d] = std::exp(n(g));
+        if (trial % 7 == 0) s *= 0.6;                  // compressed
+        if (trial % 11 == 0) s[0] = -0.2 - 0.5 * u(g);  // inverted
+        if (trial < 4) s = Eigen::Vector3d::Constant(1.1);
+        else if (trial < 8) s = Eigen::Vector3d(-0.5, 1, 1);
+        const Mat3 F = trial < 8 ? Mat3(s.asDiagonal()) : Mat3(randomRotation(g) * s.asDiagonal() * randomRotation(g));
+        for (std::size_t a = 0; a < w.nNodes(); ++a) {
+            const Eigen::Vector3d X(w.refPos[3 * a], w.refPos[3 * a + 1], w.refPos[3 * a + 2]);
+            const Eigen::Vector3d x = F * X;
+            for (int d = 0; d < 3; ++d) w.pos[3 * a + d] = x[d];
+        }
+        // Reported: the largest dt the check accepts (it is monotone in dt).
+        const double ref = w.stableDt().combined;
+        auto accepts = [&](double dt) {
+            try {
+                w.checkCurrentDt(dt);
+                return true;
+            } catch (const StabilityError&) {
+                return false;
+            }
+        };
+        double lo = 0, hi = 4 * ref;
+        // (Compressed far enough, an element softens: its positive stiffness
+        // and so its own limit can be far above the reference step.)
+        for (int k = 0; k < 40 && accepts(hi); ++k) lo = hi, hi *= 4;
+        ASSERT_FALSE(accepts(hi)) << trial;
+        for (int k = 0; k < 50; ++k) {
+            const double mid = 0.5 * (lo + hi);
+            (accepts(mid) ? lo : hi) = mid;
+        }
+        if (lo == 0) continue;  // refused at any step (not expected: a softening direction only)
+        // Exact: the element alone, its lumped mass, K's positive part.
+        MatX K, C;
+        assembleElements(w, K, C);
+        VecX im(12);
+        for (int a = 0; a < 4; ++a) im.segment<3>(3 * a).setConstant(1.0 / w.mass[a]);
+        const double exact = exactStableStep(im, positivePart(K), C, lo);
+        record(std::string(m.law == MaterialLaw::StableNeoHookean ? "element, stable Neo-Hookean"
+                                                                  : "element, Saint-Venant-Kirchhoff"),
+               lo, exact);
+        ++states;
+    }
+    EXPECT_GT(states, 1000);
+}
+
+// Pieces resting on a rigid wall: the elements at rest plus each bottom
+// node's normal and tangential springs and dashpots (area-weighted), against
+// stableDt().combined.
+TEST(StableStepProperty, PiecesOnARigidWall) {
+    std::mt19937_64 g(7);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int trial = 0; trial < 120; ++trial) {
+        const int tpc = std::vector<int>{5, 6, 12}[trial % 3];
+        const int nc = tpc == 12 ? 1 : 1 + trial % 2;
+        Material m;
+        m.young = 1e6;
+        m.density = 1000;
+        m.poisson = -0.9 + 1.39 * u(g);
+        if (trial < 6) m.poisson = -0.5;
+        m.radius = 0.1 * std::pow(10.0, -2 + 3 * u(g));  // contact from negligible to dominant
+        m.restitution = trial % 4 == 0 ? 1.0 : 0.05 + 0.95 * u(g);
+        m.viscosity = trial % 2 ? 0.0 : std::pow(10.0, -1 + 3 * u(g));
+        World w;
+        w.addPiece(boxMesh(nc, nc, nc, 0.1, 0.1, 0.1, tpc), w.addMaterial(m));
+        Obstacle floor;
+        floor.kind = ObstacleKind::Wall;
+        floor.axis = 2;
+        floor.sense = 1;
+        floor.pos = Eigen::Vector3d(0, 0, -0.05 - 0.5 * m.radius);
+        floor.updateDerived();
+        w.setObstacles({floor});
+        const double reported = w.stableDt().combined;
+        MatX K, C;
+        assembleElements(w, K, C);
+        const PairConst pc = mix(materialSide(m, m.frictionWall), rigidSide());
+        for (std::size_t s = 0; s < w.surfNodes.size(); ++s) {
+            const int32_t node = w.surfNodes[s];
+            if (w.pos[3 * node + 2] > -0.05 + 1e-9) continue;  // the bottom face touches the floor
+            const PairLaw law = pairLaw(pc, w.mass[node]);
+            const double wa = w.surfWeight[s];
+            for (int d = 0; d < 3; ++d) {
+                VecX e = VecX::Zero(K.rows());
+                e[3 * node + d] = 1;
+                addSpring(K, e, wa * (d == 2 ? law.kn : law.kt));
+                addSpring(C, e, std::sqrt(wa) * (d == 2 ? law.cn : law.ct));
+            }
+        }
+        VecX im(K.rows());
+        for (std::size_t a = 0; a < w.nNodes(); ++a) im.segment<3>(3 * a).setConstant(1.0 / w.mass[a]);
+        record("node-wall contact", reported, exactStableStep(im, K, C, reported));
+    }
+}
+
+// A YADE sphere resting on a piece's top face (a ball: 3 translations and 3
+// rotations; its tangential spring acts at its surface), against
+// stableDt().combined.
+TEST(StableStepProperty, SpheresRestingOnAPiece) {
+    std::mt19937_64 g(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int trial = 0; trial < 100; ++trial) {
+        Material m;
+        m.young = std::pow(10.0, 5 + 3 * u(g));
+        m.density = 1000;
+        m.poisson = -0.5 + 0.99 * u(g);
+        m.radius = 0.002 + 0.01 * u(g);
+        m.restitution = trial % 4 == 0 ? 1.0 : 0.05 + 0.95 * u(g);
+        m.viscosity = 0;
+        World w;
+        w.addPiece(boxMesh(2, 2, 1, 0.2, 0.2, 0.05, std::vector<int>{5, 6}[trial % 2]), w.addMaterial(m));
+        // The sphere: radius, material and mass from light to heavy against the nodes.
+        const double R = 0.005 + 0.03 * u(g), young = std::pow(10.0, 5 + 4 * u(g));
+        const double ktRatio = trial % 5 == 0 ? -1.0 : 0.2 + 0.8 * u(g);
+        const double friction = 0.5, restitution = trial % 3 == 0 ? 1.0 : 0.1 + 0.9 * u(g);
+        const double mass = w.pieces[0].mass * std::pow(10.0, -4 + 4 * u(g));
+        const int32_t id = 1, pairStart[2] = {0, 1}, pairPiece[1] = {0};
+        w.setSpheres(1, &id, &R, &young, &ktRatio, &friction, &restitution, &mass, pairStart, pairPiece);
+        const double reported = w.stableDt().combined;
+        // Where it touches: a point of the top face, on one of its triangles.
+        const Eigen::Vector2d at(-0.09 + 0.18 * u(g), -0.09 + 0.18 * u(g));
+        int32_t tri[3] = {-1, -1, -1};
+        Eigen::Vector3d bary;
+        const Surface& surf = w.pieces[0].surface;
+        for (std::size_t t = 0; t < surf.nTriangles() && tri[0] < 0; ++t) {
+            const int32_t* c = &surf.triangles[3 * t];
+            Eigen::Vector2d p[3];
+            bool top = true;
+            for (int k = 0; k < 3; ++k) {
+                p[k] = Eigen::Vector2d(w.pos[3 * c[k]], w.pos[3 * c[k] + 1]);
+                top = top && w.pos[3 * c[k] + 2] > 0.025 - 1e-9;
+            }
+            if (!top) continue;
+            const Eigen::Vector2d e1 = p[1] - p[0], e2 = p[2] - p[0], r = at - p[0];
+            const double det = e1.x() * e2.y() - e1.y() * e2.x();
+            const double b1 = (r.x() * e2.y() - r.y() * e2.x()) / det, b2 = (e1.x() * r.y() - e1.y() * r.x()) / det;
+            if (b1 < 0 || b2 < 0 || b1 + b2 > 1) continue;
+            bary = Eigen::Vector3d(1 - b1 - b2, b1, b2);
+            for (int k = 0; k < 3; ++k) tri[k] = c[k];
+        }
+        ASSERT_GE(tri[0], 0);
+        // The pair's constants as sphereContacts makes them.
+        const PairConst pc = mix(ContactSide{young * R, ktRatio, restitution, friction, R},
+                                 materialSide(m, m.frictionPiece));
+        double mT = 0;
+        for (int k = 0; k < 3; ++k) mT += bary[k] * w.mass[tri[k]];
+        const PairLaw law = pairLaw(pc, mass, mT);
+        MatX Kel, Cel;
+        assembleElements(w, Kel, Cel);
+        const auto nn = Kel.rows(), n = nn + 6;  // nodes, then the sphere's translation and rotation
+        MatX K = MatX::Zero(n, n), C = MatX::Zero(n, n);
+        K.topLeftCorner(nn, nn) = Kel;
+        C.topLeftCorner(nn, nn) = Cel;
+        const Eigen::Vector3d normal(0, 0, 1), arm = -R * normal;  // from the centre to the contact point
+        for (int d = 0; d < 3; ++d) {
+            const Eigen::Vector3d dir = Eigen::Vector3d::Unit(d);
+            VecX row = VecX::Zero(n);
+            for (int k = 0; k < 3; ++k) row.segment<3>(3 * tri[k]) -= bary[k] * dir;
+            row.segment<3>(nn) = dir;
+            if (d < 2) row.segment<3>(nn + 3) = arm.cross(dir);  // (w x arm).dir = w.(arm x dir)
+            addSpring(K, row, d == 2 ? law.kn : law.kt);
+            addSpring(C, row, d == 2 ? law.cn : law.ct);
+        }
+        VecX im(n);
+        for (std::size_t a = 0; a < w.nNodes(); ++a) im.segment<3>(3 * a).setConstant(1.0 / w.mass[a]);
+        im.segment<3>(nn).setConstant(1.0 / mass);
+        im.segment<3>(nn + 3).setConstant(1.0 / (0.4 * mass * R * R));
+        record("sphere-triangle contact", reported, exactStableStep(im, K, C, reported));
+    }
+}
+
+// Writes the ratios (after the tests above, in this binary's order).
+TEST(StableStepProperty, ZzWritesTheRatios) {
+    const char* path = std::getenv("QDEM_STABLE_STEP_JSON");
+    if (!path) GTEST_SKIP() << "QDEM_STABLE_STEP_JSON not set";
+    std::ofstream out(path);
+    out << "{\n";
+    bool first = true;
+    for (const auto& [family, r] : ratios()) {
+        out << (first ? "" : ",\n") << "  \"" << family << "\": [";
+        for (std::size_t i = 0; i < r.size(); ++i) out << (i ? ", " : "") << r[i];
+        out << "]";
+        first = false;
+    }
+    out << "\n}\n";
+}
