@@ -43,14 +43,19 @@ struct SphereSet {
 
     // ---- derived on set-up ------------------------------------------------------
     double radiusMax = 0;
-    // The stable step (SpherePhase::setSpheres, doc/spheres.md "Time step"):
-    // per piece, the stiffest sphere spring max(kn, kt) [N/m] and, of the
-    // spheres it is paired with, the largest k/m on the sphere's side of the
-    // two-mass mode [1/s^2] (a ball's tangential mass at its surface is 2m/7)
-    // and the largest dashpot rate c/m_eff [1/s]; and the sphere side's own
-    // leapfrog limit [s] (inf: no pair).
-    std::vector<double> pieceKMax, pieceSphereW2, pieceSphereRate;
-    double stableStep = std::numeric_limits<double>::infinity();
+    // The stable step (SpherePhase::setSpheres, doc/spheres.md "Stable time
+    // step"): per piece, the stiffest sphere spring [N/m] and, of the spheres
+    // it is paired with, the largest k/m on the sphere's side of the two-mass
+    // mode [1/s^2] (a ball's tangential mass at its surface is 2m/7) and the
+    // largest dashpot rate c/m_eff [1/s]; and the sphere side's own leapfrog
+    // limit [s] (inf: no pair).  [0]: normal springs only (no friction, or
+    // the regularised law), [1]: with the tangential springs of pairs with
+    // friction.
+    struct StepBound {
+        std::vector<double> pieceK, pieceSphereW2, pieceSphereRate;
+        double stableStep = std::numeric_limits<double>::infinity();
+    };
+    StepBound bound[2];
 
     // ---- working data of the phase (reused: no allocation per step) -------------
     std::vector<CellGrid> triGrid;       // per piece: its surface triangles by centroid

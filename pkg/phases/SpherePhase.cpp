@@ -120,10 +120,12 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
     // omega^2 / k), which the half-step-lagged dashpot turns into a lower
     // limit, leapfrogLimit(omega, xi_eff) (doc/spheres.md, "Time step").
     S.radiusMax = 0;
-    S.stableStep = std::numeric_limits<double>::infinity();
-    S.pieceKMax.assign(np, 0.0);
-    S.pieceSphereW2.assign(np, 0.0);
-    S.pieceSphereRate.assign(np, 0.0);
+    for (SphereSet::StepBound& sb : S.bound) {
+        sb.stableStep = std::numeric_limits<double>::infinity();
+        sb.pieceK.assign(np, 0.0);
+        sb.pieceSphereW2.assign(np, 0.0);
+        sb.pieceSphereRate.assign(np, 0.0);
+    }
     for (int32_t i = 0; i < n; ++i) {
         S.radiusMax = std::max(S.radiusMax, radius[i]);
         for (int32_t q = pairStart[i]; q < pairStart[i + 1]; ++q) {
@@ -132,14 +134,18 @@ void SpherePhase::setSpheres(int32_t n, const int32_t* id, const double* radius,
             const Material& b = w_.materials[piece.material];
             const PairConst c = mix(sphereSide(S, i), materialSide(b, b.frictionPiece));
             const double mReduced = mass[i] * piece.maxSurfaceNodeMass / (mass[i] + piece.maxSurfaceNodeMass);
-            double& kMax = S.pieceKMax[pc];
-            kMax = std::max({kMax, c.kn, c.kt});
-            for (const auto& [k, sphereInvMass] : {std::pair{c.kn, 1.0 / mass[i]}, std::pair{c.kt, 3.5 / mass[i]}}) {
-                const double w2 = k * (sphereInvMass + 1.0 / piece.minSurfaceNodeMass);
-                const double xiEff = c.xi * std::sqrt(mReduced * w2 / k);
-                S.pieceSphereW2[pc] = std::max(S.pieceSphereW2[pc], k * sphereInvMass);
-                S.pieceSphereRate[pc] = std::max(S.pieceSphereRate[pc], 2 * xiEff * std::sqrt(w2));
-                S.stableStep = std::min(S.stableStep, leapfrogLimit(std::sqrt(w2), xiEff));
+            for (int withTangential = 0; withTangential < 2; ++withTangential) {
+                SphereSet::StepBound& sb = S.bound[withTangential];
+                const int modes = withTangential && c.mu > 0 ? 2 : 1;
+                for (int mode = 0; mode < modes; ++mode) {
+                    const double k = mode ? c.kt : c.kn, sphereInvMass = (mode ? 3.5 : 1.0) / mass[i];
+                    const double w2 = k * (sphereInvMass + 1.0 / piece.minSurfaceNodeMass);
+                    const double xiEff = c.xi * std::sqrt(mReduced * w2 / k);
+                    sb.pieceK[pc] = std::max(sb.pieceK[pc], k);
+                    sb.pieceSphereW2[pc] = std::max(sb.pieceSphereW2[pc], k * sphereInvMass);
+                    sb.pieceSphereRate[pc] = std::max(sb.pieceSphereRate[pc], 2 * xiEff * std::sqrt(w2));
+                    sb.stableStep = std::min(sb.stableStep, leapfrogLimit(std::sqrt(w2), xiEff));
+                }
             }
         }
     }

@@ -267,6 +267,12 @@ void World::checkCurrentDt(double dt) const {
     }
 }
 
+// Whether contacts carry a tangential spring: friction on, with the spring
+// law (the regularised law's drag is implicit, no spring).
+bool World::tangentialSprings() const {
+    return settings.frictionOn && settings.frictionModel == FrictionModel::Spring;
+}
+
 // Stiffest contact spring of piece i over its surface nodes (largest
 // w_i kn / m_i; YADE spheres' springs are not area-weighted: lightest node):
 // its angular frequency wc and damping ratio xic (0, 0 when nothing can touch it).
@@ -312,16 +318,19 @@ void World::contactMode(std::size_t i, double& wc, double& xic) const {
         // different directions: the stiffer one sets the mode (kt > kn for
         // Poisson ratios below 0, Mindlin's ratio up to 4/3).  Both dashpots
         // keep the pair's damping ratio (ContactModel.hpp).
-        wc = std::sqrt(std::max(pair.kn, pair.kt) / (p.minSurfaceMassPerWeight * (finest / p.meanSurfaceShare)));
+        // (No friction, or the regularised law's implicit drag: no tangential spring.)
+        const bool spring = tangentialSprings() && std::max(m.frictionWall, m.frictionPiece) > 0;
+        wc = std::sqrt((spring ? std::max(pair.kn, pair.kt) : pair.kn) /
+                       (p.minSurfaceMassPerWeight * (finest / p.meanSurfaceShare)));
         xic = pair.xi;
     }
-    if (i < spheres.pieceKMax.size() && spheres.pieceKMax[i] > 0) {
+    const SphereSet::StepBound& sb = spheres.bound[tangentialSprings() ? 1 : 0];
+    if (i < sb.pieceK.size() && sb.pieceK[i] > 0) {
         // YADE spheres near the piece: their springs on its lightest node and
         // on the sphere's own mass (two masses on one spring), their dashpots'
         // largest rate (SpherePhase::setSpheres).
-        const double w2 = spheres.pieceKMax[i] / p.minSurfaceNodeMass + spheres.pieceSphereW2[i];
-        const double ws = std::sqrt(w2);
-        if (ws > wc) wc = ws, xic = std::max(xic, spheres.pieceSphereRate[i] / (2 * ws));
+        const double ws = std::sqrt(sb.pieceK[i] / p.minSurfaceNodeMass + sb.pieceSphereW2[i]);
+        if (ws > wc) wc = ws, xic = std::max(xic, sb.pieceSphereRate[i] / (2 * ws));
     }
 }
 
@@ -421,10 +430,9 @@ StableDt World::stableDt() const {
     }
     const bool implicit = settings.viscousIntegration == ViscousIntegration::Implicit;
     r.combined = implicit ? r.combinedImplicit : r.combinedExplicit;
-    if (std::isfinite(spheres.stableStep)) {
+    if (const double ds = spheres.bound[tangentialSprings() ? 1 : 0].stableStep; std::isfinite(ds)) {
         // The same springs on the sphere side, its dashpots lagged half a step
         // as every dashpot (SpherePhase::setSpheres).
-        const double ds = spheres.stableStep;
         r.contact = std::min(r.contact, ds);
         r.combined = std::min(r.combined, ds);
         r.combinedExplicit = std::min(r.combinedExplicit, ds);

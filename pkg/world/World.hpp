@@ -357,6 +357,7 @@ private:
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
+    bool tangentialSprings() const;
     // Stable step of a dynamic obstacle on the node springs that can act on
     // it at once (infinite for a fixed one): StableDt.cpp.
     double dynamicObstacleLimit(const Obstacle& o) const;

@@ -400,7 +400,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.setSpheres(*_NO_SPHERES)
         dt = O.dt
         spheresVersion = coupling.version if coupling else (self._mpy.version if self._mpy else None)
-        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, spheresVersion)
+        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, self.friction, self.frictionModel,
+               spheresVersion)
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
