@@ -9,7 +9,7 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py bench bench-mpi accuracy compare-builds clean
+.PHONY: deps build install demo test test-cpp test-py fuzz bench bench-mpi accuracy compare-builds clean
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -35,6 +35,15 @@ test-cpp:
 
 test-py:
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q tests/python
+
+# Random-scene fuzzer (doc/validation.md): random examples for QDEM_FUZZ_SECONDS
+# (default 600) or QDEM_FUZZ_EXAMPLES; failures shrunk and printed as a scene
+# spec for tests/python/test_fuzz_regressions.py; database in out/fuzz/.
+QDEM_FUZZ_SECONDS ?= 600
+fuzz: build
+	@mkdir -p out/fuzz
+	@QDEM_FUZZ_SECONDS=$(QDEM_FUZZ_SECONDS) QDEM_FUZZ_LONG=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python \
+	  $(YADE) -x tests/python/run_pytest.py -q -x tests/python/test_fuzz.py
 
 bench: build
 	@mkdir -p out/bench

@@ -1,0 +1,567 @@
+"""Random scenes for the fuzzer (test_fuzz.py) and their replay in the
+regression tests (test_fuzz_regressions.py).
+
+A scene is a plain dict (a *spec*: printable, and pasted as is into a
+regression test); ``sceneSpecs()`` is the Hypothesis strategy drawing them and
+``runScene(spec)`` builds the YADE scene, runs it with the invariants checked
+after every step and returns an Outcome.  ``check(outcome)`` raises
+AssertionError naming the first broken invariant.
+
+Three kinds of scene, each made to collide within its run:
+
+* ``pair``   two pieces thrown at each other, no gravity, nothing else: the
+             total momentum is exact (to rounding) and neither piece passes
+             through the other;
+* ``drop``   one piece thrown (with or without gravity) at a YADE wall (any
+             axis and side), a floor of two facets or a box;
+* ``spheres`` a YADE sphere or a clump of spheres thrown at a piece, no
+             gravity: momentum of spheres plus piece exact, no sphere ends
+             inside the piece.
+
+Invariants checked every step: positions and velocities finite; the energy
+ledger (QDEM's total plus the YADE bodies' kinetic energy) never above its
+start by more than its first-order drift ``ENERGY_GAIN`` (measured, see
+there); momentum exact where nothing external acts; no piece centroid inside
+another piece or behind the wall it was thrown at, and no sphere centre
+inside a piece (checked every ``PASS_CHECK`` steps and at the end); with
+Saint-Venant-Kirchhoff no element left inverted at the end; ``O.dt`` at or
+below the stable step it was drawn from.  A *named stop* (qdem.StabilityError,
+qdem.SetupError or ValueError whose message says what is wrong) is a correct
+outcome, except a StabilityError for a non-finite state: the step is drawn
+below the stable one, so a NaN is a blow-up."""
+import functools
+import math
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+
+import qdem
+
+# Ledger gain allowed, as a fraction of the scene's energy scale (initial
+# kinetic energy plus the largest |gravity work|), per unit dtFraction (the
+# drift is first order in dt: doc/spheres.md, doc/formulation.md 2).  Measured
+# on scenes the fuzzer draws (see doc/validation.md, "Random-scene fuzzer"):
+# the largest gain seen was ~1.3e-2 * dtFraction; allowed: 4x that.
+ENERGY_GAIN = 0.05
+MOMENTUM_REL = 1e-9      # |dp| / sum m|v| where nothing external acts
+PASS_CHECK = 10          # steps between the (costlier) pass-through checks
+
+NAMED_STOPS = ("StabilityError", "SetupError", "ValueError")
+
+
+# ----------------------------------------------------------------- meshes ----
+
+def _cacheDir():
+    d = os.path.join(tempfile.gettempdir(), "qdem-fuzz-meshes-%d" % os.getuid())
+    os.makedirs(d, exist_ok=True)
+    return d
+
+
+@functools.lru_cache(maxsize=None)
+def _unitBall(cellsPerRadius, seed):
+    m = qdem.ballMesh(1.0, 1.0 / cellsPerRadius, seed=seed)
+    return np.array(m.nodes), np.array(m.tets)
+
+
+def _prismSurface(sides, height):
+    """A closed convex prism of `sides` sides, circumradius 1, as (verts, tris)."""
+    a = 2 * np.pi * np.arange(sides) / sides
+    ring = np.c_[np.cos(a), np.sin(a)]
+    v = np.r_[np.c_[ring, np.full(sides, -height / 2)], np.c_[ring, np.full(sides, height / 2)],
+              [[0, 0, -height / 2], [0, 0, height / 2]]]
+    b, t = 2 * sides, 2 * sides + 1
+    tris = []
+    for i in range(sides):
+        j = (i + 1) % sides
+        tris += [(b, j, i), (t, sides + i, sides + j), (i, j, sides + j), (i, sides + j, sides + i)]
+    return v, np.array(tris, dtype=np.int32)
+
+
+@functools.lru_cache(maxsize=None)
+def _unitCgalShape(kind, cellSize, seed):
+    if kind == "prism":
+        surf = _prismSurface(6, 1.2)
+    elif kind == "octahedron":
+        v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+        tris = [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]
+        surf = (v, np.array(tris, dtype=np.int32))
+    else:  # ellipsoid
+        from qdem.shapes import icosphere
+        v, t = icosphere(1.0, 2)
+        surf = (v * [1.0, 0.6, 0.4], t)
+    m = qdem.meshSurface(surf, cellSize, seed=seed)
+    return np.array(m.nodes), np.array(m.tets)
+
+
+def _writeOff(path, verts, tris):
+    with open(path, "w") as f:
+        f.write("OFF\n%d %d 0\n" % (len(verts), len(tris)))
+        for p in verts:
+            f.write("%.17g %.17g %.17g\n" % tuple(p))
+        for t in tris:
+            f.write("3 %d %d %d\n" % tuple(t))
+
+
+@functools.lru_cache(maxsize=None)
+def _unitTetgen(kind, maxVolume):
+    """TetGen without its quality bound (-q): the Delaunay tetrahedra of the
+    surface points, slivers (four nearly coplanar points) included."""
+    from qdem.shapes import icosphere
+    if kind == "ball":
+        verts, tris = icosphere(1.0, 2)
+    else:
+        verts, tris = _prismSurface(8, 1.5)
+    d = tempfile.mkdtemp(dir=_cacheDir())
+    off = os.path.join(d, "s.off")
+    _writeOff(off, verts, tris)
+    flags = "-pQ" + ("a%g" % maxVolume if maxVolume else "")
+    subprocess.run(["tetgen", flags, off], check=True, capture_output=True, timeout=60)
+    m = qdem.loadMesh(os.path.join(d, "s.1.node"), fixOrientation=True)
+    return np.array(m.nodes), np.array(m.tets)
+
+
+def makeMesh(spec):
+    """(nodes, tets) of a mesh spec; sizes in metres."""
+    kind = spec["kind"]
+    if kind == "box":
+        m = qdem.boxMesh(tuple(spec["size"]), tuple(spec["cells"]), spec["tetsPerCell"])
+        return np.array(m.nodes), np.array(m.tets)
+    if kind == "ball":
+        nodes, tets = _unitBall(spec["cellsPerRadius"], spec.get("seed", 0))
+    elif kind == "cgal":
+        nodes, tets = _unitCgalShape(spec["shape"], spec["cellSize"], spec.get("seed", 0))
+    elif kind == "tetgen":
+        nodes, tets = _unitTetgen(spec["shape"], spec["maxVolume"])
+    else:
+        raise ValueError("unknown mesh kind %r" % kind)
+    return nodes * spec["size"], tets
+
+
+def meshSize(nodes):
+    """Smallest extent of the mesh's bounding box."""
+    return float((nodes.max(axis=0) - nodes.min(axis=0)).min())
+
+
+def edgeLength(nodes, tets):
+    e = nodes[tets[:, [0, 0, 0, 1, 1, 2]]] - nodes[tets[:, [1, 2, 3, 2, 3, 3]]]
+    return float(np.median(np.linalg.norm(e, axis=2)))
+
+
+# ---------------------------------------------------------------- material ---
+
+def makeMaterial(spec, nodes, tets):
+    """QdemMat from a material spec: viscosity from a first-mode damping ratio
+    (xi = eta omega / (2 mu), omega ~ pi c_s / L), radius a fraction of the
+    median edge."""
+    E, nu, rho = spec["young"], spec["poisson"], spec["density"]
+    mu = E / (2 * (1 + nu))
+    L = max(meshSize(nodes), 1e-9)
+    omega = math.pi * math.sqrt(mu / rho) / L
+    eta = spec["xi"] * 2 * mu / omega
+    return qdem.QdemMat(young=E, poisson=nu, density=rho, viscosity=eta, radius=spec["radiusFraction"] *
+                        edgeLength(nodes, tets), restitution=spec["restitution"], frictionPiece=spec["friction"],
+                        frictionWall=spec["friction"], law=spec["law"])
+
+
+# ------------------------------------------------------------------ checks ---
+
+def _pointsInside(points, nodes, tets):
+    """Boolean per point: inside one of the tetrahedra (barycentric test)."""
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    a = nodes[tets[:, 0]]
+    T = np.stack([nodes[tets[:, k]] - a for k in (1, 2, 3)], axis=2)       # (t,3,3)
+    det = np.linalg.det(T)
+    ok = np.abs(det) > 0
+    Tinv = np.zeros_like(T)
+    Tinv[ok] = np.linalg.inv(T[ok])
+    d = points[:, None, :] - a[None, :, :]                                     # (p,t,3)
+    lam = np.einsum("tij,ptj->pti", Tinv, d)
+    inside = (lam >= 0).all(axis=2) & (lam.sum(axis=2) <= 1) & ok[None, :]
+    return inside.any(axis=1)
+
+
+def _yadeKinetic(O, ids):
+    """Kinetic energy (translation + rotation) of the YADE bodies `ids`
+    (standalone spheres and clumps)."""
+    e = 0.0
+    for i in ids:
+        s = O.bodies[i].state
+        v = np.array(s.vel)
+        e += 0.5 * s.mass * v @ v
+        w = s.ori.conjugate() * s.angVel
+        e += 0.5 * sum(s.inertia[k] * w[k] ** 2 for k in range(3))
+    return e
+
+
+def _yadeMomentum(O, ids):
+    return sum((O.bodies[i].state.mass * np.array(O.bodies[i].state.vel) for i in ids), np.zeros(3))
+
+
+class Outcome:
+    """What a run gave: the first broken invariant (``failure``), or none;
+    the named stop it ended with (``stop``), the worst figures seen."""
+
+    def __init__(self, spec):
+        self.spec = spec
+        self.failure = None
+        self.stop = None
+        self.steps = 0
+        self.dt = None
+        self.stableDt = None
+        self.energyGain = 0.0       # largest (ledger - start) / scale
+        self.energyScale = None
+        self.momentumError = 0.0    # largest |dp| / sum m|v|
+        self.contacted = False
+        self.warnings = []
+
+    def fail(self, msg):
+        if self.failure is None:
+            self.failure = "step %d: %s" % (self.steps, msg)
+
+    def __repr__(self):
+        return ("Outcome(failure=%r, stop=%r, steps=%d, dt=%.3g, energyGain=%.3g, momentumError=%.3g, "
+                "contacted=%s)" % (self.failure, self.stop, self.steps, self.dt or 0, self.energyGain,
+                                   self.momentumError, self.contacted))
+
+
+def check(outcome):
+    assert outcome.failure is None, "%s\nspec = %r" % (outcome.failure, outcome.spec)
+
+
+# ---------------------------------------------------------------- the run ----
+
+def _engines(spec, withSpheres):
+    from yade import (Bo1_Box_Aabb, Bo1_Facet_Aabb, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter,
+                      Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
+                      Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
+    g = (0, 0, -9.81) if spec.get("gravity") else (0, 0, 0)
+    qe = qdem.QdemEngine(threads=spec["threads"])
+    pre = []
+    if withSpheres:
+        pre = [InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb(), Bo1_Facet_Aabb(), Bo1_Box_Aabb()]),
+               InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
+                               [Law2_ScGeom_FrictPhys_CundallStrack()])]
+    return [ForceResetter()] + pre + [qe, NewtonIntegrator(gravity=g, damping=0.0)], qe
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def _perp(d, angle):
+    """A unit vector perpendicular to d, turned by angle about d."""
+    a = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
+    u = _unit(np.cross(d, a))
+    w = np.cross(d, u)
+    return math.cos(angle) * u + math.sin(angle) * w
+
+
+def _addObstacle(O, ob, size):
+    """A YADE obstacle whose contact plane passes through the origin with
+    outward normal n (returned), pieces coming from the +n side."""
+    from yade import FrictMat, Vector3, utils
+    fm = O.materials.append(FrictMat(young=1e9, poisson=0.3, frictionAngle=ob.get("frictionAngle", 0.5),
+                                     density=1000))
+    kind = ob["kind"]
+    if kind == "wall":
+        axis, sense = ob["axis"], ob["sense"]
+        O.bodies.append(utils.wall(0.0, axis=axis, sense=sense, material=fm))
+        n = np.zeros(3)
+        n[axis] = sense if sense else 1
+        return n
+    big = 50 * size
+    if kind == "facets":
+        pts = [(-big, -big, 0), (big, -big, 0), (big, big, 0), (-big, big, 0)]
+        for tri in [(0, 1, 2), (0, 2, 3)]:
+            O.bodies.append(utils.facet([Vector3(*pts[k]) for k in tri], fixed=True, material=fm))
+    else:  # box: its top face at z = 0
+        O.bodies.append(utils.box((0, 0, -size), (big, big, size), fixed=True, material=fm))
+    return np.array([0, 0, 1.0])
+
+
+def runScene(spec):
+    """Build and run a scene spec inside YADE; returns an Outcome."""
+    from yade import FrictMat, O, PyRunner, Quaternion, Vector3, utils
+    import warnings
+    out = Outcome(spec)
+    O.reset()
+    qdem.reset()
+    kind = spec["kind"]
+    meshes = [makeMesh(p["mesh"]) for p in spec["pieces"]]
+    mats = [makeMaterial(p["material"], *m) for p, m in zip(spec["pieces"], meshes)]
+    pieces = []
+    for p, (nodes, tets), mat in zip(spec["pieces"], meshes, mats):
+        nodes = nodes - nodes.mean(axis=0)
+        pieces.append(qdem.addPiece((nodes, tets), mat, ori=(tuple(p["oriAxis"]), p["oriAngle"])))
+    sizes = [meshSize(m[0]) for m in meshes]
+    normal = None
+    sphereIds, dynIds = [], []
+    if kind == "drop":
+        normal = _addObstacle(O, spec["obstacle"], sizes[0])
+    elif kind == "spheres":
+        sp = spec["spheres"]
+        fm = O.materials.append(FrictMat(young=sp["young"], poisson=0.3, frictionAngle=sp["frictionAngle"],
+                                         density=sp["density"]))
+        R = sp["radiusFraction"] * sizes[0]
+        if sp["clump"]:
+            offs = [(-0.6 * R, 0, 0), (0.6 * R, 0, 0), (0, 0.6 * R, 0.3 * R)]
+            cid, members = O.bodies.appendClumped([utils.sphere(o, R * 0.7, material=fm) for o in offs])
+            dynIds, sphereIds = [cid], list(members)
+        else:
+            sid = O.bodies.append(utils.sphere((0, 0, 0), R, material=fm))
+            dynIds = sphereIds = [sid]
+    engines, qe = _engines(spec, kind == "spheres")
+    O.engines = engines
+    try:
+        stable = qe.stableTimeStep()
+    except Exception as e:  # noqa: BLE001 - classified below
+        return _stopped(out, e)
+    out.stableDt = stable
+    dt = spec["dtFraction"] * stable
+    out.dt = dt
+    steps = spec["steps"]
+    # Placement: the gap closes within the first `approach` of the run at the drawn speed.
+    speed = spec["speed"]
+    travel = speed * steps * dt * spec["approach"]
+    if kind == "pair":
+        d = _unit(spec["direction"])
+        a, b = pieces
+        ra = np.abs((a.pos - a.centroid()) @ d).max() + a.material.radius
+        rb = np.abs((b.pos - b.centroid()) @ d).max() + b.material.radius
+        lateral = spec["offset"] * min(sizes) * _perp(d, spec["offsetAngle"])
+        _moveTo(a, -d * (ra + travel / 2), 0.5 * speed * d, spec["pieces"][0]["spin"])
+        _moveTo(b, d * (rb + travel / 2) + lateral, -0.5 * speed * d, spec["pieces"][1]["spin"])
+        # with a lateral offset curved faces meet later: close the gap between
+        # the node sets along d to r_a + r_b + travel (never into overlap)
+        target = a.material.radius + b.material.radius + travel
+        for _ in range(4):
+            gap = _minDistance(a.pos, b.pos) - target
+            if gap <= 1e-3 * target:
+                break
+            b.pos[:] -= gap * d
+    elif kind == "drop":
+        p = pieces[0]
+        h = np.abs((p.pos - p.centroid()) @ normal).max() + p.material.radius
+        tang = _perp(normal, spec["offsetAngle"])
+        dirn = _unit(-normal * math.cos(spec["incidence"]) + tang * math.sin(spec["incidence"]))
+        _moveTo(p, normal * (h + travel * abs(dirn @ normal) + 1e-9 * h), speed * dirn,
+                spec["pieces"][0]["spin"])
+    else:
+        p = pieces[0]
+        _moveTo(p, np.zeros(3), np.zeros(3), spec["pieces"][0]["spin"])
+        d = _unit(spec["direction"])
+        reach = np.abs(p.pos @ d).max() + p.material.radius
+        body = O.bodies[dynIds[0]]
+        R = max(O.bodies[i].shape.radius for i in sphereIds)
+        ext = max(np.linalg.norm(np.array(O.bodies[i].state.pos) - np.array(body.state.pos)) for i in sphereIds)
+        c = d * (reach + R + ext + travel) + spec["offset"] * sizes[0] * _perp(d, spec["offsetAngle"])
+        for _ in range(4):  # close the gap to the drawn travel (curved faces, offset)
+            cs = np.array([list(O.bodies[i].state.pos) for i in sphereIds]) - np.array(body.state.pos) + c
+            gap = _minDistance(p.pos, cs) - R - p.material.radius - travel
+            if gap <= 1e-3 * (R + travel):
+                break
+            c = c - gap * d
+        body.state.pos = Vector3(*c)
+        body.state.vel = Vector3(*(-speed * d))
+        body.state.angVel = Vector3(*spec["spheres"]["spin"])
+        # (stable step read again: the spheres' positions do not change it, but be sure)
+    O.dt = dt
+    O.trackEnergy = True
+    core = qe.world.core
+
+    def energyNow():
+        return core.energy["total"] + _yadeKinetic(O, dynIds)
+
+    def momentumNow():
+        return sum(p.momentum() for p in pieces) + _yadeMomentum(O, dynIds)
+
+    conserveMomentum = kind in ("pair", "spheres")
+    mass = [core.mass]
+    scaleP = float((np.abs(core.vel) * core.mass[:, None]).sum()) + sum(
+        O.bodies[i].state.mass * np.linalg.norm(O.bodies[i].state.vel) for i in dynIds)
+    state = {"e0": None, "p0": momentumNow(), "gravMax": 0.0, "k0": None, "passed": None}
+
+    def perStep():
+        out.steps += 1
+        pos, vel = core.pos, core.vel
+        if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
+            out.fail("non-finite node state")
+            O.pause()
+            return
+        e = core.energy
+        if state["e0"] is None:  # after the first step: the ledger starts when QDEM has booked it
+            state["e0"] = e["total"] + _yadeKinetic(O, dynIds)
+            state["k0"] = e["kinetic"] + _yadeKinetic(O, dynIds)
+        state["gravMax"] = max(state["gravMax"], abs(e["gravity"]))
+        scale = state["k0"] + state["gravMax"] + 1e-300
+        out.energyScale = scale
+        gain = (e["total"] + _yadeKinetic(O, dynIds) - state["e0"]) / scale
+        out.energyGain = max(out.energyGain, gain)
+        if not math.isfinite(gain):
+            out.fail("energy ledger not finite")
+            O.pause()
+            return
+        if gain > ENERGY_GAIN * spec["dtFraction"]:
+            out.fail("energy ledger gained %.3g of its scale (allowed %.3g)" % (gain, ENERGY_GAIN * spec["dtFraction"]))
+        c = core.contactCounts
+        out.contacted = out.contacted or (c["pointPolygon"] + c["edgeEdge"] + c["sphere"] + c["wall"]) > 0
+        if conserveMomentum:
+            dp = np.abs(momentumNow() - state["p0"]).max() / max(scaleP, 1e-300)
+            out.momentumError = max(out.momentumError, dp)
+            if dp > MOMENTUM_REL:
+                out.fail("momentum changed by %.3g of sum m|v| with nothing external acting" % dp)
+        if out.steps % PASS_CHECK == 0 and state["passed"] is None:
+            msg = _passThrough(O, spec, pieces, normal, sphereIds)
+            if msg:
+                state["passed"] = (out.steps, msg)
+        if state["passed"] and out.steps - state["passed"][0] > qe.checkPeriod + 1:
+            # the engine checked since and named nothing: a silent pass
+            out.fail("%s (at step %d; no named stop by step %d)" % (state["passed"][1], state["passed"][0],
+                                                                   out.steps))
+        if out.failure:
+            O.pause()
+
+    O.engines = O.engines + [PyRunner(command="import fuzzscene; fuzzscene._perStep()", iterPeriod=1)]
+    global _perStep
+    _perStep = perStep
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            O.run(steps, True)
+        except Exception as e:  # noqa: BLE001 - classified in _stopped
+            _stopped(out, e)
+        finally:
+            _perStep = None
+    out.warnings = sorted({str(w.message)[:120] for w in caught})
+    if out.failure is None and out.stop is None:
+        msg = _passThrough(O, spec, pieces, normal, sphereIds)
+        msg = msg or (state["passed"] and state["passed"][1])
+        if msg:  # the engine's own checks, as at its next checkPeriod
+            try:
+                core.checkFinite()
+                if core.nPieces > 1:
+                    core.checkDeepOverlap()
+                if core.nSpheres:
+                    core.checkSpheresInside()
+            except Exception as e:  # noqa: BLE001 - classified in _stopped
+                _stopped(out, e)
+            else:
+                out.fail("%s (at the end of the run; no named stop)" % msg)
+        if O.dt > stable * (1 + 1e-12):
+            out.fail("O.dt %.6g above the stable step %.6g" % (O.dt, stable))
+        for p in pieces:
+            if p.material.law == "saintVenantKirchhoff":
+                v = qdem._core.tetVolumes(p.pos, p.tets)
+                if (v <= 0).any():
+                    out.fail("Saint-Venant-Kirchhoff piece %d left with %d inverted elements, no stop"
+                             % (p.id, int((v <= 0).sum())))
+    return out
+
+
+_perStep = None
+
+
+def _minDistance(x, y):
+    d2 = ((x[:, None, :] - y[None, :, :]) ** 2).sum(axis=2)
+    return float(np.sqrt(d2.min()))
+
+
+def _moveTo(p, c, v, spin):
+    x = p.pos
+    c0 = p.centroid()
+    x += np.asarray(c) - c0
+    p.vel[:] = np.asarray(v) + np.cross(np.asarray(spin, float), x - np.asarray(c))
+
+
+def _passThrough(O, spec, pieces, normal, sphereIds):
+    """What passed through what, or None."""
+    kind = spec["kind"]
+    if kind == "pair":
+        a, b = pieces
+        if spec["pieces"][0]["mesh"]["convex"] and _pointsInside(a.centroid()[None], b.pos, b.tets)[0]:
+            return "the centroid of piece 0 is inside piece 1: passed through it"
+        if spec["pieces"][1]["mesh"]["convex"] and _pointsInside(b.centroid()[None], a.pos, a.tets)[0]:
+            return "the centroid of piece 1 is inside piece 0: passed through it"
+    elif kind == "drop":
+        p = pieces[0]
+        if p.centroid() @ normal < 0:
+            return ("piece 0's centroid is behind the %s it was thrown at: passed through it"
+                     % spec["obstacle"]["kind"])
+    else:
+        p = pieces[0]
+        c = np.array([list(O.bodies[i].state.pos) for i in sphereIds])
+        if _pointsInside(c, p.pos, p.tets).any():
+            return "a YADE sphere's centre is inside piece 0: passed into it"
+    return None
+
+
+def _stopped(out, e):
+    name = type(e).__name__
+    msg = str(e)
+    if name not in NAMED_STOPS:
+        out.fail("unexpected exception %s: %s" % (name, msg[:400]))
+    elif name == "StabilityError" and "not finite" in msg:
+        out.fail("blow-up below the stable step (named, but a NaN): %s" % msg[:400])
+    elif len(msg) < 20:
+        out.fail("%s without a message naming the problem: %r" % (name, msg))
+    else:
+        out.stop = "%s: %s" % (name, msg[:300])
+    return out
+
+
+# -------------------------------------------------------------- strategies ---
+
+def sceneSpecs():
+    """Hypothesis strategy of scene specs."""
+    from hypothesis import strategies as st
+
+    logu = lambda lo, hi: st.floats(math.log10(lo), math.log10(hi)).map(lambda x: 10.0 ** x)  # noqa: E731
+    unitVec = st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: 0.1 < np.linalg.norm(v))
+
+    def box():
+        return st.builds(lambda s, c, t: {"kind": "box", "size": list(s), "cells": list(c), "tetsPerCell": t,
+                                          "convex": True},
+                         st.tuples(*[logu(0.02, 0.2)] * 3).filter(lambda s: max(s) / min(s) < 6),
+                         st.tuples(*[st.integers(1, 3)] * 3), st.sampled_from([5, 6, 12]))
+
+    mesh = st.one_of(
+        box(),
+        st.builds(lambda r, n, s: {"kind": "ball", "size": r, "cellsPerRadius": n, "seed": s, "convex": True},
+                  logu(0.02, 0.1), st.sampled_from([1.5, 2.5]), st.integers(0, 1)),
+        st.builds(lambda k, r, c: {"kind": "cgal", "shape": k, "size": r, "cellSize": c, "seed": 0,
+                                   "convex": True},
+                  st.sampled_from(["prism", "octahedron", "ellipsoid"]), logu(0.02, 0.1),
+                  st.sampled_from([0.5, 0.8])),
+        st.builds(lambda k, r, a: {"kind": "tetgen", "shape": k, "size": r, "maxVolume": a, "convex": True},
+                  st.sampled_from(["ball", "prism"]), logu(0.02, 0.1), st.sampled_from([0, 0.05])))
+    material = st.fixed_dictionaries({
+        "young": logu(1e5, 1e10), "poisson": st.floats(-0.5, 0.49), "density": logu(300, 10000),
+        "xi": st.one_of(st.just(0.0), logu(1e-3, 3.0)), "restitution": st.floats(0.05, 1.0),
+        "friction": st.floats(0, 1), "radiusFraction": logu(0.05, 1.0),
+        "law": st.sampled_from(["stableNeoHookean", "saintVenantKirchhoff"])})
+    spin = st.tuples(*[st.floats(-20, 20)] * 3)
+    piece = st.fixed_dictionaries({"mesh": mesh, "material": material, "oriAxis": unitVec,
+                                   "oriAngle": st.floats(0, math.pi), "spin": spin})
+    common = {"threads": st.sampled_from([1, 1, 1, 2]), "dtFraction": st.floats(0.3, 0.95),
+              "steps": st.integers(200, 1500), "speed": st.floats(0.1, 30.0), "approach": st.floats(0.0, 0.4),
+              "offset": st.floats(0, 0.3), "offsetAngle": st.floats(0, 2 * math.pi)}
+    pair = st.fixed_dictionaries(dict(common, kind=st.just("pair"), gravity=st.just(False),
+                                      pieces=st.lists(piece, min_size=2, max_size=2), direction=unitVec))
+    obstacle = st.one_of(
+        st.fixed_dictionaries({"kind": st.just("wall"), "axis": st.integers(0, 2), "sense": st.sampled_from([-1, 1]),
+                               "frictionAngle": st.floats(0, 1)}),
+        st.fixed_dictionaries({"kind": st.sampled_from(["facets", "box"]), "frictionAngle": st.floats(0, 1)}))
+    drop = st.fixed_dictionaries(dict(common, kind=st.just("drop"), gravity=st.booleans(),
+                                      pieces=st.lists(piece, min_size=1, max_size=1), obstacle=obstacle,
+                                      incidence=st.floats(0, 1.2)))
+    spheres = st.fixed_dictionaries(dict(
+        common, kind=st.just("spheres"), gravity=st.just(False), pieces=st.lists(piece, min_size=1, max_size=1),
+        direction=unitVec,
+        spheres=st.fixed_dictionaries({"clump": st.booleans(), "radiusFraction": logu(0.05, 0.5),
+                                       "young": logu(1e5, 1e10), "density": logu(300, 10000),
+                                       "frictionAngle": st.floats(0, 1), "spin": spin})))
+    return st.one_of(pair, drop, spheres)
