@@ -39,12 +39,15 @@ import numpy as np
 
 import qdem
 
-# Ledger gain allowed, as a fraction of the scene's energy scale (initial
-# kinetic energy plus the largest |gravity work|), per unit dtFraction (the
-# drift is first order in dt: doc/spheres.md, doc/formulation.md 2).  Measured
-# on scenes the fuzzer draws (see doc/validation.md, "Random-scene fuzzer"):
-# the largest gain seen was ~1.3e-2 * dtFraction; allowed: 4x that.
-ENERGY_GAIN = 0.05
+# Ledger gain allowed, as a fraction of the energy in flight (the largest
+# kinetic + elastic + contact-spring energy seen, plus the largest |gravity
+# work|), per unit dtFraction: the contact dashpots' booked loss drifts to
+# first order in dt (doc/hard_cases.md, "Known limits").  Measured: 0.069 f
+# (two cubes at restitution 0.2, 5.5 % at f = 0.8), 0.052 f (two 3x3x3 cubes
+# at restitution 0.5: 4.1 %, 2.0 %, 0.98 %, 0.48 % at f = 0.8, 0.4, 0.2,
+# 0.1), below 0.02 f in the fuzzer's own well-behaved scenes (pieces, walls,
+# facets, boxes; spheres 0.016 f).  Allowed: twice the largest.
+ENERGY_GAIN = 0.15
 EXPLOSION = 0.5         # a gain this large fails even if a named stop follows: a blow-up
 MOMENTUM_REL = 1e-9      # |dp| / sum m|v| where nothing external acts
 PASS_CHECK = 10          # steps between the (costlier) pass-through checks
@@ -522,12 +525,42 @@ def _minDistance(x, y):
     return float(np.sqrt(d2.min()))
 
 
+def _pointTriangleDistance(P, A, B, C):
+    """Distances (p,t) from points P (p,3) to triangles ABC (t,3 each):
+    the closest point of each triangle by Voronoi region (Ericson, Real-Time
+    Collision Detection, 5.1.5), vectorised."""
+    P = P[:, None, :]
+    ab, ac = (B - A)[None], (C - A)[None]
+    ap, bp, cp = P - A[None], P - B[None], P - C[None]
+    dot = lambda u, v: (u * v).sum(axis=-1)  # noqa: E731
+    d1, d2, d3, d4, d5, d6 = dot(ab, ap), dot(ac, ap), dot(ab, bp), dot(ac, bp), dot(ab, cp), dot(ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = vb / denom
+        w = vc / denom
+        q = A[None] + ab * v[..., None] + ac * w[..., None]                          # face
+        tab = np.clip(d1 / (d1 - d3), 0, 1)
+        tac = np.clip(d2 / (d2 - d6), 0, 1)
+        tbc = np.clip((d4 - d3) / ((d4 - d3) + (d5 - d6)), 0, 1)
+    qab = A[None] + ab * tab[..., None]
+    qac = A[None] + ac * tac[..., None]
+    qbc = B[None] + (C - B)[None] * tbc[..., None]
+    A_, B_, C_ = np.broadcast_to(A[None], q.shape), np.broadcast_to(B[None], q.shape), np.broadcast_to(C[None], q.shape)
+    regions = [
+        (d1 <= 0) & (d2 <= 0), (d3 >= 0) & (d4 <= d3), (d6 >= 0) & (d5 <= d6),
+        (vc <= 0) & (d1 >= 0) & (d3 <= 0), (vb <= 0) & (d2 >= 0) & (d6 <= 0),
+        (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)]
+    for mask, point in zip(reversed(regions), reversed([A_, B_, C_, qab, qac, qbc])):
+        q = np.where(mask[..., None], point, q)
+    return np.linalg.norm(P - q, axis=-1)
+
+
 def _surfaceDistance(p, points):
-    """Distance from points to piece p's surface, from below (surface
-    samples less their sampling error), and, for a piece's nodes, from its
-    surface samples too: placed this far, nothing starts in contact."""
-    pts, err = _surfaceSamples(p)
-    return _minDistance(pts, points) - err
+    """Smallest distance from points (n,3) to piece p's surface triangles:
+    what its point-polygon contacts measure."""
+    x = p.pos[p.surface()["triangles"]]
+    return float(_pointTriangleDistance(np.asarray(points, float), x[:, 0], x[:, 1], x[:, 2]).min())
 
 
 def _moveTo(p, c, v, spin):
