@@ -88,3 +88,49 @@ def test_soft_cubes_colliding_at_nine_tenths_of_the_stable_step_stay_bounded(sce
             "pieces": [_piece(_box(cells=2), _rubber()), _piece(_box(cells=2), _rubber())]}
     out = fuzzscene.runScene(spec)
     fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: a soft viscous piece whose contacts are too soft for its impact "
+                                       "sinks through a YADE wall, box or facets with no named stop (the "
+                                       "sink-through check misses it); deep-overlap checks are being extended "
+                                       "elsewhere")
+@pytest.mark.parametrize("obstacle", ["wall", "box", "facets"])
+def test_a_soft_ball_too_fast_for_its_contacts_does_not_sink_through_an_obstacle_silently(scene, obstacle):
+    """A CGAL ball (R 5 cm, 2.5 cells a radius), E 1e5, rho 1e4, first-mode
+    damping ratio 0.1, contact radius one edge (5.7 cm), restitution 1,
+    thrown at 11 m/s onto a YADE wall, box or pair of facets at half the
+    stable step (1.9 mm a step, a thirtieth of the contact radius): its node
+    contacts cannot stop it, and its centroid is behind the obstacle by step
+    90, unnamed at step 192.  It must rebound or stop naming the sinking
+    piece.  Without viscosity the same ball stops at step 100 naming an
+    inverted element; a 3x3x3 cube stops naming a node gone through the
+    facet.  Found as a CGAL prism onto facets, shrunk by Hypothesis."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 300, "speed": 11.0, "approach": 0.0, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "drop", "gravity": False, "incidence": 0.0,
+            "pieces": [_piece({"kind": "ball", "size": 0.05, "cellsPerRadius": 2.5, "seed": 0, "convex": True},
+                              _rubber(xi=0.1))],
+            "obstacle": {"kind": obstacle, "axis": 2, "sense": 1, "frictionAngle": 0.0}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: the ledger of YADE spheres and clumps against a piece drifts "
+                                       "first order but at 0.22 f (sphere) to 0.46 f (clump of three), three to "
+                                       "seven times the piece contacts' 0.07 f: the stable step does not see the "
+                                       "sphere contact's period (sphere-contact stable step, being fixed by the "
+                                       "lead)")
+@pytest.mark.parametrize("clump", [False, True])
+def test_a_sphere_or_clump_bouncing_off_a_cube_drifts_as_piece_contacts_do(scene, clump):
+    """A YADE sphere (R 2 cm) or a clump of three (members 1.4 cm), E 1e7,
+    rho 3000, at 2 m/s onto a 0.1 m cube (2x2x2 cells, E 1e7, rho 1e4,
+    restitution 1), no gravity, at half the stable step: the ledger gains
+    0.11 (sphere) and 0.23 (clump) of the energy in flight, halving with the
+    step (0.049 and 0.10 at 0.25, 0.023 and 0.048 at 0.125): first order, but
+    beyond the 0.15 f the piece contacts stay within."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 600, "speed": 2.0, "approach": 0.3, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "spheres", "gravity": False,
+            "pieces": [_piece(_box(cells=2), _rubber(young=1e7))], "direction": [0, 0, 1],
+            "spheres": {"clump": clump, "radiusFraction": 0.2, "young": 1e7, "density": 3000.0,
+                        "frictionAngle": 0.3, "spin": [0, 0, 0]}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
