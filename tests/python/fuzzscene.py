@@ -247,7 +247,7 @@ def _supersonic(spec, out):
 
 
 def _sphereLedger(spec, out):
-    """The ledger of a YADE sphere sunk deep into a piece."""
+    """The ledger of YADE spheres and clumps against pieces (several defects)."""
     return spec["kind"] == "spheres" and "energy ledger" in (out.failure or "")
 
 
@@ -266,7 +266,7 @@ def _sinkThrough(spec, out):
 KNOWN_DEFECTS = {
     "soft piece sinks through a wall, box or facets unnamed": _sinkThrough,
     "supersonic impact ends in NaN, not a named stop": _supersonic,
-    "sphere sunk deep into a soft piece: ledger off": _sphereLedger,
+    "sphere contacts: ledger gain beyond the first-order drift": _sphereLedger,
     "contact stable step too large (blow-up below stableTimeStep)": _softContactStep,
 }
 
