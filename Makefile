@@ -9,7 +9,7 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py bench bench-mpi accuracy compare-builds clean
+.PHONY: deps build install demo test test-cpp test-py fuzz bench bench-mpi accuracy compare-builds clean
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -35,6 +35,21 @@ test-cpp:
 
 test-py:
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q tests/python
+
+# Random-scene fuzzer (doc/validation.md): batches of QDEM_FUZZ_BATCH fresh
+# random examples until QDEM_FUZZ_SECONDS (default 600) have passed; the first
+# failure stops it, shrunk and printed as a scene spec for
+# tests/python/test_fuzz_regressions.py.  Hypothesis's database: out/fuzz/.
+QDEM_FUZZ_SECONDS ?= 600
+QDEM_FUZZ_BATCH ?= 30
+fuzz: build
+	@mkdir -p out/fuzz
+	@end=$$(( $$(date +%s) + $(QDEM_FUZZ_SECONDS) )); n=0; \
+	while [ $$(date +%s) -lt $$end ]; do \
+	  n=$$((n + 1)); echo "fuzz: batch $$n of $(QDEM_FUZZ_BATCH) examples"; \
+	  QDEM_FUZZ_LONG=1 QDEM_FUZZ_EXAMPLES=$(QDEM_FUZZ_BATCH) PYTHONPATH=$(CURDIR)/$(BUILD)/python \
+	    $(YADE) -x tests/python/run_pytest.py -q -s -x tests/python/test_fuzz.py || exit 1; \
+	done
 
 bench: build
 	@mkdir -p out/bench

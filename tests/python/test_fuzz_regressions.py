@@ -1,0 +1,158 @@
+"""Scenes the random-scene fuzzer (test_fuzz.py) found breaking an invariant,
+shrunk by hand to the fewest ingredients that still break it, each asserting
+the right behaviour.  A defect whose fix belongs elsewhere is marked
+xfail(strict=True) naming it: the mark comes off with the fix (a strict xfail
+that passes fails the suite, so a fix cannot go unnoticed)."""
+import pytest
+
+import fuzzscene
+
+
+def _rubber(**kw):
+    m = {"young": 1e5, "poisson": 0.0, "density": 10000.0, "xi": 0.0, "restitution": 0.99999, "friction": 0.0,
+         "radiusFraction": 1.0, "law": "stableNeoHookean"}
+    m.update(kw)
+    return m
+
+
+def _box(cells=3, tpc=5):
+    return {"kind": "box", "size": [0.1, 0.1, 0.1], "cells": [cells] * 3, "tetsPerCell": tpc, "convex": True}
+
+
+def _piece(mesh, material):
+    return {"mesh": mesh, "material": material, "oriAxis": [0, 0, 1], "oriAngle": 0.0, "spin": [0, 0, 0]}
+
+
+@pytest.mark.xfail(strict=True, reason="defect: an impact far beyond what the step resolves (a node moving more "
+                                       "than its contact radius per step into a wall) ends in NaN instead of a "
+                                       "named stop; per-step impact checks are being added elsewhere")
+@pytest.mark.parametrize("law", ["stableNeoHookean", "saintVenantKirchhoff"])
+def test_supersonic_impact_on_a_wall_stops_with_a_named_error_not_a_nan(scene, law):
+    """A very soft, dense cube (E = 1e5 Pa, rho = 1e4: wave speed 3 m/s)
+    thrown at 28 m/s onto a YADE wall at half the stable step: each step
+    moves it 6 cm, more than its contact radius (3.3 cm) and half its size.
+    The contact cannot stop it within a step; the run must end with a named
+    stop (the node that outruns its contact, the inverted element), never a
+    NaN.  Found as: a TetGen ball, SVK, 0.95 of the stable step, gravity, 2
+    threads (NaN at step 292); shrunk to this cube without gravity, at 0.5,
+    on one thread, both laws (NaN near step 380)."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 1010, "speed": 28.2, "approach": 0.35, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "drop", "gravity": False,
+            "pieces": [_piece(_box(), _rubber(law=law))],
+            "obstacle": {"kind": "wall", "axis": 2, "sense": 1, "frictionAngle": 0.0}, "incidence": 0.0}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+    assert out.stop is not None and "not finite" not in out.stop
+
+
+@pytest.mark.xfail(strict=True, reason="defect: the energy ledger of a YADE sphere sunk about its radius into "
+                                       "a soft piece gains 0.15-0.24 of the energy in flight during the impact, "
+                                       "independent of O.dt, and ends 15 % below its start with no dissipation "
+                                       "booked (restitution 1, no viscosity)")
+@pytest.mark.parametrize("dtFraction", [0.225, 0.45])
+def test_a_heavy_sphere_sinking_into_a_soft_piece_keeps_the_energy_ledger(scene, dtFraction):
+    """A YADE sphere (R 5 cm, E 1e5, rho 3000, 1.57 kg) thrown at 3 m/s onto a
+    soft cube (E 1e5, rho 1e4, 0.1 m, 2x2x2 cells, contact radius one edge
+    5 cm, restitution 1, no viscosity), no gravity: the contact (about 5e3
+    N/m) lets the sphere sink 5 cm, its own radius.  The ledger (QDEM's total
+    + the sphere's kinetic energy) must stay within its first-order drift
+    (fuzzscene.ENERGY_GAIN x f of the energy in flight).  Measured: a gain of
+    0.18, 0.15, 0.21, 0.22 at f = 0.9, 0.45, 0.225, 0.1125 (not first order:
+    not a stable-step matter); after the bounce sphere 1.36 J + cube 4.32 J
+    kinetic + 0.31 J elastic of the 7.07 J thrown in, 1.08 J gone with 3e-5 J
+    booked.  A stiff cube (E 1e8) gains 0.003.  Found as a clump of three
+    spheres at 13.6 m/s onto a CGAL ellipsoid (gain 0.12 at f = 0.89)."""
+    spec = {"threads": 1, "dtFraction": dtFraction, "steps": int(1100 / dtFraction), "speed": 3.0, "approach": 0.3,
+            "offset": 0.0, "offsetAngle": 0.0, "kind": "spheres", "gravity": False,
+            "pieces": [_piece(_box(cells=2), _rubber(law="stableNeoHookean"))], "direction": [0, 0, 1],
+            "spheres": {"clump": False, "radiusFraction": 0.5, "young": 1e5, "density": 3000.0,
+                        "frictionAngle": 0.3, "spin": [0, 0, 0]}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: two soft cubes (contact radius one edge) colliding at 0.9 of "
+                                       "stableTimeStep() blow up: the stable step of the piece-piece contact "
+                                       "(pkg/world/StableDt.cpp, node contact stiffness) is too large; being "
+                                       "fixed by the lead")
+def test_soft_cubes_colliding_at_nine_tenths_of_the_stable_step_stay_bounded(scene):
+    """Two cubes (E 1e5, rho 1e4, 0.1 m, 2x2x2 cells, contact radius one
+    edge, restitution 1) head-on at 3 m/s, O.dt = 0.9 stableTimeStep(): the
+    ledger must stay within its first-order drift.  Measured: the energy
+    explodes (gain 0.99 of the energy in flight, momentum off by 3e9 of sum
+    m|v| in the exploding velocities) before the engine stops naming a piece
+    gone through the other (step 383); at 0.45 the gain is 0.021 and at 0.1125
+    0.0016 (first order)."""
+    spec = {"threads": 1, "dtFraction": 0.9, "steps": 1200, "speed": 3.0, "approach": 0.3, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "pair", "gravity": False, "direction": [0, 0, 1],
+            "pieces": [_piece(_box(cells=2), _rubber()), _piece(_box(cells=2), _rubber())]}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: a soft viscous piece whose contacts are too soft for its impact "
+                                       "sinks through a YADE wall, box or facets with no named stop (the "
+                                       "sink-through check misses it); deep-overlap checks are being extended "
+                                       "elsewhere")
+@pytest.mark.parametrize("obstacle", ["wall", "box", "facets"])
+def test_a_soft_ball_too_fast_for_its_contacts_does_not_sink_through_an_obstacle_silently(scene, obstacle):
+    """A CGAL ball (R 5 cm, 2.5 cells a radius), E 1e5, rho 1e4, first-mode
+    damping ratio 0.1, contact radius one edge (5.7 cm), restitution 1,
+    thrown at 11 m/s onto a YADE wall, box or pair of facets at half the
+    stable step (1.9 mm a step, a thirtieth of the contact radius): its node
+    contacts cannot stop it, and its centroid is behind the obstacle by step
+    90, unnamed at step 192.  It must rebound or stop naming the sinking
+    piece.  Without viscosity the same ball stops at step 100 naming an
+    inverted element; a 3x3x3 cube stops naming a node gone through the
+    facet.  Found as a CGAL prism onto facets, shrunk by Hypothesis."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 300, "speed": 11.0, "approach": 0.0, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "drop", "gravity": False, "incidence": 0.0,
+            "pieces": [_piece({"kind": "ball", "size": 0.05, "cellsPerRadius": 2.5, "seed": 0, "convex": True},
+                              _rubber(xi=0.1))],
+            "obstacle": {"kind": obstacle, "axis": 2, "sense": 1, "frictionAngle": 0.0}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: the ledger of YADE spheres and clumps against a piece drifts "
+                                       "first order but at 0.22 f (sphere) to 0.46 f (clump of three), three to "
+                                       "seven times the piece contacts' 0.07 f: the stable step does not see the "
+                                       "sphere contact's period (sphere-contact stable step, being fixed by the "
+                                       "lead)")
+@pytest.mark.parametrize("clump", [False, True])
+def test_a_sphere_or_clump_bouncing_off_a_cube_drifts_as_piece_contacts_do(scene, clump):
+    """A YADE sphere (R 2 cm) or a clump of three (members 1.4 cm), E 1e7,
+    rho 3000, at 2 m/s onto a 0.1 m cube (2x2x2 cells, E 1e7, rho 1e4,
+    restitution 1), no gravity, at half the stable step: the ledger gains
+    0.11 (sphere) and 0.23 (clump) of the energy in flight, halving with the
+    step (0.049 and 0.10 at 0.25, 0.023 and 0.048 at 0.125): first order, but
+    beyond the 0.15 f the piece contacts stay within."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 600, "speed": 2.0, "approach": 0.3, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "spheres", "gravity": False,
+            "pieces": [_piece(_box(cells=2), _rubber(young=1e7))], "direction": [0, 0, 1],
+            "spheres": {"clump": clump, "radiusFraction": 0.2, "young": 1e7, "density": 3000.0,
+                        "frictionAngle": 0.3, "spin": [0, 0, 0]}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+
+
+@pytest.mark.xfail(strict=True, reason="defect: a light YADE sphere on a soft piece: the ledger gains 0.49 of "
+                                       "the energy in flight at half the stable step, 0.075 at 1/16 (about "
+                                       "1.2 f): the step is far too coarse for the sphere contact's period "
+                                       "(sphere-contact stable step and its accuracy, being fixed by the lead)")
+def test_a_light_sphere_touching_a_soft_one_cell_cube_keeps_the_ledger(scene):
+    """Hypothesis's shrunk scene: a YADE sphere (R 1 cm, E 1e5, rho 1000, 4 g)
+    at 1 m/s just touching a one-cell cube (5 tets, 0.1 m, E 1e5, rho 1000,
+    contact radius one edge, restitution 1), no gravity, at half the stable
+    step (3.0e-3 s, limited by the cube): the ledger gains 0.49 of the energy
+    in flight by the second step; 0.38, 0.17, 0.075 at f = 0.25, 0.125,
+    0.0625."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 200, "speed": 1.0, "approach": 0.0, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "spheres", "gravity": False,
+            "pieces": [_piece({"kind": "box", "size": [0.1, 0.1, 0.1], "cells": [1, 1, 1], "tetsPerCell": 5,
+                               "convex": True}, _rubber(density=1000.0))],
+            "direction": [0.0, 0.0, 1.0],
+            "spheres": {"clump": False, "radiusFraction": 0.1, "young": 1e5, "density": 1000.0, "frictionAngle": 0.0,
+                        "spin": [0, 0, 0]}}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
