@@ -621,3 +621,48 @@ def test_a_qdem_engine_stopped_for_some_steps_warns_and_its_clock_follows_yades_
         O.run(10, True)
     assert (qe2.world.core.iter, qe2.world.core.time) == (O.iter, pytest.approx(O.time, rel=1e-12))
 
+
+def _defaultDtNotes(O, steps=20):
+    import warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        O.run(steps, True)
+    return [str(w.message) for w in caught if "YADE's default" in str(w.message)]
+
+
+@pytest.mark.parametrize("dt", ["untouched", "set smaller", "set by a time stepper", "near the stable step"])
+def test_yades_default_dt_far_below_the_stable_step_is_noted_once(scene, dt):
+    """O.dt left at YADE's default 1e-8 s while QDEM's stable step is 1e-4 s
+    ran 10^4 times more steps than needed, and nothing said so: a one-time
+    RuntimeWarning names the stable step and the line to write.  An O.dt set
+    smaller on purpose, one a time stepper sets, and the default where it is
+    within 100 times the stable step (a stiff, fine piece) are not noted."""
+    from yade import ForceResetter, GlobalStiffnessTimeStepper, NewtonIntegrator
+    O = scene
+    if dt == "near the stable step":              # steel, 2 mm cells: a stable step ~1e-7 s
+        mat = qdem.QdemMat(young=2e11, poisson=0.3, density=7800, viscosity=0.0, radius=2e-4)
+        qdem.addPiece(qdem.boxMesh((0.01, 0.01, 0.01), (5, 5, 5)), mat, pos=(0, 0, 0.5))
+    else:
+        qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.5))
+    qe = qdem.QdemEngine(label="qe")
+    stepper = [GlobalStiffnessTimeStepper(defaultDt=1e-8, timeStepUpdateInterval=10 ** 9)] \
+        if dt == "set by a time stepper" else []
+    O.engines = [ForceResetter()] + stepper + [qe, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    assert O.dt == 1e-8                                           # YADE's default
+    stable = qe.stableTimeStep()
+    if dt == "set smaller":
+        O.dt = 5e-9
+    notes = _defaultDtNotes(O)
+    assert O.dt in (1e-8, 5e-9)
+    if dt != "untouched":
+        assert notes == [], notes
+        assert (stable < 100 * O.dt) == (dt == "near the stable step")
+        return
+    assert stable > 1e4 * O.dt
+    assert len(notes) == 1, notes
+    assert ("O.dt = 1e-08 s is YADE's default, %.3g times below QDEM's stable time step %.6g s "
+            "(QdemEngine.stableTimeStep())" % (stable / 1e-8, stable)) in notes[0], notes[0]
+    assert "Set O.dt = 0.8 * qe.stableTimeStep() (qe: this QdemEngine (label 'qe'))" in notes[0], notes[0]
+    assert _defaultDtNotes(O) == []                               # once
+    O.dt = 0.8 * qe.stableTimeStep()
+    assert _defaultDtNotes(O) == []
