@@ -33,6 +33,7 @@ Each of these runs without complaint in YADE and gives wrong physics:
 
 And one that is only slow: O.dt left at YADE's default while QDEM's stable
 step is 100 or more times larger (a one-time warning naming that step)."""
+import math
 import warnings
 
 from . import lifecycle
@@ -222,7 +223,7 @@ def noteDefaultDt(engine, O, dt):
     if O.dynDt:  # an active TimeStepper (GlobalStiffnessTimeStepper, ...) sets O.dt
         return
     stable = float(engine.world.core.stableDt()["combined"])
-    if not stable >= 100 * dt:
+    if not (stable >= 100 * dt and math.isfinite(stable)):  # (inf: no piece yet, nothing to compare)
         return
     engine._warnedDefaultDt = True
     from . import parallel

@@ -666,3 +666,15 @@ def test_yades_default_dt_far_below_the_stable_step_is_noted_once(scene, dt):
     assert _defaultDtNotes(O) == []                               # once
     O.dt = 0.8 * qe.stableTimeStep()
     assert _defaultDtNotes(O) == []
+
+
+def test_yades_default_dt_is_weighed_once_a_piece_is_there(scene):
+    """Before any piece the stable step is inf (nothing limits it): no note
+    saying O.dt is 'inf times' too small; the piece added later is noted."""
+    from yade import ForceResetter, NewtonIntegrator
+    O = scene
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    assert _defaultDtNotes(O, 5) == []
+    qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.5))
+    notes = _defaultDtNotes(O, 5)
+    assert len(notes) == 1 and "1.4e+04 times below" in notes[0], notes
