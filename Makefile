@@ -33,8 +33,14 @@ test: build test-cpp test-py
 test-cpp:
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+# The Python tests run inside YADE on PYTEST_WORKERS pytest-xdist workers (one
+# per core, one OpenMP thread each: tests/python/conftest.py; the MPI tests
+# all on one of them).  Here MPI is required: a build without it fails the MPI
+# tests instead of skipping them (tests/python/mpi_launch.py).
+PYTEST_WORKERS ?= 2
 test-py:
-	@PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q tests/python
+	@QDEM_TESTS_REQUIRE_MPI=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q \
+	  -n $(PYTEST_WORKERS) --dist loadgroup tests/python
 
 # Random-scene fuzzer (doc/validation.md): batches of QDEM_FUZZ_BATCH fresh
 # random examples until QDEM_FUZZ_SECONDS (default 600) have passed; the first

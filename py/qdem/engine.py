@@ -170,6 +170,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._unfelt = []  # (id, shape) of the bodies pieces cannot collide with, at the last scan
         self._ids, self._states, self._signatures, self._obstacles = [], None, [], []
         self._dtChecked = None
+        self._dtNoted = None          # the step key YADE's default O.dt was last weighed at
+        self._warnedDefaultDt = False
         self._lastProgress = None
         #: Inverted elements (volume ratio <= 0), counted every checkPeriod: ``now`` (at the last
         #: check), ``max`` (largest count seen), ``time`` [s] (time during which any element
@@ -405,6 +407,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
+        if dt == setupcheck.YADE_DEFAULT_DT and not self._warnedDefaultDt and self._dtNoted != key:
+            setupcheck.noteDefaultDt(self, O, dt)
+            self._dtNoted = key
         if core.mpiSize == 1 and (parallel.launchedSize() > 1 or self._mpy is not None):
             parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
         if core.iter == 0 and core.time == 0.0:

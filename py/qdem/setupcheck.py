@@ -29,10 +29,17 @@ Each of these runs without complaint in YADE and gives wrong physics:
   CombinedKinematicEngine) turning bodies about its zeroPoint before
   QdemEngine: QDEM reads the velocities it set for the coming step, not the
   step just made, and a piece stuck on such a body slips sideways by about
-  w^2 r dt per second (a warning: it converges with dt)."""
+  w^2 r dt per second (a warning: it converges with dt).
+
+And one that is only slow: O.dt left at YADE's default while QDEM's stable
+step is 100 or more times larger (a one-time warning naming that step)."""
+import math
 import warnings
 
 from . import lifecycle
+
+#: O.dt of a new YADE scene (``O.reset(); O.dt`` in YADE 2023.02a).
+YADE_DEFAULT_DT = 1e-8
 
 
 class SetupError(RuntimeError):
@@ -205,3 +212,26 @@ def _checkForceReaders(O, engine, engines, i, newton):
                              "ServoPIDController(...), NewtonIntegrator(...)]." % (k, i))
         if i < k < newton:
             engine._syncForces = True
+
+
+def noteDefaultDt(engine, O, dt):
+    """O.dt at YADE's default 1e-8 s runs a scene whose stable step is 1e-4 s
+    10^4 times slower than it could, and nothing says so: warned once per
+    engine and scene when QDEM's stable step is at least 100 times larger.
+    A time stepper in O.engines owns O.dt, and a smaller O.dt set on purpose
+    (any other value) is the user's choice: neither is warned of."""
+    if O.dynDt:  # an active TimeStepper (GlobalStiffnessTimeStepper, ...) sets O.dt
+        return
+    stable = float(engine.world.core.stableDt()["combined"])
+    if not (stable >= 100 * dt and math.isfinite(stable)):  # (inf: no piece yet, nothing to compare)
+        return
+    engine._warnedDefaultDt = True
+    from . import parallel
+    if not parallel.isWriter():
+        return
+    name = "this QdemEngine" + (" (label %r)" % engine.label if engine.label else "")
+    warnings.warn("QdemEngine: O.dt = %g s is YADE's default, %.3g times below QDEM's stable time step %.6g s "
+                  "(QdemEngine.stableTimeStep()): the run takes that many more steps than it needs. Set "
+                  "O.dt = 0.8 * qe.stableTimeStep() (qe: %s) after adding the pieces; if O.dt = %g s is meant, "
+                  "ignore this note (given once)." % (dt, stable / dt, stable, name, dt),
+                  RuntimeWarning, stacklevel=3)

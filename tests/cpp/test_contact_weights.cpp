@@ -2,6 +2,8 @@
 // area (World::surfWeight, doc/contacts.md "Area weights").
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -116,21 +118,67 @@ TEST(ContactWeights, EqualSharesKeepTheStiffness) {
     EXPECT_NEAR(fz, 2 * (2 * mat.young * mat.radius) * 1e-3, 1e-9 * fz);
 }
 
-// The contact stable step follows the stiffest weighted spring: the largest
-// w_i kn / m_i over the surface nodes.
-TEST(ContactWeights, StableStepUsesTheLargestWeightedStiffness) {
-    World w;
-    const Material mat = softMaterial();
-    w.addPiece(gradedBlock(6), w.addMaterial(mat));
-    w.setObstacles({floorWall()});
-    double best = 0, unweighted = 0;
-    const PieceInfo& p = w.pieces[0];
-    for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
-        best = std::max(best, w.surfWeight[s] / w.mass[w.surfNodes[s]]);
-        unweighted = std::max(unweighted, 1.0 / w.mass[w.surfNodes[s]]);
+// The largest step for which a node of mass m on springs k (x, y, z) with
+// dashpots c stays bounded, found from the scheme itself (the velocity lagging
+// half a step, as the integrator treats dashpots): the spectral radius of the
+// one-step map of (x_n, v_{n-1/2}) at most 1, by bisection on dt.  No formula
+// of the implementation is used.
+static double nodeStableStep(double m, const Eigen::Vector3d& k, const Eigen::Vector3d& c) {
+    auto radius = [&](double dt) {
+        Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+        for (int d = 0; d < 3; ++d) {
+            const double keep = 1 - dt * c[d] / m;  // v_{n+1/2} = keep v_{n-1/2} - dt k/m x_n
+            A(3 + d, d) = -dt * k[d] / m;
+            A(3 + d, 3 + d) = keep;
+            A(d, d) = 1 - dt * dt * k[d] / m;  // x_{n+1} = x_n + dt v_{n+1/2}
+            A(d, 3 + d) = dt * keep;
+        }
+        return A.eigenvalues().cwiseAbs().maxCoeff();
+    };
+    double lo = 0, hi = 1e-3 * std::sqrt(m / k.maxCoeff());
+    while (radius(hi) <= 1 + 1e-12) lo = hi, hi *= 2;
+    for (int i = 0; i < 80; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (radius(mid) <= 1 + 1e-12 ? lo : hi) = mid;
     }
-    const double kn = 2 * mat.young * mat.radius;
-    const double xi = dampingRatioFromRestitution(mat.restitution);
-    EXPECT_NEAR(w.stableDt().contact, leapfrogLimit(std::sqrt(kn * best), xi), 1e-12);
-    EXPECT_NE(best, unweighted);  // the graded mesh's stiffest node is not its lightest
+    return lo;
+}
+
+// The contact stable step is that of the node whose springs, scaled by its
+// area weight, are stiffest for its mass, with BOTH its normal spring kn and
+// its two tangential springs kt (sticking friction): for Poisson's ratio < 0
+// Mindlin's kt / kn = 2 (1 - nu) / (2 - nu) is above 1 and the tangential
+// mode is the fastest.  Computed here node by node from the springs of the
+// contact law (doc/contacts.md: kn = 2 E r against a rigid wall, kt from
+// Mindlin, dashpots 2 xi sqrt(k m) in both directions, springs x w, dashpots
+// x sqrt(w)).
+TEST(ContactWeights, StableStepIsTheFastestNodeOnItsNormalAndTangentialSprings) {
+    for (double nu : {0.3, 0.0, -0.5}) {
+        World w;
+        Material mat = softMaterial();
+        mat.poisson = nu;
+        mat.viscosity = 0;
+        w.addPiece(gradedBlock(6), w.addMaterial(mat));
+        w.setObstacles({floorWall()});
+        const double kn = 2 * mat.young * mat.radius, kt = kn * 2 * (1 - nu) / (2 - nu);
+        const double le = std::log(mat.restitution), xi = -le / std::sqrt(M_PI * M_PI + le * le);
+        double expected = 1e300, unweighted = 1e300;
+        const PieceInfo& p = w.pieces[0];
+        for (int32_t s = p.surfBegin; s < p.surfEnd; ++s) {
+            const double m = w.mass[w.surfNodes[s]], ws = w.surfWeight[s];
+            const Eigen::Vector3d k(ws * kt, ws * kt, ws * kn);
+            const Eigen::Vector3d c(2 * xi * std::sqrt(k.x() * m), 2 * xi * std::sqrt(k.y() * m),
+                                    2 * xi * std::sqrt(k.z() * m));
+            expected = std::min(expected, nodeStableStep(m, k, c));
+            const Eigen::Vector3d k1(kt, kt, kn);
+            const Eigen::Vector3d c1(2 * xi * std::sqrt(kt * m), 2 * xi * std::sqrt(kt * m), 2 * xi * std::sqrt(kn * m));
+            unweighted = std::min(unweighted, nodeStableStep(m, k1, c1));
+        }
+        const double got = w.stableDt().contact;
+        std::printf("nu = %4.1f: kt/kn = %.3f, contact stable step %.6e s, the fastest node's %.6e s (ratio %.4f)\n", nu,
+                    kt / kn, got, expected, got / expected);
+        EXPECT_NEAR(got, expected, 1e-6 * expected) << "nu = " << nu << ", kt/kn = " << kt / kn;
+        // The graded mesh's stiffest node is not its lightest: the weights count.
+        EXPECT_GT(std::fabs(unweighted / expected - 1), 0.01) << nu;
+    }
 }

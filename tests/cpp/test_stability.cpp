@@ -56,16 +56,37 @@ TEST(Stability, EngineRefusesUnstableStepNamingTheLimit) {
     }
 }
 
+// An undamped elastic block, its nodes displaced by up to 1 mm, run 20,000
+// steps at 0.99 of the stable step.  Leapfrog keeps a modified energy: kinetic
+// + elastic oscillates (the fastest mode's kinetic energy near the limit is
+// amplified by up to 1 / (1 - (w dt / 2)^2)) and node speeds reach 42 m/s,
+// but neither grows.  The first 2,000 steps (hundreds of periods of the
+// fastest modes) set the band; the last 2,000 must stay in it.  (A fixed
+// bound of 100 m/s passed at 1.2 x the stable step, where the peak speed grew
+// from 71 to 86 m/s over the run; this fails there.)
 TEST(Stability, ElasticBlockStaysBoundedAtTheLimit) {
     World w;
     Material m;
     m.viscosity = 0;
     w.addPiece(boxMesh(3, 3, 3, 1, 1, 1, 5), w.addMaterial(m));
     for (std::size_t i = 0; i < w.pos.size(); ++i) w.pos[i] += 1e-3 * std::sin(7.0 * i);
+    w.settings.trackEnergy = true;
     const double dt = 0.99 * w.stableDt().combined;
-    for (int i = 0; i < 20000; ++i) w.step(dt);
+    const int n = 20000, window = 2000;
+    double eFirst = 0, vFirst = 0, eLast = 0, vLast = 0, eMin = 1e300;
+    for (int i = 0; i < n; ++i) {
+        w.step(dt);
+        double vmax = 0;
+        for (std::size_t k = 0; k < w.vel.size(); ++k) vmax = std::max(vmax, std::fabs(w.vel[k]));
+        const double e = w.energy.kinetic + w.energy.elastic;
+        if (i < window) eFirst = std::max(eFirst, e), vFirst = std::max(vFirst, vmax);
+        if (i >= n - window) eLast = std::max(eLast, e), vLast = std::max(vLast, vmax);
+        eMin = std::min(eMin, e);
+    }
+    std::printf("dt %.4g: energy peak %.6g J in the first %d steps, %.6g J in the last (min %.6g); speed %.4g, %.4g m/s\n",
+                dt, eFirst, window, eLast, eMin, vFirst, vLast);
     EXPECT_NO_THROW(w.checkFinite());
-    double vmax = 0;
-    for (std::size_t i = 0; i < w.vel.size(); ++i) vmax = std::max(vmax, std::fabs(w.vel[i]));
-    EXPECT_LT(vmax, 100.0);
+    EXPECT_GT(vFirst, 1.0);  // the block does move
+    EXPECT_LT(eLast, 1.02 * eFirst);
+    EXPECT_LT(vLast, 1.1 * vFirst);
 }

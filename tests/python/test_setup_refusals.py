@@ -66,8 +66,11 @@ def test_the_halves_of_a_cut_block_added_as_pieces_do_not_pass_through_each_othe
     a.pos[:, 0] -= 0.004                      # just apart: the reach of two 2 mm radii
     a.vel[:, 0], b.vel[:, 0] = 1.0, -1.0
     dt = 0.8 * w.stableDt()["combined"]
-    w.core.step(dt, int(0.02 / dt))
-    assert w.core.contactCounts["pointPolygon"] >= 0
+    touching = 0                                             # steps with point-polygon contacts between them
+    for _ in range(int(0.02 / dt)):
+        w.core.step(dt, 1)
+        touching += w.core.contactCounts["pointPolygon"] > 0
+    assert touching * dt > 2e-3                              # they touched (for 4.2 ms)
     assert a.pos[:, 0].max() < b.pos[:, 0].min() + 2e-3      # no node of one past the other's face
     assert a.velocity()[0] < 0 < b.velocity()[0]             # they bounced apart
 
@@ -255,27 +258,43 @@ def test_a_loaded_state_knows_its_obstacles_whatever_list_was_in_force_before():
     again: the saved run's floor was taken as new and refused. (b) Saved
     before the floor existed, the floor added, the state loaded, an impact,
     then a far facet added: the floor, known since the load, was checked
-    again mid-impact and refused."""
+    again mid-impact and refused.  Each run goes on exactly as the same run
+    without the detour (same trajectory to the bit), the floor pushing the
+    cube back."""
     w, p, dt = _impactWorld()
     saved_list = [_far(7, 5.0), _wall(1)[0]]
     _setAll(w, saved_list)
     _intoImpact(w, p, dt)
     saved = w.core.saveState()
+    vz = p.velocity()[2]
+    w.core.step(dt, 5)                                            # the run without the detour
+    ref = w.core.pos.copy()
+    assert p.velocity()[2] > vz                                   # the floor pushes back
+    w.core.loadState(saved)
     _setAll(w, [_far(7, 5.0), _far(9, 20.0)])
     w.core.step(dt, 1)
     w.core.loadState(saved)
     _setAll(w, saved_list)
     w.core.step(dt, 5)                                            # (a): no refusal
-    w, p, dt = _impactWorld()
-    _setAll(w, [_far(7, 5.0)])
-    w.core.step(dt, 1)
-    saved = w.core.saveState()                                    # in the air, no floor
-    _setAll(w, [_far(7, 5.0), _wall(9)[0]])
-    w.core.step(dt, 1)
-    w.core.loadState(saved)
-    _intoImpact(w, p, dt)
-    _setAll(w, [_far(7, 5.0), _wall(9)[0], _far(11, 40.0)])
-    w.core.step(dt, 5)                                            # (b): no refusal
+    assert np.array_equal(w.core.pos, ref)
+
+    def impactAfterLoad(detour):
+        w, p, dt = _impactWorld()
+        _setAll(w, [_far(7, 5.0)])
+        w.core.step(dt, 1)
+        saved = w.core.saveState()                                # in the air, no floor
+        _setAll(w, [_far(7, 5.0), _wall(9)[0]])
+        if detour:
+            w.core.step(dt, 1)
+            w.core.loadState(saved)
+        _intoImpact(w, p, dt)
+        vz = p.velocity()[2]
+        _setAll(w, [_far(7, 5.0), _wall(9)[0], _far(11, 40.0)])
+        w.core.step(dt, 5)                                        # (b): no refusal
+        assert p.velocity()[2] > vz                               # the floor pushes back
+        return w.core.pos.copy()
+
+    assert np.array_equal(impactAfterLoad(True), impactAfterLoad(False))
 
 
 @pytest.mark.parametrize("twoChanges", [False, True])
@@ -601,3 +620,61 @@ def test_a_qdem_engine_stopped_for_some_steps_warns_and_its_clock_follows_yades_
     with pytest.warns(RuntimeWarning, match=r"did not run in the 50 steps before O.iter = 450"):
         O.run(10, True)
     assert (qe2.world.core.iter, qe2.world.core.time) == (O.iter, pytest.approx(O.time, rel=1e-12))
+
+
+def _defaultDtNotes(O, steps=20):
+    import warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        O.run(steps, True)
+    return [str(w.message) for w in caught if "YADE's default" in str(w.message)]
+
+
+@pytest.mark.parametrize("dt", ["untouched", "set smaller", "set by a time stepper", "near the stable step"])
+def test_yades_default_dt_far_below_the_stable_step_is_noted_once(scene, dt):
+    """O.dt left at YADE's default 1e-8 s while QDEM's stable step is 1e-4 s
+    ran 10^4 times more steps than needed, and nothing said so: a one-time
+    RuntimeWarning names the stable step and the line to write.  An O.dt set
+    smaller on purpose, one a time stepper sets, and the default where it is
+    within 100 times the stable step (a stiff, fine piece) are not noted."""
+    from yade import ForceResetter, GlobalStiffnessTimeStepper, NewtonIntegrator
+    O = scene
+    if dt == "near the stable step":              # steel, 2 mm cells: a stable step ~1e-7 s
+        mat = qdem.QdemMat(young=2e11, poisson=0.3, density=7800, viscosity=0.0, radius=2e-4)
+        qdem.addPiece(qdem.boxMesh((0.01, 0.01, 0.01), (5, 5, 5)), mat, pos=(0, 0, 0.5))
+    else:
+        qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.5))
+    qe = qdem.QdemEngine(label="qe")
+    stepper = [GlobalStiffnessTimeStepper(defaultDt=1e-8, timeStepUpdateInterval=10 ** 9)] \
+        if dt == "set by a time stepper" else []
+    O.engines = [ForceResetter()] + stepper + [qe, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    assert O.dt == 1e-8                                           # YADE's default
+    stable = qe.stableTimeStep()
+    if dt == "set smaller":
+        O.dt = 5e-9
+    notes = _defaultDtNotes(O)
+    assert O.dt in (1e-8, 5e-9)
+    if dt != "untouched":
+        assert notes == [], notes
+        assert (stable < 100 * O.dt) == (dt == "near the stable step")
+        return
+    assert stable > 1e4 * O.dt
+    assert len(notes) == 1, notes
+    assert ("O.dt = 1e-08 s is YADE's default, %.3g times below QDEM's stable time step %.6g s "
+            "(QdemEngine.stableTimeStep())" % (stable / 1e-8, stable)) in notes[0], notes[0]
+    assert "Set O.dt = 0.8 * qe.stableTimeStep() (qe: this QdemEngine (label 'qe'))" in notes[0], notes[0]
+    assert _defaultDtNotes(O) == []                               # once
+    O.dt = 0.8 * qe.stableTimeStep()
+    assert _defaultDtNotes(O) == []
+
+
+def test_yades_default_dt_is_weighed_once_a_piece_is_there(scene):
+    """Before any piece the stable step is inf (nothing limits it): no note
+    saying O.dt is 'inf times' too small; the piece added later is noted."""
+    from yade import ForceResetter, NewtonIntegrator
+    O = scene
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    assert _defaultDtNotes(O, 5) == []
+    qdem.addPiece(_cube(), rubber(radius=R), pos=(0, 0, 0.5))
+    notes = _defaultDtNotes(O, 5)
+    assert len(notes) == 1 and "1.4e+04 times below" in notes[0], notes
