@@ -174,7 +174,7 @@ private:
     double meanSurfaceEdge(int32_t piece) const;
     // Accepted: pairs with a new piece whose springs start pressed by more
     // than a quarter of the reach get a warning naming the energy held and
-    // the speed it throws them apart at (startWarnings_).  Collective under MPI.
+    // the speed it throws them apart at (startWarnings_).
     void warnStartPress();
     // The surface node lying deepest inside another piece (winding number),
     // among at most 16 per neighbour pair, those deepest in the other's box

@@ -76,9 +76,8 @@ double PieceContactPhase::meanSurfaceEdge(int32_t piece) const {
 }
 
 void PieceContactPhase::warnStartPress() {
-    // The pairs every rank knows (st_.pairs: from the reduced boxes), each
-    // once, lower id first; the springs' energy summed over the threads and
-    // (under MPI) the ranks, in rank order.
+    // The pairs of pieces that can touch, each once, lower id first; the
+    // springs' energy summed over the threads.
     std::vector<std::pair<int32_t, int32_t>> pairs;
     for (std::size_t q = 0; q + 1 < st_.pairs.size(); q += 2)
         if (st_.pairs[q] < st_.pairs[q + 1]) pairs.emplace_back(st_.pairs[q], st_.pairs[q + 1]);
@@ -92,10 +91,10 @@ void PieceContactPhase::warnStartPress() {
             energy[it - pairs.begin()] += p.energy;
             overlap[it - pairs.begin()] = std::max(overlap[it - pairs.begin()], p.overlap);
         }
-    if (Domain* dom = w_.domain.built(); dom && nq > 0) {
-        dom->sumInRankOrder(energy.data(), nq);
-        dom->comm().allreduceMax(overlap.data(), nq);
-    }
+    // Under MPI each rank sums its own nodes' springs and says so: no
+    // collective here (a rank whose start check or obstacle check refused
+    // the set-up is not in this call, and would leave the others waiting).
+    const Domain* dom = w_.domain.built();
     for (int q = 0; q < nq; ++q) {
         const int32_t a = pairs[q].first, b = pairs[q].second;
         if (startChecked_[a] && startChecked_[b]) continue;
@@ -114,7 +113,9 @@ void PieceContactPhase::warnStartPress() {
           << overlap[q] << " m against their reach r_a + r_b = " << ra + rb << " m";
         if (overlap[q] > ra + rb) m << ": node centres " << overlap[q] - (ra + rb) << " m inside";
         m << "): their contact springs hold " << energy[q] << " J, enough to throw them apart at up to " << speed
-          << " m/s relative speed. Pieces placed overlapping are pushed apart by that stored energy, not "
+          << " m/s relative speed";
+        if (dom) m << " (the springs of this rank's nodes, rank " << dom->rank() << " of " << dom->size() << ")";
+        m << ". Pieces placed overlapping are pushed apart by that stored energy, not "
              "relaxed gently. A piece's surface is its nodes' spheres, r outside the mesh: to start them at rest, "
              "place their meshes at least r_a + r_b = "
           << ra + rb << " m apart (a packing: generate it without overlaps, or let it settle under damping).";

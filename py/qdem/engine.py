@@ -63,8 +63,10 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
                             "checkDt) check that O.dt is below the stable step of the current, strained "
                             "shape, and that no surface node lies inside another piece deeper than their "
-                            "contact reach r_a + r_b (qdem.StabilityError naming them: contacts too soft "
-                            "for the load; doc/hard_cases.md, 'Deep overlap') (0 = never).  Non-finite positions and velocities are caught every "
+                            "contact reach r_a + r_b where no contact sees it (qdem.StabilityError naming "
+                            "them: contacts too soft for the load; doc/hard_cases.md, 'Deep overlap'), and "
+                            "(with O.trackEnergy) the energy ledger (energyDrift) (0 = never).  A node a "
+                            "contact holds deeper than the reach stops the step it happens.  Non-finite positions and velocities are caught every "
                             "step regardless: the step that meets one raises qdem.StabilityError.",
                         integer(0, extra=" (0 = never)"))
     energyDrift = Attr(0.1, "With O.trackEnergy: every checkPeriod steps the QDEM energy ledger (the sum of "
