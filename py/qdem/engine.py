@@ -488,13 +488,16 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     def _checkLedger(self, core):
         """The energy ledger's imbalance, a checked quantity: its total (every term, dissipation and
         work included) must stay where it was at the first check, to the scheme's first-order drift
-        (doc/hard_cases.md, 'Energy ledger').  A new piece, a loaded state or a rewound clock starts
-        it afresh.  Warns once per drift, then follows from there."""
+        (doc/hard_cases.md, 'Energy ledger').  A new piece, a loaded state, a rewound clock or a
+        script that took a piece's writable pos, vel (or other node) array starts it afresh.  Warns
+        once per drift, then follows from there."""
         e = core.energy
         total = sum(e[k] for k in ENERGY_KEYS if k in e)
         scale = sum(abs(e[k]) for k in ENERGY_KEYS if k in e)
         led = self._ledger
-        if led is None or led["pieces"] != core.nPieces or core.iter < led["iter"]:
+        edited = getattr(self.world, "_stateEdited", False)
+        self.world._stateEdited = False
+        if led is None or edited or led["pieces"] != core.nPieces or core.iter < led["iter"]:
             self._ledger = dict(ref=total, peak=scale, pieces=core.nPieces, iter=core.iter, since=core.iter)
             return
         led["peak"], led["iter"] = max(led["peak"], scale), core.iter
