@@ -83,6 +83,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
+        DeepContact& deep = threadDeep_[omp_get_thread_num()];
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = st_.edgeItems[ie];
@@ -260,6 +261,9 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force + fw[2]);
                     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force + fw[3]);
                     if (pe) pe[3 * pa + 2] += r.elastic;
+                    // Edges crossed (overlap past the reach): how far behind
+                    // the other edge, against the reach (the per-step check).
+                    noteDepth(deep, overlap - reach, reach, vRel.dot(n), a0, pa, pb, true);
                     eDamp += r.dampPower * dt;
                     eSlip += r.slipWork;
                     ++count;

@@ -57,7 +57,7 @@ void PieceContactPhase::report(PhaseReport& r) const {
 void PieceContactPhase::run(double dt) {
     broadSeconds_ = sumSeconds_ = 0;
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
-    maxOverlap_ = 0;
+    maxOverlap_ = maxDepthRatio_ = 0;
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
@@ -577,6 +577,7 @@ void PieceContactPhase::run(double dt) {
     broadSeconds_ = omp_get_wtime() - t0;
 
     beginStartCheck();
+    threadDeep_.assign(omp_get_max_threads(), DeepContact{});  // (same size each step: no allocation)
     // The kinds of the table, in order (ContactKind.hpp).
     KindStep ks{dt, w_.settings.frictionOn, w_, *this, st_, st_.threadForce};
     for (Kind& k : kinds_) {
@@ -586,6 +587,8 @@ void PieceContactPhase::run(double dt) {
         k.seconds = omp_get_wtime() - tk;
     }
     finishStartCheck();
+    for (const DeepContact& d : threadDeep_) maxDepthRatio_ = std::max(maxDepthRatio_, d.ratio);
+    if (maxDepthRatio_ > 1) checkContactDepth(dt);
     const double tSum = omp_get_wtime();
     // Sum the thread buffers into the node contact forces.
     // (Under MPI the ghosts' too: their owners get them back, Domain.hpp.)

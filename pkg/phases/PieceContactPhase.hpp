@@ -9,6 +9,12 @@
 #include <vector>
 
 #include <memory>
+#include <string>
+#include <utility>
+
+#include <omp.h>
+
+#include <algorithm>
 
 #include "../world/Phase.hpp"
 #include "ContactKind.hpp"
@@ -31,6 +37,14 @@ public:
     void report(PhaseReport& r) const override;
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxOverlap() const { return maxOverlap_; }
+    // Largest depth of a contact's node (or edge crossing) behind the other
+    // piece's surface, over its reach r_a + r_b, in the last step (0: none
+    // behind).  Above 1 the run stops (checkContactDepth).
+    double maxDepthRatio() const { return maxDepthRatio_; }
+    // Pieces placed pressed into each other, accepted by the start check:
+    // the energy their springs hold and the speed it throws them apart at,
+    // handed over once (QdemEngine warns).
+    std::vector<std::string> takeStartWarnings() { return std::exchange(startWarnings_, {}); }
     void stateColumns(StateColumns& c) override;
     void piecesAdded() override;
     void stateLoaded() override;
@@ -51,6 +65,28 @@ public:
 
     // The narrow phases of the seed's two kinds (their rows' kernels call
     // them: ContactKinds.cpp).
+    // The deepest contact of a thread in this step (see maxDepthRatio), and
+    // the deepest of those past the reach that the per-step check judges:
+    // depth of the node (edge crossing) behind the other surface, reach,
+    // relative normal velocity (< 0 closing), which node and pieces.
+    struct DeepContact {
+        double ratio = 0;  // largest depth / reach of every contact
+        double depth = 0, reach = 1, vn = 0;
+        int32_t node = -1, pa = -1, pb = -1;
+        bool edge = false;
+    };
+    // Called by the kinds for a contact whose node lies `depth` behind the
+    // other piece's surface: keeps the thread's maxima (two compares; the
+    // pair look-up only for the rare contact deeper than its reach).
+    void noteDepth(DeepContact& d, double depth, double reach, double vn, int32_t node, int32_t pa, int32_t pb,
+                   bool edge) const {
+        const double ratio = depth / reach;
+        if (ratio > d.ratio) d.ratio = ratio;
+        if (ratio <= 1 || ratio * d.reach <= d.depth || !judged(pa, pb)) return;
+        d.depth = depth, d.reach = reach, d.vn = vn, d.node = node, d.pa = pa, d.pb = pb, d.edge = edge;
+    }
+    DeepContact& threadDeep(int thread) { return threadDeep_[thread]; }
+
     template <bool Friction>
     void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
     template <bool Friction>
@@ -83,7 +119,34 @@ private:
     unsigned listsWanted() const;
 
     PieceContactState st_;
-    double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0;
+    double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0, maxDepthRatio_ = 0;
+    std::vector<DeepContact> threadDeep_;  // per thread, sized once
+    // Is a contact of pieces pa, pb past its reach judged by the per-step
+    // check?  Not while the start check judges the pair (a new piece), nor
+    // for a pair the start check accepted interpenetrated (startOverlap_):
+    // the contact is pushing it apart.
+    bool judged(int32_t pa, int32_t pb) const;
+    // After the kinds: a contact whose node lies deeper behind the other
+    // piece's surface than the reach r_a + r_b stops the run (StabilityError
+    // naming the pieces, the depth, the closing speed, the radius and the
+    // fixes), the step it happens (doc/hard_cases.md, "Impacts deeper than
+    // the reach").
+    void checkContactDepth(double dt) const;
+    std::vector<std::string> startWarnings_;
+    // Per thread, while startPending_: per pair with a new piece (lower id
+    // first), the point-polygon springs' energy and largest overlap.
+    struct StartPress {
+        int32_t a, b;
+        double energy, overlap;
+    };
+    std::vector<std::vector<StartPress>> threadStartPress_;
+    void notePress(int32_t pa, int32_t pb, double energy, double overlap) {
+        auto& v = threadStartPress_[omp_get_thread_num()];
+        const int32_t a = std::min(pa, pb), b = std::max(pa, pb);
+        if (v.empty() || v.back().a != a || v.back().b != b) v.push_back({a, b, 0.0, 0.0});
+        v.back().energy += energy;
+        v.back().overlap = std::max(v.back().overlap, overlap);
+    }
     long interiorFaceTests_ = 0, interiorFaceNear_ = 0;
     // Point-polygon from the Verlet lists: triangles listed for the nodes.
     long listedTriangles_ = 0;
@@ -107,6 +170,12 @@ private:
     // deep inside the other (winding number) where point-polygon saw none
     // inside: no contact pushes them apart.
     void finishStartCheck();
+    // The mean length of a piece's surface edges, now (its cell size) [m].
+    double meanSurfaceEdge(int32_t piece) const;
+    // Accepted: pairs with a new piece whose springs start pressed by more
+    // than a quarter of the reach get a warning naming the energy held and
+    // the speed it throws them apart at (startWarnings_).
+    void warnStartPress();
     // The surface node lying deepest inside another piece (winding number),
     // among at most 16 per neighbour pair, those deepest in the other's box
     // less the reach.  Start check (periodic = false): pairs with a piece not

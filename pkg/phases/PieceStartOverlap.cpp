@@ -58,6 +58,69 @@ void PieceContactPhase::beginStartCheck() {
     for (std::size_t i = 0; i < w_.pieces.size(); ++i) startPending_ = startPending_ || !startChecked_[i];
     threadStartSeen_.resize(startPending_ ? omp_get_max_threads() : 0);
     for (auto& v : threadStartSeen_) v.clear();
+    threadStartPress_.resize(startPending_ ? omp_get_max_threads() : 0);
+    for (auto& v : threadStartPress_) v.clear();
+}
+
+double PieceContactPhase::meanSurfaceEdge(int32_t piece) const {
+    const SurfaceIndex& S = w_.surface;
+    const double* X = w_.pos.data();
+    double sum = 0;
+    const int32_t e0 = S.pieceEdgeStart[piece], e1 = S.pieceEdgeStart[piece + 1];
+    for (int32_t e = e0; e < e1; ++e) {
+        const int32_t a = S.edge[2 * e], b = S.edge[2 * e + 1];
+        sum += std::sqrt(std::pow(X[3 * a] - X[3 * b], 2) + std::pow(X[3 * a + 1] - X[3 * b + 1], 2) +
+                         std::pow(X[3 * a + 2] - X[3 * b + 2], 2));
+    }
+    return e1 > e0 ? sum / (e1 - e0) : 0.0;
+}
+
+void PieceContactPhase::warnStartPress() {
+    // The pairs of pieces that can touch, each once, lower id first; the
+    // springs' energy summed over the threads.
+    std::vector<std::pair<int32_t, int32_t>> pairs;
+    for (std::size_t q = 0; q + 1 < st_.pairs.size(); q += 2)
+        if (st_.pairs[q] < st_.pairs[q + 1]) pairs.emplace_back(st_.pairs[q], st_.pairs[q + 1]);
+    std::sort(pairs.begin(), pairs.end());
+    const auto nq = static_cast<int>(pairs.size());
+    std::vector<double> energy(nq, 0.0), overlap(nq, 0.0);
+    for (const auto& v : threadStartPress_)
+        for (const StartPress& p : v) {
+            const auto it = std::lower_bound(pairs.begin(), pairs.end(), std::make_pair(p.a, p.b));
+            if (it == pairs.end() || *it != std::make_pair(p.a, p.b)) continue;
+            energy[it - pairs.begin()] += p.energy;
+            overlap[it - pairs.begin()] = std::max(overlap[it - pairs.begin()], p.overlap);
+        }
+    // Under MPI each rank sums its own nodes' springs and says so: no
+    // collective here (a rank whose start check or obstacle check refused
+    // the set-up is not in this call, and would leave the others waiting).
+    const Domain* dom = w_.domain.built();
+    for (int q = 0; q < nq; ++q) {
+        const int32_t a = pairs[q].first, b = pairs[q].second;
+        if (startChecked_[a] && startChecked_[b]) continue;
+        const double ra = w_.materials[w_.pieces[a].material].radius;
+        const double rb = w_.materials[w_.pieces[b].material].radius;
+        // Pieces resting on each other press their springs by m g / (n kn),
+        // a small part of the reach; a quarter of it is a set-up (walls: the same).
+        if (!(overlap[q] > 0.25 * (ra + rb))) continue;
+        // Released, the springs throw the pieces apart at up to
+        // sqrt(2 E / mu), mu the pieces' reduced mass (energy into relative motion).
+        const double ma = w_.pieces[a].mass, mb = w_.pieces[b].mass;
+        const double speed = std::sqrt(2 * energy[q] * (ma + mb) / (ma * mb));
+        std::ostringstream m;
+        m.precision(3);
+        m << "qdem: pieces " << a << " and " << b << " start pressed into each other (contact overlap up to "
+          << overlap[q] << " m against their reach r_a + r_b = " << ra + rb << " m";
+        if (overlap[q] > ra + rb) m << ": node centres " << overlap[q] - (ra + rb) << " m inside";
+        m << "): their contact springs hold " << energy[q] << " J, enough to throw them apart at up to " << speed
+          << " m/s relative speed";
+        if (dom) m << " (the springs of this rank's nodes, rank " << dom->rank() << " of " << dom->size() << ")";
+        m << ". Pieces placed overlapping are pushed apart by that stored energy, not "
+             "relaxed gently. A piece's surface is its nodes' spheres, r outside the mesh: to start them at rest, "
+             "place their meshes at least r_a + r_b = "
+          << ra + rb << " m apart (a packing: generate it without overlaps, or let it settle under damping).";
+        startWarnings_.push_back(m.str());
+    }
 }
 
 PieceContactPhase::DeepNode PieceContactPhase::deepestInside(
@@ -151,7 +214,30 @@ void PieceContactPhase::finishStartCheck() {
     for (const auto& v : threadStartSeen_) seen.insert(seen.end(), v.begin(), v.end());
     std::sort(seen.begin(), seen.end());
     const DeepNode found = deepestInside(false, seen, nullptr);
+    // Seen, but deeper than a cell of the other piece (its mean surface
+    // edge): the documented limit of what the contact pushes apart (the
+    // search reaches about a cell behind a face).  Two 0.2 m cubes of 5 cm
+    // cells 10 cm into each other held 205 J and stayed: the nodes in the
+    // middle are pushed both ways.  Refused like a piece inside a wall.
+    const DeepNode deep = found.node < 0 ? deepestInside(false, {}, nullptr) : found;
+    if (found.node < 0 && deep.node >= 0) {
+        const double cell = meanSurfaceEdge(deep.pb);
+        if (deep.depth > cell) {
+            std::ostringstream m;
+            m.precision(3);
+            m << "piece " << deep.pa << " starts " << deep.depth << " m inside piece " << deep.pb << ": node "
+              << deep.node - w_.pieces[deep.pa].nodeBegin << " of piece " << deep.pa << " is " << deep.depth
+              << " m deep, more than a cell of piece " << deep.pb << " (its mean surface edge, " << cell
+              << " m): the contact does not push pieces that deep into each other apart (nodes in the middle are "
+                 "pushed both ways and hold them, or the springs' stored energy throws them apart). Place them "
+                 "apart (by at least "
+              << deep.depth + deep.reach << " m: that depth plus the contact reach " << deep.reach
+              << " m), so that the meshes are at least the reach apart";
+            throw InputError(m.str());
+        }
+    }
     if (found.node < 0) {  // accepted: these pairs separate, and the periodic check lets them until they are out
+        warnStartPress();
         // (A refused set-up stays unchecked: a script that catches the error
         // and runs again without moving the pieces far enough apart is
         // refused again; it ran on until the periodic check.)

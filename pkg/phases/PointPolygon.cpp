@@ -67,6 +67,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
+        DeepContact& deep = threadDeep_[omp_get_thread_num()];
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
         Candidate* const cand = cl.c;
         // The pair law last looked up: consecutive nodes mostly touch the
@@ -394,6 +395,11 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                                               vRel.dot(n), dt);
                 const ContactResult r =
                     lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
+                // How deep the node is behind pb's surface (overlap - reach:
+                // > 0 behind it), against the reach: the per-step check.
+                noteDepth(deep, overlap - law.reach, law.reach, vRel.dot(n), node, pa, pb, false);
+                if (startPending_ && !(startChecked_[pa] && startChecked_[pb]))
+                    notePress(pa, pb, r.elastic, overlap);  // placed pressed in: the start warning's energy
                 newKey[nNew] = kk;
                 newPiece[nNew] = pb;
                 newShear[nNew] = sh;

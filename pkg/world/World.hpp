@@ -145,7 +145,12 @@ public:
     ObstacleEdgeCrossing obstacleEdgeCrossing() const;
     // Pieces that started pressed into an obstacle by more than a quarter of their
     // node radius (ObstaclePhase::takeStartWarnings), handed over once.
-    std::vector<std::string> takeStartWarnings() { return obstaclePhase_.takeStartWarnings(); }
+    // And pieces placed pressed into each other (PieceContactPhase::takeStartWarnings).
+    std::vector<std::string> takeStartWarnings() {
+        std::vector<std::string> w = obstaclePhase_.takeStartWarnings();
+        for (std::string& m : pieceContactPhase_.takeStartWarnings()) w.push_back(std::move(m));
+        return w;
+    }
 
     // ---- restarts (Checkpoint.cpp) ---------------------------------------
     // The dynamic state (positions, velocities, contact histories, sleeping
@@ -280,6 +285,9 @@ public:
     const Column<int32_t>& pointPolygonKeyPieces() const { return pieceContactPhase_.state().ppPiece; }
     // Largest overlap of a piece-piece contact in the last step [m].
     double maxPieceOverlap() const { return pieceContactPhase_.maxOverlap(); }
+    // Deepest piece-piece contact of the last step: depth behind the other
+    // surface over the reach (the run stops above 1).
+    double maxPieceDepthRatio() const { return pieceContactPhase_.maxDepthRatio(); }
 
     World();
     ~World();

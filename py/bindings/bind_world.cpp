@@ -286,6 +286,10 @@ void bindWorld(py::module_& m) {
             "The phases' counters of the last step: contacts by kind (as contactCounts) and "
             "viscousIterations (conjugate-gradient iterations of viscousIntegration='implicit').")
         .def_property_readonly("maxPieceOverlap", &World::maxPieceOverlap)
+        .def_property_readonly("maxPieceDepthRatio", &World::maxPieceDepthRatio,
+                               "Deepest piece-piece contact of the last step: how far its node (or edge crossing) "
+                               "lies behind the other piece's surface, over the contact reach r_a + r_b (0: none "
+                               "behind).  Above 1 the step stops with a StabilityError (doc/hard_cases.md).")
         .def(
             "pointPolygonContacts",
             [](const World& w) {

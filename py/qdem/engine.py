@@ -63,10 +63,20 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
                             "checkDt) check that O.dt is below the stable step of the current, strained "
                             "shape, and that no surface node lies inside another piece deeper than their "
-                            "contact reach r_a + r_b (qdem.StabilityError naming them: contacts too soft "
-                            "for the load; doc/hard_cases.md, 'Deep overlap') (0 = never).  Non-finite positions and velocities are caught every "
+                            "contact reach r_a + r_b where no contact sees it (qdem.StabilityError naming "
+                            "them: contacts too soft for the load; doc/hard_cases.md, 'Deep overlap'), and "
+                            "(with O.trackEnergy) the energy ledger (energyDrift) (0 = never).  A node a "
+                            "contact holds deeper than the reach stops the step it happens.  Non-finite positions and velocities are caught every "
                             "step regardless: the step that meets one raises qdem.StabilityError.",
                         integer(0, extra=" (0 = never)"))
+    energyDrift = Attr(0.1, "With O.trackEnergy: every checkPeriod steps the QDEM energy ledger (the sum of "
+                            "its qdem* terms, dissipation and work included) is compared with its value at the "
+                            "first check; a drift beyond this fraction of the largest energy it has held (the "
+                            "sum of the terms' magnitudes) warns once (RuntimeWarning naming the drift and its "
+                            "likely causes; doc/hard_cases.md, 'Energy ledger').  Correct runs drift by the "
+                            "scheme's first-order error: up to 4 % in impacts at 0.8 of the stable step (the "
+                            "dashpots' first steps), 0.5 % at 0.2 of it (0 = not checked; not with YADE spheres, "
+                            "whose side of the exchange is YADE's ledger).", number(0, 1))
     progressPeriod = Attr(0, "Print a progress line every this many steps (0 = silent).",
                           integer(0, extra=" (0 = silent)"))
     threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
@@ -173,6 +183,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._dtNoted = None          # the step key YADE's default O.dt was last weighed at
         self._warnedDefaultDt = False
         self._lastProgress = None
+        self._ledger = None  # the energy ledger at its reference check (_checkLedger)
         #: Inverted elements (volume ratio <= 0), counted every checkPeriod: ``now`` (at the last
         #: check), ``max`` (largest count seen), ``time`` [s] (time during which any element
         #: was inverted, to one checkPeriod), ``first`` (piece, element, volume ratio) of the
@@ -462,6 +473,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             core.gatherAll()  # every rank sees every node: the checks agree, scripts read current arrays
         for msg in core.takeStartWarnings():  # pieces placed pressed into an obstacle: at once (they are thrown)
             warnings.warn(msg, RuntimeWarning, stacklevel=3)
+        if checking and core.trackEnergy and self.energyDrift > 0 and not core.nSpheres:
+            self._checkLedger(core)
         if checking:
             self._checkInverted(core, dt)  # first: an inverted element is named as inverted
             if self.checkDt:  # then: a strained, stiffened element is named before it blows up
@@ -477,6 +490,38 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             counts = parallel.summedCounts(core)  # (collective under MPI: every rank gets here)
             if parallel.isWriter():
                 self._progress(core, counts)
+
+    def _checkLedger(self, core):
+        """The energy ledger's imbalance, a checked quantity: its total (every term, dissipation and
+        work included) must stay where it was at the first check, to the scheme's first-order drift
+        (doc/hard_cases.md, 'Energy ledger').  A new piece, a loaded state, a rewound clock or a
+        script that took a piece's writable pos, vel (or other node) array starts it afresh.  Warns
+        once per drift, then follows from there."""
+        e = core.energy
+        total = sum(e[k] for k in ENERGY_KEYS if k in e)
+        scale = sum(abs(e[k]) for k in ENERGY_KEYS if k in e)
+        led = self._ledger
+        edited = getattr(self.world, "_stateEdited", False)
+        self.world._stateEdited = False
+        if led is None or edited or led["pieces"] != core.nPieces or core.iter < led["iter"]:
+            self._ledger = dict(ref=total, peak=scale, pieces=core.nPieces, iter=core.iter, since=core.iter)
+            return
+        led["peak"], led["iter"] = max(led["peak"], scale), core.iter
+        drift = total - led["ref"]
+        if abs(drift) <= self.energyDrift * led["peak"]:
+            return
+        warnings.warn(
+            "QDEM: the energy ledger has %s %.4g J (%.3g %% of the largest energy it held, %.4g J) since step "
+            "%d, beyond energyDrift = %g: the run is not conserving energy to the scheme's accuracy, so its "
+            "result is in doubt. Likely causes: contacts or elements near their stability limit (a smaller "
+            "O.dt; see QdemEngine.stableDt()), pieces sunk into each other or into obstacles (a stiffer "
+            "contact or a larger radius), or a script that changed piece velocities, positions or masses "
+            "between steps (the ledger sees that as energy from nowhere). O.energy holds the terms "
+            "(doc/hard_cases.md, 'Energy ledger')."
+            % ("lost" if drift < 0 else "gained", abs(drift), 100 * abs(drift) / led["peak"], led["peak"],
+               led["since"], self.energyDrift),
+            RuntimeWarning, stacklevel=4)
+        self._ledger = dict(ref=total, peak=scale, pieces=core.nPieces, iter=core.iter, since=core.iter)
 
     def _checkObstacleEdges(self, core):
         """Warns (once per obstacle and piece) when a Box or Facet edge has passed

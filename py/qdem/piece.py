@@ -78,6 +78,9 @@ class Piece:
         self._live(name)
         core = self.world.core
         _requireCurrent(core, name)
+        # The script may change the state: the energy ledger check starts afresh
+        # (QdemEngine._checkLedger), as energy put in by hand is no drift.
+        self.world._stateEdited = True
         a = getattr(core, name)[self.nodeSlice]
         if not core.dynamic(self.id):
             a = a.view(_HeldNodes)

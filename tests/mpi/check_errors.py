@@ -98,6 +98,20 @@ w.core.setCommunicator(comm)
 if other:
     w.core.gravity = (0.0, 0.0, -9.0)
 e["gravity"] = caught(lambda: w.core.step(dt, 1))
-everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d, "e": e}, root=0)
+# (f) Two soft cubes thrown at each other faster than their contact can
+# hold within its reach: the rank whose node goes deeper than the reach
+# stops, and every rank raises the same error in that step
+# (ContactDepthCheck.cpp, Domain::finishStep).
+w = qdem.World()
+soft = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=20, radius=0.005, restitution=0.5)
+cube = qdem.boxMesh((0.2, 0.2, 0.2), (4, 4, 4))
+w.addPiece(cube, soft, pos=(-0.15, 0, 0), vel=(10.0, 0, 0))
+w.addPiece(cube, soft, pos=(0.15, 0.03, 0), vel=(-10.0, 0, 0))
+w.core.setCommunicator(comm)
+fdt = 0.8 * w.stableDt()["combined"]
+f = caught(lambda: w.core.step(fdt, 200))
+fIter = int(w.core.iter)
+everything = comm.gather({"rank": comm.rank, "a": a, "b": b, "c": c, "d": d, "e": e, "f": f, "fIter": fIter},
+                         root=0)
 if comm.rank == 0:
     print("RESULT " + json.dumps({"ranks": comm.size, "caught": everything, "nanNode": node}), flush=True)

@@ -66,6 +66,13 @@ def test_error_on_one_rank_stops_every_rank(P):
     # (d) ranks with different scenes: refused on every rank, naming the fix.
     for c in caught:
         assert c["d"][0] == "ValueError" and "different scenes" in c["d"][1] and "seed" in c["d"][1]
+    # (f) an impact deeper than the contact's reach: every rank stops with the
+    # same StabilityError in the same step, the one it happens in.
+    msgs = {tuple(c["f"]) for c in caught}
+    assert len(msgs) == 1 and len({c["fIter"] for c in caught}) == 1
+    kind, msg = msgs.pop()
+    assert kind == "StabilityError" and "deeper than their contact can see" in msg and "closing at" in msg
+    assert caught[0]["fIter"] < 30
     # (e) scenes that differ in velocities, loads, O.dt, settings or gravity:
     # refused on every rank, naming what differs (they ran on silently).
     for c in caught:
