@@ -2,7 +2,9 @@
 
 Two runs in one process, same spheres, same engines:
   near - the spheres fill a box around and above the block and settle onto it;
-  far  - the same box of spheres, with the block 10 m away.
+  far  - the same box of spheres, with the block 10 m above it (the
+         container's walls are infinite planes: a block beside the container
+         would stand behind one of them, and is refused).
 For each: YADE's own step time (every engine but QdemEngine, from O.timingEnabled)
 and the time QdemEngine spends on sphere coupling (lists, states, sphere-surface
 contacts, forces back), and their ratio.  Targets: near <= 25 %, far <= 2 %.
@@ -27,13 +29,13 @@ BOX = 0.36        # container width [m]
 
 
 def build(nSpheres, far):
-    """Container of spheres with the block in its middle (or 10 m away)."""
+    """Container of spheres with the block in its middle (or 10 m above it)."""
     O.reset()
     qdem.reset()
     mat = qdem.QdemMat(young=5e5, poisson=0.3, density=1000.0, viscosity=20.0, radius=0.002, frictionPiece=0.5)
-    shift = 10.0 if far else 0.0
+    lift = 10.0 if far else 0.0
     qdem.addPiece(qdem.boxMesh((BLOCK, BLOCK, BLOCK), (8, 8, 8)), mat,
-                  pos=(shift, 0, BLOCK / 2 + mat.radius))
+                  pos=(0, 0, BLOCK / 2 + mat.radius + lift))
     wm = O.materials.append(FrictMat(young=1e7, frictionAngle=0.3, density=1000))
     O.bodies.append(utils.wall(0, axis=2, sense=1, material=wm))
     for ax in (0, 1):
@@ -91,7 +93,8 @@ def main():
     ap.add_argument("--warm", type=int, default=5000, help="steps before measuring (spheres reach the block)")
     ap.add_argument("--out", default="out/bench")
     a = ap.parse_args(sys.argv[1:])
-    res = {"spheres": None, "threads": qdem._core.getThreads()}
+    res = {"benchmark": "bench_spheres", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+           "spheres": None, "threads": qdem._core.getThreads()}
     for name, far in (("near", False), ("far", True)):
         n = build(a.spheres, far)
         res["spheres"] = n

@@ -2,6 +2,7 @@
 busy runs stay out of the figures, nothing measured is null (never a zero or
 a copy), and the doc's tables are printed from the committed JSON."""
 import glob
+import json
 import os
 import subprocess
 import sys
@@ -51,3 +52,23 @@ def test_doc_tables_print_from_the_committed_json(kind):
     out = subprocess.run([PY, os.path.join(ROOT, "scripts", "bench", "perf_tables.py"), kind, files[-1]],
                          capture_output=True, text=True, check=True).stdout
     assert out.count("\n| ") >= 2, out
+
+
+def test_every_kept_benchmark_log_holds_the_keys_the_docs_read():
+    import bench_schema
+    assert bench_schema.checkLogs(os.path.join(ROOT, "bench", "logs")) == []
+
+
+def test_the_json_check_names_a_missing_file_and_a_missing_key(tmp_path):
+    import bench_schema
+    problems = bench_schema.checkOutput(str(tmp_path))
+    assert any("spheres.json: missing" in p for p in problems)
+    (tmp_path / "spheres.json").write_text(json.dumps({"benchmark": "bench_spheres", "near": {}}))
+    problems = bench_schema.checkOutput(str(tmp_path))
+    assert any("spheres.json: lacks far.coupling_ms_per_step" in p for p in problems)
+    assert any("spheres.json: lacks near.coupling_ms_per_step" in p for p in problems)
+    # A kept log is recognised by its "benchmark" field.
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "anything.json").write_text(json.dumps({"benchmark": "bench_effects", "date": "x"}))
+    assert any("anything.json: lacks threads" in p for p in bench_schema.checkLogs(str(logs)))
