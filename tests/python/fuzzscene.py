@@ -427,6 +427,8 @@ def runScene(spec):
     O.dt = dt
     O.trackEnergy = True
     core = qe.world.core
+    if "edgeFeatureAngle" in spec:  # a regression scene's own setting (default: QDEM's)
+        core.edgeFeatureAngle = spec["edgeFeatureAngle"]
 
     def energyNow():
         return core.energy["total"] + _yadeKinetic(O, dynIds)

@@ -45,30 +45,56 @@ def test_supersonic_impact_on_a_wall_stops_with_a_named_error_not_a_nan(scene, l
     assert out.stop is not None and "not finite" not in out.stop
 
 
-@pytest.mark.xfail(strict=True, reason="defect: the energy ledger of a YADE sphere sunk about its radius into "
-                                       "a soft piece gains 0.15-0.24 of the energy in flight during the impact, "
-                                       "independent of O.dt, and ends 15 % below its start with no dissipation "
-                                       "booked (restitution 1, no viscosity)")
-@pytest.mark.parametrize("dtFraction", [0.225, 0.45])
-def test_a_heavy_sphere_sinking_into_a_soft_piece_keeps_the_energy_ledger(scene, dtFraction):
-    """A YADE sphere (R 5 cm, E 1e5, rho 3000, 1.57 kg) thrown at 3 m/s onto a
-    soft cube (E 1e5, rho 1e4, 0.1 m, 2x2x2 cells, contact radius one edge
-    5 cm, restitution 1, no viscosity), no gravity: the contact (about 5e3
-    N/m) lets the sphere sink 5 cm, its own radius.  The ledger (QDEM's total
-    + the sphere's kinetic energy) must stay within its first-order drift
-    (fuzzscene.ENERGY_GAIN x f of the energy in flight).  Measured: a gain of
-    0.18, 0.15, 0.21, 0.22 at f = 0.9, 0.45, 0.225, 0.1125 (not first order:
-    not a stable-step matter); after the bounce sphere 1.36 J + cube 4.32 J
-    kinetic + 0.31 J elastic of the 7.07 J thrown in, 1.08 J gone with 3e-5 J
-    booked.  A stiff cube (E 1e8) gains 0.003.  Found as a clump of three
-    spheres at 13.6 m/s onto a CGAL ellipsoid (gain 0.12 at f = 0.89)."""
+def _heavySphereOnSoftCube(dtFraction, **extra):
     spec = {"threads": 1, "dtFraction": dtFraction, "steps": int(1100 / dtFraction), "speed": 3.0, "approach": 0.3,
             "offset": 0.0, "offsetAngle": 0.0, "kind": "spheres", "gravity": False,
             "pieces": [_piece(_box(cells=2), _rubber(law="stableNeoHookean"))], "direction": [0, 0, 1],
             "spheres": {"clump": False, "radiusFraction": 0.5, "young": 1e5, "density": 3000.0,
                         "frictionAngle": 0.3, "spin": [0, 0, 0]}}
-    out = fuzzscene.runScene(spec)
+    spec.update(extra)
+    return spec
+
+
+@pytest.mark.xfail(strict=True, reason="defect: the surface folds under a heavy YADE sphere beyond the feature "
+                                       "angle (30 deg) and the one-touch rule (TouchSelection.hpp) switches the "
+                                       "sphere between one and two touches with the piece at full overlap: a "
+                                       "touch born 3 cm deep (+2.1 J), then merged away (-2.9 J); the force "
+                                       "field is discontinuous, whatever the step. Needs a selection whose "
+                                       "touch set changes only at zero force (shared with node contacts)")
+@pytest.mark.parametrize("dtFraction", [0.225, 0.45])
+def test_a_heavy_sphere_sinking_into_a_soft_piece_keeps_the_energy_ledger(scene, dtFraction):
+    """A YADE sphere (R 5 cm, E 1e5, rho 3000, 1.57 kg) thrown at 3 m/s onto a
+    soft cube (E 1e5, rho 1e4, 0.1 m, 2x2x2 cells, contact radius one edge
+    5 cm, restitution 1, no viscosity), no gravity.  The ledger (QDEM's total
+    + the sphere's kinetic energy) must stay within its first-order drift
+    (fuzzscene.ENERGY_GAIN x f of the energy in flight).  The sphere, as
+    large as a cell, loads the centre node of the top face alone and presses
+    it 1.6 cm in: the triangles around it tilt by about 20 deg, two
+    opposite ones 40 deg apart, more than the 30 deg feature angle, and the
+    sphere, within reach (overlap 3.0 cm of the 10 cm reach), gets a second
+    touch at full overlap.  Measured at f = 0.45: 1 -> 2 touches at step
+    740, the contact springs' energy 2.08 -> 5.30 J (ledger +2.08 J); 2 -> 1
+    at step 743, -2.89 J; again +1.03 and -0.73 J at steps 750-751; gain
+    0.196 at 0.45, 0.182 at 0.225 (not first order); ledger ends at 6.66 J
+    of 7.07 J.  A stiff cube (E 1e8) gains 0.003: no fold.  Found as a clump
+    of three spheres at 13.6 m/s onto a CGAL ellipsoid (gain 0.12 at f =
+    0.89)."""
+    out = fuzzscene.runScene(_heavySphereOnSoftCube(dtFraction))
     fuzzscene.check(out)
+
+
+@pytest.mark.parametrize("dtFraction", [0.225, 0.45])
+def test_a_heavy_sphere_keeps_the_ledger_while_it_keeps_one_touch(scene, dtFraction):
+    """The scene above with edgeFeatureAngle 0.8 rad (46 deg), above the 40
+    deg fold under the sphere: the sphere keeps one touch throughout, and the
+    ledger stays within its first-order drift, fuzzscene.ENERGY_GAIN x f
+    (gain 0.049 at f = 0.45, 0.0155 at 0.225, against 0.196 and 0.182 with
+    the touch switching; ends 2.7 % and 0.3 % above its start).  So the sphere's
+    contact law and its energy booking are right; what breaks the ledger is
+    the touch set changing at full overlap."""
+    out = fuzzscene.runScene(_heavySphereOnSoftCube(dtFraction, edgeFeatureAngle=0.8))
+    fuzzscene.check(out)
+    assert out.contacted
 
 
 @pytest.mark.xfail(strict=True, reason="defect: two soft cubes (contact radius one edge) colliding at 0.9 of "
