@@ -62,7 +62,7 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall
              InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
                              [Ip2_FrictMat_FrictMat_FrictPhys()], [Law2_ScGeom_FrictPhys_CundallStrack()]),
              qdem.QdemEngine(label="qe", threads=THREADS), NewtonIntegrator(gravity=(0, 0, -9.81), damping=0.0)]
-O.dt = 0.5 * qe.stableTimeStep()  # noqa: F821 - YADE's label
+O.dt = 0.8 * qe.stableTimeStep()  # noqa: F821 - YADE's label
 if os.environ.get("QDEM_MPY_RUN_FIRST") == "1":
     O.run(1, True)  # refused under yade.mpy (test_mpi.py): QDEM steps with mp.mpirun there
 placed = qdem.parallel.assignSubdomains()  # spheres to the workers owning the surface near them ({} serially)
