@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactSpin.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
@@ -228,8 +229,12 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     // 30 degrees, test_crossed_bars_conserve_energy).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, 0.0,
                                                   vRel.dot(n), dt);
+                    // Two extended sides: the spring turns with their mean spin
+                    // about n (doc/formulation.md, "Twist").
+                    const double spin = 0.5 * (segmentSpin(p1, q1, at(V, a0), at(V, a1), n) +
+                                               segmentSpin(p2, q2, at(V, b0), at(V, b1), n));
                     const ContactResult r =
-                        lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                     // The spring's stiffness w aw kn varies with the geometry
                     // (the fades, the area weight), so kn w aw delta n alone is
                     // not the gradient of the energy 1/2 kn w aw delta^2 it

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactSpin.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
 #include "../contact/ContactDetail.hpp"
@@ -393,8 +394,12 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 const Vector3d vRel = at(w_.vel, node) - vT;
                 const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
                                               vRel.dot(n), dt);
+                // The spring turns with the triangle (a node is a point: no
+                // spin of its own; doc/formulation.md, "Twist").
+                const double spin = triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]), at(w_.vel, tn[0]),
+                                                 at(w_.vel, tn[1]), at(w_.vel, tn[2]), n);
                 const ContactResult r =
-                    lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
+                    lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                 // How deep the node is behind pb's surface (overlap - reach:
                 // > 0 behind it), against the reach: the per-step check.
                 noteDepth(deep, overlap - law.reach, law.reach, vRel.dot(n), node, pa, pb, false);

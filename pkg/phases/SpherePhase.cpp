@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactSpin.hpp"
 #include "../contact/Obstacle.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
@@ -544,8 +545,13 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     // not made: it stores no energy it was not given (ContactDetail.hpp).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
                                                   vRel.dot(nrm), dt);
+                    // Two extended sides: the spring turns with the mean of the
+                    // ball's and the triangle's spins about n (doc/formulation.md, "Twist").
+                    const double spin =
+                        0.5 * (w.dot(nrm) + triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]), at(w_.vel, tn[0]),
+                                                         at(w_.vel, tn[1]), at(w_.vel, tn[2]), nrm));
                     const ContactResult r =
-                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh, spin);
                     newKey[nNew] = kk;
                     newRef[nNew] = r0;
                     newShear[nNew] = sh;
