@@ -231,8 +231,10 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                                                   vRel.dot(n), dt);
                     // Two extended sides: the spring turns with their mean spin
                     // about n (doc/formulation.md, "Twist").
-                    const double spin = 0.5 * (segmentSpin(p1, q1, at(V, a0), at(V, a1), n) +
-                                               segmentSpin(p2, q2, at(V, b0), at(V, b1), n));
+                    const double spin = Friction && law.mu > 0 && !regularized
+                                             ? 0.5 * (segmentSpin(p1, q1, at(V, a0), at(V, a1), n) +
+                                                      segmentSpin(p2, q2, at(V, b0), at(V, b1), n))
+                                             : 0.0;
                     const ContactResult r =
                         lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                     // The spring's stiffness w aw kn varies with the geometry

@@ -396,8 +396,10 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                                               vRel.dot(n), dt);
                 // The spring turns with the triangle (a node is a point: no
                 // spin of its own; doc/formulation.md, "Twist").
-                const double spin = triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]), at(w_.vel, tn[0]),
-                                                 at(w_.vel, tn[1]), at(w_.vel, tn[2]), n);
+                const double spin = Friction && law.mu > 0 && !regularized
+                                         ? triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]), at(w_.vel, tn[0]),
+                                                        at(w_.vel, tn[1]), at(w_.vel, tn[2]), n)
+                                         : 0.0;
                 const ContactResult r =
                     lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                 // How deep the node is behind pb's surface (overlap - reach:

@@ -548,8 +548,10 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     // Two extended sides: the spring turns with the mean of the
                     // ball's and the triangle's spins about n (doc/formulation.md, "Twist").
                     const double spin =
-                        0.5 * (w.dot(nrm) + triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]), at(w_.vel, tn[0]),
-                                                         at(w_.vel, tn[1]), at(w_.vel, tn[2]), nrm));
+                        Friction && law.mu > 0 && !regularized
+                            ? 0.5 * (w.dot(nrm) + triangleSpin(at(X, tn[0]), at(X, tn[1]), at(X, tn[2]),
+                                                               at(w_.vel, tn[0]), at(w_.vel, tn[1]), at(w_.vel, tn[2]), nrm))
+                            : 0.0;
                     const ContactResult r =
                         lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh, spin);
                     newKey[nNew] = kk;
