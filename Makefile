@@ -1,5 +1,7 @@
 # yade-qdem: `make demo` sets everything up and runs the default demo;
-# `make test` builds and runs every test.  See README.md.
+# `make test` builds and runs every test; `make doc` builds the site
+# (out/doc/html/index.html).  See README.md.
+SHELL   := /bin/bash
 PY      := /usr/bin/python3.11
 BUILD   := build
 JOBS    ?= 2
@@ -9,17 +11,29 @@ SITE    := $(shell if [ "$$(id -u)" = 0 ]; then echo /usr/local/lib/python3.11/d
 YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
-.PHONY: deps build install demo test test-cpp test-py fuzz bench bench-mpi accuracy compare-builds clean
+# YADE's Python modules (the path its launcher puts first), for tools run
+# outside yade that import qdem's YADE parts: the documentation build.
+YADEPY  := $(shell sed -n "s/^sys\.path\.insert(1,'\(.*\)')$$/\1/p" $$(command -v yade 2>/dev/null) 2>/dev/null)
+
+.PHONY: deps configure build ext install demo doc test test-all test-cpp test-py fuzz bench bench-mpi accuracy \
+        compare-builds clean
 
 deps:
 	@bash scripts/setup/deps.sh
 
-build: deps
+configure: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DQDEM_PYTHON=$(PY) > $(BUILD).cmake.log 2>&1 \
 	  || (cat $(BUILD).cmake.log; exit 1)
+
+# Everything: the extension, the C++ tests and the benchmarks.
+build: configure
 	@cmake --build $(BUILD) -j $(JOBS)
 
-install: build
+# The Python extension and package only: what the demo and the docs need.
+ext: configure
+	@cmake --build $(BUILD) -j $(JOBS) --target _core qdem_py
+
+install: ext
 	@mkdir -p $(SITE)/qdem
 	@cp $(BUILD)/python/qdem/*.py $(BUILD)/python/qdem/_core*.so $(SITE)/qdem/
 	@echo "qdem installed in $(SITE)/qdem"
@@ -28,10 +42,29 @@ demo: install
 	@mkdir -p out/demo
 	$(YADE) -x scripts/demo.py
 
-test: build test-cpp test-py
+# The site (Sphinx, MyST Markdown, furo): out/doc/html/index.html.  The API
+# reference and the settings tables are generated from the package, so it
+# needs the built extension; -W: any warning (a broken reference, a public
+# name without a docstring, a stale settings table) fails.
+doc: ext
+	@mkdir -p out/doc
+	@PYTHONPATH=$(CURDIR)/$(BUILD)/python:$(YADEPY) OMP_NUM_THREADS=1 $(PY) -m sphinx -b html -q -W --keep-going \
+	  doc out/doc/html
+	@echo "doc: out/doc/html/index.html"
+
+# Everything, then one line: what passed and how long it took (logs in out/test/).
+test:
+	@mkdir -p out/test; start=$$(date +%s); $(MAKE) --no-print-directory test-all; rc=$$?; \
+	t=$$(( $$(date +%s) - start )); \
+	cpp=$$(grep -ho "[0-9]* tests failed out of [0-9]*" out/test/cpp.log 2>/dev/null | tail -1); \
+	py=$$(grep -hoE "[0-9]+ (passed|failed)[^=]*" out/test/py.log 2>/dev/null | tail -1 | sed 's/ in [0-9.]*s.*//'); \
+	echo "make test: $$([ $$rc = 0 ] && echo PASSED || echo FAILED) in $$((t / 60)) min $$((t % 60)) s;" \
+	  "C++: $${cpp:-not run}; Python (docs included): $${py:-not run}"; exit $$rc
+
+test-all: build test-cpp test-py
 
 test-cpp:
-	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	@mkdir -p out/test; set -o pipefail; cd $(BUILD) && ctest --output-on-failure -j $(JOBS) 2>&1 | tee $(CURDIR)/out/test/cpp.log
 
 # The Python tests run inside YADE on PYTEST_WORKERS pytest-xdist workers (one
 # per core, one OpenMP thread each: tests/python/conftest.py; the MPI tests
@@ -39,8 +72,9 @@ test-cpp:
 # tests instead of skipping them (tests/python/mpi_launch.py).
 PYTEST_WORKERS ?= 2
 test-py:
-	@QDEM_TESTS_REQUIRE_MPI=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q \
-	  -n $(PYTEST_WORKERS) --dist loadgroup tests/python
+	@mkdir -p out/test; set -o pipefail; \
+	QDEM_TESTS_REQUIRE_MPI=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(YADE) -x tests/python/run_pytest.py -q \
+	  -n $(PYTEST_WORKERS) --dist loadgroup tests/python 2>&1 | tee out/test/py.log
 
 # Random-scene fuzzer (doc/validation.md): batches of QDEM_FUZZ_BATCH fresh
 # random examples until QDEM_FUZZ_SECONDS (default 600) have passed; the first

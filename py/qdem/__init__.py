@@ -11,6 +11,11 @@ Typical use inside a YADE script::
 """
 from . import _core
 from ._core import StabilityError
+StabilityError.__doc__ = (
+    "Raised when a run would go unstable or give a wrong answer: O.dt above the stable step, an element "
+    "stiffened or inverted beyond what O.dt resolves, a non-finite position or force, a node through a wall "
+    "or deeper inside another piece than the contacts reach.  The message names the piece, element or node, "
+    "the limit and the fix (doc/hard_cases.md).")
 from . import modes
 from .material import QdemMat
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
@@ -34,6 +39,22 @@ else:
     from .recorder import VtkRecorder
     from .setupcheck import SetupError
     _lifecycle.install()  # O.save/O.load/O.reset carry QDEM; QDEM errors reach scripts as themselves
+
+# Submodules loaded on first use (``qdem.render.snapshot`` without ``import
+# qdem.render``): VTK and matplotlib are imported only by a script that uses them.
+_LAZY = ("render", "plot", "shogi", "spheres", "restart", "recorder", "engine")
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+        return importlib.import_module("." + name, __name__)
+    raise AttributeError("module 'qdem' has no attribute %r" % name)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "splitMesh", "defaultWorld",

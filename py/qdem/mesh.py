@@ -89,10 +89,12 @@ class Mesh:
 
     @property
     def nNodes(self):
+        """Number of nodes."""
         return len(self.nodes)
 
     @property
     def nTets(self):
+        """Number of tetrahedra."""
         return len(self.tets)
 
     def volumes(self):
@@ -104,6 +106,7 @@ class Mesh:
         return _core.extractSurface(self.nodes, self.tets)
 
     def bounds(self):
+        """Bounding box: (lowest corner, highest corner) of the nodes [m]."""
         return self.nodes.min(axis=0), self.nodes.max(axis=0)
 
     def scaled(self, factor):

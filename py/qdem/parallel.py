@@ -258,3 +258,5 @@ def assignSubdomains(world=None):
     mpiexec; returns {rank: bodies placed}."""
     from . import mpyglue
     return mpyglue.assignSubdomains(world)
+
+__all__ = ["assignSubdomains", "rank", "isWriter", "launchedSize"]

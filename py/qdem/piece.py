@@ -166,6 +166,7 @@ class Piece:
 
     @property
     def displacement(self):
+        """Node displacements from the reference shape (n,3) [m], rigid motion included (a copy)."""
         return self._nodes("pos") - self.refPos
 
     def stress(self):
@@ -185,30 +186,51 @@ class Piece:
                 "nodes": s["nodes"] - n0, "tets": s["tets"] - t0}
 
     # -- rigid-body summaries --------------------------------------------------
+    # The rule (doc/reference/api.rst, "Piece"): a quantity of the piece --
+    # what it holds, or a sum or mean over its nodes, taking no argument -- is
+    # a property, read as a value like YADE's b.state.pos; per-element fields
+    # the core computes on demand (stress(), vonMises()), the surface() lists
+    # and anything taking an argument are methods.  centroid, momentum,
+    # velocity and angularMomentum were methods: calling them still works,
+    # with a DeprecationWarning (_Quantity).
     @property
     def totalMass(self):
+        """Total mass of the piece [kg] (sum of the node masses)."""
         self._live("totalMass")
         return self.world.core.pieceMass(self.id)
 
     @property
     def volume(self):
+        """Volume of the piece's reference (undeformed) mesh [m^3]."""
         return self.world.core.pieceVolume(self.id)
 
+    @property
     def centroid(self):
-        """Centre of mass [m]."""
+        """Centre of mass (3,) [m]."""
         m = self.mass
-        return (self._nodes("pos") * m[:, None]).sum(axis=0) / m.sum()
+        return _Quantity.of((self._nodes("pos") * m[:, None]).sum(axis=0) / m.sum(), "centroid")
 
+    @property
     def momentum(self):
-        """Linear momentum (sum m v) [kg m/s]."""
-        return (self._nodes("vel") * self.mass[:, None]).sum(axis=0)
+        """Linear momentum (3,), the sum of m v [kg m/s]."""
+        return _Quantity.of((self._nodes("vel") * self.mass[:, None]).sum(axis=0), "momentum")
 
+    @property
     def velocity(self):
-        """Centre-of-mass velocity [m/s]."""
-        return self.momentum() / self.mass.sum()
+        """Centre-of-mass velocity (3,) [m/s]."""
+        return _Quantity.of(np.asarray(self.momentum) / self.mass.sum(), "velocity")
 
-    def angularMomentum(self, about=None):
-        c = self.centroid() if about is None else np.asarray(about, dtype=float)
+    @property
+    def angularMomentum(self):
+        """Angular momentum about the centre of mass (3,) [kg m^2/s]; about
+        another point: angularMomentumAbout(point)."""
+        return _Quantity.of(self.angularMomentumAbout(None), "angularMomentum",
+                            call=lambda about=None: self.angularMomentumAbout(about),
+                            instead="angularMomentumAbout(point)")
+
+    def angularMomentumAbout(self, point=None):
+        """Angular momentum (3,) [kg m^2/s] about a point (None: the centre of mass)."""
+        c = np.asarray(self.centroid) if point is None else np.asarray(point, dtype=float)
         return (np.cross(self._nodes("pos") - c, self._nodes("vel")) * self.mass[:, None]).sum(axis=0)
 
     def __repr__(self):
@@ -225,3 +247,46 @@ def _requireCurrent(core, name):
             "qdem: piece.%s on rank %d of %d is not current at step %d: under MPI every rank learns every node's "
             "state only every QdemEngine.gatherPeriod steps. Read it at those steps, set gatherPeriod=1, or call "
             "world.core.gatherAll() on every rank first." % (name, core.mpiRank, core.mpiSize, core.iter))
+
+
+class _Quantity(np.ndarray):
+    """The value of a Piece quantity that used to be a method (centroid(),
+    momentum(), ...): an ordinary array that may still be called, as the old
+    spelling did, with a DeprecationWarning.  Arithmetic on it gives plain
+    arrays."""
+
+    @classmethod
+    def of(cls, value, name, call=None, instead=None):
+        q = np.asarray(value).view(cls)
+        q._name, q._call, q._instead = name, call, instead or name
+        return q
+
+    def __array_finalize__(self, obj):
+        self._name = getattr(obj, "_name", "quantity")
+        self._call = getattr(obj, "_call", None)
+        self._instead = getattr(obj, "_instead", self._name)
+
+    def __array_wrap__(self, arr, context=None, *args):
+        arr = np.asarray(arr)
+        return arr[()] if arr.ndim == 0 else arr
+
+    def __call__(self, *args, **kw):
+        import warnings
+        warnings.warn("Piece.%s() is deprecated: Piece.%s is a property (read it without parentheses%s)"
+                      % (self._name, self._name,
+                         "" if self._instead == self._name else "; with an argument: Piece." + self._instead),
+                      DeprecationWarning, stacklevel=2)
+        if self._call is not None:
+            return self._call(*args, **kw)
+        if args or kw:
+            raise TypeError("Piece.%s takes no arguments" % self._name)
+        return np.asarray(self).copy()
+
+    def __repr__(self):
+        return repr(np.asarray(self))
+
+    def __str__(self):
+        return str(np.asarray(self))
+
+    def __reduce__(self):
+        return np.asarray(self).__reduce__()

@@ -22,3 +22,5 @@ def energyPlot(path, t, series, title="QDEM energy"):
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+__all__ = ["energyPlot"]

@@ -378,3 +378,5 @@ def _matplotlibPlot(X, tris, val, path, title, elev, azim, vmax, floor, fit, fra
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+__all__ = ["snapshot", "frontPieces", "surfacePlot"]

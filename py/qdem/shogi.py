@@ -172,3 +172,5 @@ def scene(name, material, scale, spacing=0.8, push=None, world=None, count=None)
         push = 1.0 * math.sqrt(9.81 / hMax)
     return dominoLine(spec["kinds"], material, scale=scale, spacing=spacing, push=push, offsets=offsets,
                       xs=spec.get("xs"), world=world)
+
+__all__ = ["outline", "surface", "mesh", "volume", "stableScale", "dominoLine", "scene"]

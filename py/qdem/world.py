@@ -101,6 +101,7 @@ class World:
         self._materialIndex = {}  # id(QdemMat) -> (material, core index)
 
     def materialIndex(self, mat):
+        """Index of a QdemMat in the compiled world, adding it on first use."""
         key = id(mat)
         if key not in self._materialIndex:
             self._materialIndex[key] = (mat, self.core.addMaterial(*mat.coreArgs()))

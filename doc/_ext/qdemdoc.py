@@ -1,0 +1,205 @@
+"""Sphinx extension of the yade-qdem site: the parts of the documentation that
+are generated from the package, so that they are never written twice.
+
+``.. qdem-api:: <module>``
+    autodoc entries for every public name of the module (its ``__all__``):
+    a name added to ``qdem.__all__`` appears in the reference without an edit.
+``.. qdem-settings:: <class>``
+    the settings table of a class built from documented attributes
+    (``QdemEngine``, ``VtkRecorder``, ``QdemMat``): name, default, unit,
+    allowed values, meaning.  The engine's world settings come from their one
+    declaration, ``QDEM_SETTINGS`` in ``pkg/world/Settings.hpp``, through
+    ``qdem._core.settings``; the build fails (a warning under ``-W``) when
+    the compiled table differs from the header, i.e. when the package the
+    site is built from is stale.
+``.. qdem-world-settings::``
+    the world settings that are not engine attributes (set on ``World.core``).
+
+``publicNames()`` is what the reference must contain; the test
+``tests/python/test_doc_site.py`` checks every one of them is in the built site."""
+import importlib
+import os
+import re
+
+from docutils import nodes
+from docutils.statemachine import StringList
+from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
+from sphinx.util.nodes import nested_parse_with_titles
+
+logger = logging.getLogger(__name__)
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+
+# The modules of the public API, in the order the reference lists them.  A
+# module's public names are its __all__.
+PUBLIC_MODULES = ["qdem", "qdem.modes", "qdem.render", "qdem.parallel", "qdem.shogi", "qdem.plot"]
+
+
+def moduleNames(modname):
+    """The public names of a module: its __all__ (every public module has one)."""
+    mod = importlib.import_module(modname)
+    names = getattr(mod, "__all__", None)
+    if names is None:
+        raise RuntimeError("%s has no __all__: the reference lists a module's __all__" % modname)
+    return mod, list(names)
+
+
+def publicNames():
+    """Every public name, qualified (``qdem.addPiece``, ``qdem.modes.viscosityForDamping``)."""
+    out = []
+    for modname in PUBLIC_MODULES:
+        _, names = moduleNames(modname)
+        out += ["%s.%s" % (modname, n) for n in names]
+    return out
+
+
+def _kind(obj):
+    if isinstance(obj, type):
+        return "autoexception" if issubclass(obj, BaseException) else "autoclass"
+    if callable(obj):
+        return "autofunction"
+    return "autodata"
+
+
+class ApiDirective(SphinxDirective):
+    """Autodoc entries for a module's __all__."""
+    required_arguments = 1
+
+    def run(self):
+        modname = self.arguments[0]
+        mod, names = moduleNames(modname)
+        lines = []
+        for n in names:
+            obj = getattr(mod, n)
+            if isinstance(obj, type(os)):
+                continue  # a submodule: it has its own section
+            lines += [".. %s:: %s.%s" % (_kind(obj), modname, n), ""]
+        return _parse(self, lines)
+
+
+# -- settings tables ------------------------------------------------------------
+
+_UNIT = re.compile(r"\[([^\]\s][^\]]{0,14})\]")
+
+
+def _unit(doc):
+    """The unit a docstring states, as '[m/s]' (first bracket), or ''."""
+    m = _UNIT.search(doc)
+    return m.group(1) if m else ""
+
+
+def _allowed(attr):
+    """What values an attribute takes, from its own validator or declaration."""
+    decl = getattr(attr, "decl", None)
+    if decl is not None:
+        if decl["kind"] == "choice":
+            return "one of " + ", ".join("``'%s'``" % c for c in decl["choices"])
+        if decl["kind"] == "bool":
+            return "True or False"
+        return decl["rule"].replace("must ", "", 1)
+    if attr.check is None:
+        return "any"
+    msg = attr.check(object())  # a validator says what it wants of a value it refuses
+    return (msg or "any").replace("must be ", "", 1).replace("must ", "", 1)
+
+
+def _cell(text):
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def _table(title, rows):
+    lines = [".. list-table:: %s" % title, "   :header-rows: 1", "   :widths: 14 10 6 18 52", "",
+             "   * - name", "     - default", "     - unit", "     - allowed", "     - meaning"]
+    for r in rows:
+        lines.append("   * - ``%s``" % r[0])
+        lines += ["     - %s" % _cell(c) for c in r[1:]]
+    return lines + [""]
+
+
+def settingsDrift():
+    """Names declared in pkg/world/Settings.hpp against those compiled into
+    qdem._core.settings: a difference means the package is stale."""
+    from qdem import _core
+    text = open(os.path.join(ROOT, "pkg", "world", "Settings.hpp")).read()
+    body = text[text.index("#define QDEM_SETTINGS(X)"):]
+    declared = re.findall(r"X\(\s*\w+\s*,\s*(\w+)\s*,", body)
+    compiled = [d["name"] for d in _core.settings]
+    return declared, compiled
+
+
+class SettingsDirective(SphinxDirective):
+    """The attribute table of a class built from qdem.attrs.Attr."""
+    required_arguments = 1
+
+    def run(self):
+        from qdem.attrs import AttrObject
+        path = self.arguments[0]
+        modname, clsname = path.rsplit(".", 1)
+        cls = getattr(importlib.import_module(modname), clsname)
+        declared, compiled = settingsDrift()
+        if declared != compiled:
+            logger.warning("qdem-settings: the settings compiled into qdem._core (%s) differ from "
+                           "QDEM_SETTINGS in pkg/world/Settings.hpp (%s): rebuild the extension "
+                           "(cmake --build build --target _core)" % (compiled, declared),
+                           location=(self.env.docname, self.lineno))
+        rows = []
+        for name in AttrObject.attrNames.__func__(cls):
+            a = next(vars(k)[name] for k in cls.__mro__ if name in vars(k))
+            default = "``%r``" % (a.default,)
+            rows.append((name, default, _unit(a.doc), _allowed(a), a.doc))
+        return _parse(self, _table("Settings of ``%s``" % path, rows))
+
+
+class WorldSettingsDirective(SphinxDirective):
+    """QDEM_SETTINGS entries without an engine name (set on World.core)."""
+
+    def run(self):
+        from qdem import _core
+        rows = [(d["name"], "``%r``" % (d["default"],), _unit(d["doc"]), d["rule"].replace("must ", "", 1), d["doc"])
+                for d in _core.settings if not d["engineName"]]
+        return _parse(self, _table("World settings without an engine attribute", rows))
+
+
+def _parse(directive, lines):
+    node = nodes.section()
+    node.document = directive.state.document
+    nested_parse_with_titles(directive.state, StringList(lines, source="qdemdoc"), node)
+    return node.children
+
+
+def _stripAttributeList(app, what, name, obj, options, lines):
+    """A class docstring ends with 'Attributes (default):' and each attribute
+    (qdem.attrs.documented, what help() shows); the reference documents the
+    attributes one by one and in the settings tables, so the list is cut."""
+    if what == "class" and "    Attributes (default):" in [" " * 4 + x.strip() for x in lines]:
+        i = next(k for k, x in enumerate(lines) if x.strip() == "Attributes (default):")
+        del lines[i:]
+
+
+_ABS = re.compile(r"(?<![\\|])\|([^|\s][^|]*?)\|(?!_)")
+
+
+def _plainText(app, what, name, obj, options, lines):
+    """The docstrings are YADE-style plain text (what help() shows): an
+    absolute value |vt| would read as an undefined reST substitution."""
+    for i, x in enumerate(lines):
+        lines[i] = _ABS.sub(lambda m: "\\|%s\\|" % m.group(1), x)
+
+
+def _requireDocstring(app, what, name, obj, options, lines):
+    """A public name without a docstring fails the build (under -W): the
+    reference is generated from them."""
+    if what != "module" and not any(x.strip() for x in lines):
+        logger.warning("%s has no docstring: every public name of qdem needs one (the API reference is "
+                       "generated from them)" % name, type="qdem", subtype="docstring")
+
+
+def setup(app):
+    app.add_directive("qdem-api", ApiDirective)
+    app.add_directive("qdem-settings", SettingsDirective)
+    app.add_directive("qdem-world-settings", WorldSettingsDirective)
+    app.connect("autodoc-process-docstring", _stripAttributeList)
+    app.connect("autodoc-process-docstring", _plainText)
+    app.connect("autodoc-process-docstring", _requireDocstring)
+    return {"version": "1", "parallel_read_safe": True}
