@@ -64,6 +64,6 @@ c = qdemEngine.world.core.contactCounts
 print("demo: %.2f s simulated in %.1f s wall (%d steps, %.0f steps/s)" % (O.time, wall, O.iter, O.iter / wall))
 print("demo: the floor carries %.4g N, the block weighs %.4g N (ratio %.4f), through %d node-wall contacts; "
       "centre at z = %.4f m; %d elements inverted at most"
-      % (load, weight, load / weight, c["wall"], block.centroid()[2], qdemEngine.inverted["max"]))
+      % (load, weight, load / weight, c["wall"], block.centroid[2], qdemEngine.inverted["max"]))
 print("demo: wrote %s/block-*.vtu (%d frames, block.pvd for ParaView), %s/energy.png and %s/block.png"
       % (OUT, len(O.engines[2].frames), OUT, OUT))

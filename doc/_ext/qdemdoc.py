@@ -117,11 +117,13 @@ def _table(title, rows):
     return lines + [""]
 
 
-def settingsDrift():
-    """Names declared in pkg/world/Settings.hpp against those compiled into
-    qdem._core.settings: a difference means the package is stale."""
+def settingsDrift(text=None):
+    """Names declared in pkg/world/Settings.hpp (or ``text``, a header's
+    contents) against those compiled into qdem._core.settings: a difference
+    means the package the site is built from is stale."""
     from qdem import _core
-    text = open(os.path.join(ROOT, "pkg", "world", "Settings.hpp")).read()
+    if text is None:
+        text = open(os.path.join(ROOT, "pkg", "world", "Settings.hpp")).read()
     body = text[text.index("#define QDEM_SETTINGS(X)"):]
     declared = re.findall(r"X\(\s*\w+\s*,\s*(\w+)\s*,", body)
     compiled = [d["name"] for d in _core.settings]

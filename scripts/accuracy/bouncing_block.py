@@ -39,7 +39,7 @@ def run(cells=3, dtFraction=0.8, tetsPerCell=6, law="stableNeoHookean"):
         s(chunk)
         worst = max(worst, abs(w.core.energy["total"] - e0))
     return dict(error=worst / scale, value=worst, reference=0.0, h=L / cells, wall=s.wall, steps=s.steps,
-                nTets=w.core.nTets, bounced=bool(p.velocity()[2] > 0))
+                nTets=w.core.nTets, bounced=bool(p.velocity[2] > 0))
 
 
 def cases(short):

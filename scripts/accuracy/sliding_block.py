@@ -47,7 +47,7 @@ def run(cells=3, dtFraction=0.8, **options):
         s(max(1, int(0.005 / dt)))
         if s.time >= 0.03:
             t.append(s.time)
-            v.append(block.velocity()[0])
+            v.append(block.velocity[0])
     a = -np.polyfit(t, v, 1)[0]
     return dict(error=a / (MU * G) - 1, value=a, reference=MU * G, wall=s.wall, steps=s.steps, edgeEdge=s.maxEdgeEdge,
                 nTets=w.core.nTets)
@@ -59,9 +59,9 @@ def runStick(cells=3, dtFraction=0.8, **options):
     dt = dtFraction * w.stableDt()["combined"]
     s = Stepper(w, dt)
     s(int(0.1 / dt))
-    x0, t0 = block.centroid()[0], s.time
+    x0, t0 = block.centroid[0], s.time
     s(int(0.2 / dt))
-    creep = (block.centroid()[0] - x0) / (s.time - t0)
+    creep = (block.centroid[0] - x0) / (s.time - t0)
     return dict(error=creep, value=creep, reference=0.0, wall=s.wall, steps=s.steps, edgeEdge=s.maxEdgeEdge, nTets=w.core.nTets)
 
 

@@ -26,11 +26,11 @@ for i in range(steps // 50):
     elif touched and firstLeft is None:
         firstLeft = O.iter
     if touched and firstLeft is None:
-        Lmax = max(Lmax, np.linalg.norm(block.angularMomentum()))
+        Lmax = max(Lmax, np.linalg.norm(block.angularMomentum))
     if firstLeft is not None and O.iter < firstLeft + 200:
-        Lmax = max(Lmax, np.linalg.norm(block.angularMomentum()))
+        Lmax = max(Lmax, np.linalg.norm(block.angularMomentum))
 tets = block.tets
 x = block.pos
 d = np.einsum("ij,ij->i", np.cross(x[tets[:, 1]] - x[tets[:, 0]], x[tets[:, 2]] - x[tets[:, 0]]), x[tets[:, 3]] - x[tets[:, 0]])
 print("tetsPerCell %d: centroid %s, |L| max around the first landing %.3g kg m^2/s, floor force %s, inverted %d"
-      % (k, np.round(block.centroid(), 4), Lmax, np.round(O.forces.f(floor), 1), int((d <= 0).sum())))
+      % (k, np.round(block.centroid, 4), Lmax, np.round(O.forces.f(floor), 1), int((d <= 0).sum())))

@@ -18,4 +18,4 @@ for e in (0.2, 0.5, 0.8):
         O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, 0))]
         O.dt = 0.5 * qe.stableTimeStep()
         O.run(int(0.01 / O.dt), True)
-        print("%11.1f  %5d  %14.3f" % (e, n, block.velocity()[2]))
+        print("%11.1f  %5d  %14.3f" % (e, n, block.velocity[2]))

@@ -97,7 +97,7 @@ floor = O.bodies.append(utils.wall(0, axis=2, sense=1, material=floorMat))
 hitSpeed = 0.02 * math.sqrt(9.81 * H)          # a piece counts as hit above this speed
 hits = [0.0] + [None] * (len(pieces) - 1)
 fallen = [None] * len(pieces)                   # centre of mass below 70 % of its height: tipped ~45 deg
-z0 = [p.centroid()[2] for p in pieces]
+z0 = [p.centroid[2] for p in pieces]
 frames = []
 
 
@@ -114,9 +114,9 @@ def watch():
     for i, p in enumerate(pieces):
         if p.asleep:                            # still, unchanged since it fell asleep
             continue
-        if hits[i] is None and np.linalg.norm(p.velocity()) > hitSpeed:
+        if hits[i] is None and np.linalg.norm(p.velocity) > hitSpeed:
             hits[i] = core.time - tPush
-        if fallen[i] is None and p.centroid()[2] < 0.7 * z0[i]:
+        if fallen[i] is None and p.centroid[2] < 0.7 * z0[i]:
             fallen[i] = core.time - tPush
     if P.retire:
         front = max(i for i, h in enumerate(hits) if h is not None)
@@ -182,7 +182,7 @@ elif P.settle:
     p0.vel[:] = np.cross([0.0, push, 0.0], p0.pos - pivot)
     print("shogi: settled for %.3g s (%.0f s wall), %d pieces asleep; first piece tipped"
           % (core.time, time.time() - start, core.nAsleep))
-    z0 = [p.centroid()[2] for p in pieces]
+    z0 = [p.centroid[2] for p in pieces]
 if tPush is None:
     tPush = core.time
 

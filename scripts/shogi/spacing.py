@@ -19,8 +19,8 @@ pieces = shogi.dominoLine(["rook"] * 3, mat, spacing=spacing, push=push * math.s
 O.bodies.append(utils.wall(0, axis=2, sense=1))
 O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
 O.dt = 0.8 * O.engines[1].stableDt()["combined"]
-z0 = [p.centroid()[2] for p in pieces]
+z0 = [p.centroid[2] for p in pieces]
 for _ in range(6):
     O.run(int(0.05 / O.dt), True)
     print("spacing %.2f push %.2f  t=%.2f s  relative heights %s"
-          % (spacing, push, O.time, " ".join("%.2f" % (p.centroid()[2] / z) for p, z in zip(pieces, z0))))
+          % (spacing, push, O.time, " ".join("%.2f" % (p.centroid[2] / z) for p, z in zip(pieces, z0))))

@@ -17,13 +17,13 @@ STEPS = 3000
 
 def run(w, cube):
     dt = 0.5 * w.stableDt()["combined"]
-    x0 = cube.centroid().copy()
+    x0 = cube.centroid.copy()
     w.core.step(dt, STEPS // 2)
     w.core.gatherAll()
-    xMid = cube.centroid().copy()
+    xMid = cube.centroid.copy()
     w.core.step(dt, STEPS // 2)
     w.core.gatherAll()
-    return x0, xMid, cube.centroid().copy(), np.abs(cube.vel).max()
+    return x0, xMid, cube.centroid.copy(), np.abs(cube.vel).max()
 
 
 w, cube = scenes.frictionHold()

@@ -72,7 +72,7 @@ movers = clumps + [s for s in spheres if not O.bodies[s].isClumpMember]
 
 
 def momentum():
-    p = piece.momentum()
+    p = piece.momentum
     for b in movers:
         p = p + O.bodies[b].state.mass * np.array(O.bodies[b].state.vel)
     return p

@@ -383,8 +383,8 @@ def runScene(spec):
     if kind == "pair":
         d = _unit(spec["direction"])
         a, b = pieces
-        ra = np.abs((a.pos - a.centroid()) @ d).max() + a.material.radius
-        rb = np.abs((b.pos - b.centroid()) @ d).max() + b.material.radius
+        ra = np.abs((a.pos - a.centroid) @ d).max() + a.material.radius
+        rb = np.abs((b.pos - b.centroid) @ d).max() + b.material.radius
         lateral = spec["offset"] * min(sizes) * _perp(d, spec["offsetAngle"])
         _moveTo(a, -d * (ra + travel / 2), 0.5 * speed * d, spec["pieces"][0]["spin"])
         _moveTo(b, d * (rb + travel / 2) + lateral, -0.5 * speed * d, spec["pieces"][1]["spin"])
@@ -398,7 +398,7 @@ def runScene(spec):
             b.pos[:] -= gap * d
     elif kind == "drop":
         p = pieces[0]
-        h = np.abs((p.pos - p.centroid()) @ normal).max() + p.material.radius
+        h = np.abs((p.pos - p.centroid) @ normal).max() + p.material.radius
         tang = _perp(normal, spec["offsetAngle"])
         dirn = _unit(-normal * math.cos(spec["incidence"]) + tang * math.sin(spec["incidence"]))
         _moveTo(p, normal * (h + travel * abs(dirn @ normal) + 1e-9 * h), speed * dirn,
@@ -434,7 +434,7 @@ def runScene(spec):
         return core.energy["total"] + _yadeKinetic(O, dynIds)
 
     def momentumNow():
-        return sum(p.momentum() for p in pieces) + _yadeMomentum(O, dynIds)
+        return sum(p.momentum for p in pieces) + _yadeMomentum(O, dynIds)
 
     conserveMomentum = kind in ("pair", "spheres")
     scaleP = float((np.abs(core.vel) * core.mass[:, None]).sum()) + sum(
@@ -584,7 +584,7 @@ def _surfaceDistance(p, points):
 
 def _moveTo(p, c, v, spin):
     x = p.pos
-    c0 = p.centroid()
+    c0 = p.centroid
     x += np.asarray(c) - c0
     p.vel[:] = np.asarray(v) + np.cross(np.asarray(spin, float), x - np.asarray(c))
 
@@ -623,13 +623,13 @@ def _passThrough(O, spec, pieces, normal, sphereIds):
         reach = a.material.radius + b.material.radius
         for i, (p, q) in enumerate(((a, b), (b, a))):
             if spec["pieces"][i]["mesh"]["convex"]:
-                depth = _depthInside(p.centroid()[None], q)[0]
+                depth = _depthInside(p.centroid[None], q)[0]
                 if depth > reach:
                     return ("the centroid of piece %d is %.3g m inside piece %d (beyond the contact reach %.3g m): "
                             "passed through it" % (p.id, depth, q.id, reach))
     elif kind == "drop":
         p = pieces[0]
-        if p.centroid() @ normal < 0:
+        if p.centroid @ normal < 0:
             return ("piece 0's centroid is behind the %s it was thrown at: passed through it"
                     % spec["obstacle"]["kind"])
     else:

@@ -80,9 +80,9 @@ def _block(model, slope=0.0, v0=0.0, mu=0.3, vReg=1e-3):
 def test_both_friction_models_slide_at_mu_g(model):
     w, block, dt = _block(model, v0=0.6)
     w.core.step(dt, int(0.02 / dt))
-    t1, v1 = w.core.time, block.velocity()[0]
+    t1, v1 = w.core.time, block.velocity[0]
     w.core.step(dt, int(0.1 / dt))
-    t2, v2 = w.core.time, block.velocity()[0]
+    t2, v2 = w.core.time, block.velocity[0]
     assert v2 > 0.1
     assert (v1 - v2) / (t2 - t1) == pytest.approx(0.3 * 9.81, rel=0.02)
 
@@ -96,9 +96,9 @@ def test_regularized_friction_creeps_on_a_slope_the_spring_holds():
         # Past the landing's elastic rocking (its up-and-down-slope swing is
         # still +-1.5e-5 m/s at 0.1 s, and its phase depends on the mesh).
         w.core.step(dt, int(0.16 / dt))
-        x0, t0 = block.centroid()[0], w.core.time
+        x0, t0 = block.centroid[0], w.core.time
         w.core.step(dt, int(0.1 / dt))
-        creep[model] = (block.centroid()[0] - x0) / (w.core.time - t0)
+        creep[model] = (block.centroid[0] - x0) / (w.core.time - t0)
     assert abs(creep["spring"]) < 1e-5
     assert creep["regularized"] == pytest.approx(vReg * math.tan(theta) / mu, rel=0.05)
 

@@ -100,7 +100,7 @@ def test_pieces_started_interpenetrated_are_let_separate():
         w.core.checkDeepOverlap()
     assert b.pos[:, 0].min() > a.pos[:, 0].max()
     # Out of each other and watched again: centres put half a side apart, it is named.
-    b.pos[:] += a.centroid() - b.centroid() + np.array([0.5 * L, 0, 0])
+    b.pos[:] += a.centroid - b.centroid + np.array([0.5 * L, 0, 0])
     with pytest.raises(qdem.StabilityError, match=r"piece [01] has sunk into piece [01] deeper"):
         w.core.step(dt, 1)  # (the contact phase sees it in that step: ContactDepthCheck.cpp)
         w.core.checkDeepOverlap()

@@ -1,4 +1,5 @@
-"""Every ```python example in README.md and doc/*.md runs as written, in a
+"""Every ```python example in README.md and the documentation site's pages
+(doc/**/*.md, not the developers' notebook doc/dev/) runs as written, in a
 fresh `yade -n -x` process, and gives the right physics.
 
 Each block is run verbatim with an epilogue that reports what it left behind
@@ -39,7 +40,7 @@ for _p in _qdem.defaultWorld().pieces:
     _X, _y = _p.refPos - _p.refPos.mean(0), _x - _x.mean(0)
     _U, _s, _Vt = _np.linalg.svd(_X.T @ _y)
     _R = (_U @ _np.diag([1, 1, _np.sign(_np.linalg.det(_U @ _Vt))]) @ _Vt).T
-    _out["pieces"].append({"inverted": int((_d <= 0).sum()), "centroid": list(map(float, _p.centroid())),
+    _out["pieces"].append({"inverted": int((_d <= 0).sum()), "centroid": list(map(float, _p.centroid)),
                            "vmax": float(_np.abs(_p.vel).max()), "mass": float(_p.totalMass),
                            "upAxis": float(_np.abs(_R[2, :]).max())})
 _walls = [b.id for b in _O.bodies if b is not None and type(b.shape).__name__ == "Wall"]
@@ -52,8 +53,12 @@ with open(_os.environ["QDEM_EXAMPLE_REPORT"], "w") as _f:
 
 
 def _examples():
-    files = [os.path.join(ROOT, "README.md")] + sorted(
-        os.path.join(ROOT, "doc", f) for f in os.listdir(os.path.join(ROOT, "doc")) if f.endswith(".md"))
+    doc = os.path.join(ROOT, "doc")
+    pages = []
+    for d, dirs, fs in os.walk(doc):
+        dirs[:] = [x for x in dirs if x not in ("dev", "_build", "_ext")]
+        pages += [os.path.join(d, f) for f in fs if f.endswith(".md")]
+    files = [os.path.join(ROOT, "README.md")] + sorted(pages)
     out = []
     for path in files:
         text = open(path).read()

@@ -134,7 +134,7 @@ def test_free_flight_energy_is_conserved_without_viscosity():
     mat = rubber()
     w = qdem.World()
     p = w.addPiece(qdem.boxMesh((0.2, 0.1, 0.1), (4, 2, 2), tetsPerCell=6), mat, angVel=(0, 0, 30))
-    p.pos[:] += 0.01 * (p.refPos - p.centroid()) * (1, -0.3, -0.3)  # start stretched: it vibrates while tumbling
+    p.pos[:] += 0.01 * (p.refPos - p.centroid) * (1, -0.3, -0.3)  # start stretched: it vibrates while tumbling
     w.core.trackEnergy = True
     dt = 0.5 * w.stableDt()["combined"]
     samples = []

@@ -44,7 +44,7 @@ def test_fast_impact_on_the_floor(speed):
     e0, worst = _watch(w, 0.8, 40, 50)
     assert worst <= 1e-3 * e0
     # the floor acted: the cube bounced back up and no node is below it
-    assert p.velocity()[2] > 0.1 * speed
+    assert p.velocity[2] > 0.1 * speed
     assert p.pos[:, 2].min() > 0
 
 
@@ -61,10 +61,10 @@ def test_fast_impact_between_pieces():
     b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, 0.01, 0), vel=(-25.0, 0, 0))
     e0, worst = _watch(w, 0.8, 40, 50)
     assert worst <= 1e-3 * e0
-    assert a.centroid()[0] < b.centroid()[0]
-    assert a.velocity()[0] < 0 < b.velocity()[0]
+    assert a.centroid[0] < b.centroid[0]
+    assert a.velocity[0] < 0 < b.velocity[0]
     assert a.pos[:, 0].max() < b.pos[:, 0].min() + 0.01          # no node deep in the other cube
-    assert np.abs(a.momentum() + b.momentum()).max() < 1e-9 * a.totalMass * 25.0
+    assert np.abs(a.momentum + b.momentum).max() < 1e-9 * a.totalMass * 25.0
 
 
 @pytest.mark.parametrize("kw", [{"poisson": 0.49}, {"young": 1e11, "density": 7800.0}])
@@ -80,7 +80,7 @@ def test_nearly_incompressible_and_stiff_materials(kw):
     # the floor acted: it reversed the 1 m/s fall (free fall would end >= 1 m/s
     # downwards and far below it) and holds every node above its plane
     p = w.pieces[0]
-    assert p.velocity()[2] > -0.5
+    assert p.velocity[2] > -0.5
     assert p.pos[:, 2].min() > -mat.radius
 
 
@@ -112,7 +112,7 @@ def test_needle_and_sliver_tetrahedra_in_one_piece():
 # --- issue 6, second set ----------------------------------------------------
 
 def _pieceMomentum(pieces):
-    return sum(p.momentum() for p in pieces)
+    return sum(p.momentum for p in pieces)
 
 
 @pytest.mark.parametrize("cells, tpc, ori", [(3, 5, None), (3, 12, ((1, 2, 3), 0.4))])
@@ -290,7 +290,7 @@ def test_resting_stack_for_a_million_steps():
     qdem._core.setThreads(1)                            # 16 nodes: threads would only cost
     try:
         w.core.step(dt, 100000)                         # settle (6.8 s of simulated time)
-        e, ca, cb = _mech(w.core.energy), a.centroid(), b.centroid()
+        e, ca, cb = _mech(w.core.energy), a.centroid, b.centroid
         for _ in range(9):
             w.core.step(dt, 100000)
             w.core.checkFinite()
@@ -301,7 +301,7 @@ def test_resting_stack_for_a_million_steps():
     finally:
         qdem._core.setThreads(threads)
     assert w.core.iter == 10 ** 6
-    assert np.abs(a.centroid() - ca).max() < 1e-12 and np.abs(b.centroid() - cb).max() < 1e-12
+    assert np.abs(a.centroid - ca).max() < 1e-12 and np.abs(b.centroid - cb).max() < 1e-12
     assert w.core.contactCounts["pointPolygon"] > 0
 
 
@@ -343,10 +343,10 @@ def test_ledger_books_external_forces_and_driven_dofs():
     w.core.trackEnergy = True
     F = 10.0
     p.extForce[:, 0] = F / len(p.mass)
-    x0 = p.centroid()[0]
+    x0 = p.centroid[0]
     w.core.step(0.5 * w.stableDt()["combined"], 3000)
     e = w.core.energy
-    work = F * (p.centroid()[0] - x0)
+    work = F * (p.centroid[0] - x0)
     assert e["kinetic"] > 0.99 * work > 0
     assert abs(e["boundaryWork"] + work) < 1e-3 * work
     assert abs(e["total"]) < 1e-3 * work

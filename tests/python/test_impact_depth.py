@@ -88,8 +88,8 @@ def test_the_same_impacts_with_a_contact_that_holds_them_are_right(scene, speed)
             deepest, overlap = max(deepest, core.maxPieceDepthRatio), max(overlap, core.maxPieceOverlap)
     assert deepest == 0 and 0 < overlap < 0.25 * 0.04  # no node behind the other surface
     assert abs(_ledger(O) - e0) < 0.05 * e0
-    assert np.abs(a.momentum() + b.momentum()).max() < 1e-9 * a.totalMass * speed
-    va, vb = a.velocity(), b.velocity()
+    assert np.abs(a.momentum + b.momentum).max() < 1e-9 * a.totalMass * speed
+    va, vb = a.velocity, b.velocity
     e = (vb[0] - va[0]) / (2 * speed)
     assert 0.5 <= e < 1, e
 
@@ -139,7 +139,7 @@ def test_pieces_placed_pressed_into_each_other_are_named_with_the_energy_and_spe
     energy, speed = map(float, re.search(r"hold ([\d.]+) J.* up to ([\d.]+) m/s", msg).groups())
     assert energy == pytest.approx(O.energy["qdemContactElastic"], rel=0.05)
     O.run(int(0.1 / O.dt), True)
-    rel = b.velocity()[2] - a.velocity()[2]
+    rel = b.velocity[2] - a.velocity[2]
     assert 0.3 * speed < rel <= speed  # thrown apart, at most at the named speed (dashpots take some)
 
 

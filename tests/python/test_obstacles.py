@@ -47,9 +47,9 @@ def _facetSlope(O, theta, frictionAngle, frictionWall):
 
 def _slideAcceleration(O, block, down):
     O.run(int(0.1 / O.dt), True)                    # settle onto the slope
-    t1, v1 = O.time, block.velocity() @ down
+    t1, v1 = O.time, block.velocity @ down
     O.run(int(0.2 / O.dt), True)
-    return (block.velocity() @ down - v1) / (O.time - t1)
+    return (block.velocity @ down - v1) / (O.time - t1)
 
 
 def test_block_slides_freely_on_a_frictionless_facet_slope(scene):
@@ -79,7 +79,7 @@ def test_a_slope_made_frictionless_mid_run_lets_the_block_slide(scene, how):
     theta = math.radians(20)
     block, down = _facetSlope(O, theta, math.atan(0.8), 0.8)
     O.run(int(0.1 / O.dt), True)
-    assert abs(block.velocity() @ down) < 0.02, "friction 0.8 holds the block (sliding: 0.34 m/s by now)"
+    assert abs(block.velocity @ down) < 0.02, "friction 0.8 holds the block (sliding: 0.34 m/s by now)"
     facets = [b for b in O.bodies if b is not None and type(b.shape).__name__ == "Facet"]
     for b in facets:
         if how == "edit":
@@ -128,14 +128,14 @@ def test_a_facet_whose_edge_hangs_just_above_a_piece_is_not_refused(scene):
     by friction against the edge's sideways push."""
     O = scene
     slab, floor, fence = _fence(O, 0.003)
-    c0 = slab.centroid()
+    c0 = slab.centroid
     O.run(int(0.3 / O.dt), True)
     weight = slab.totalMass * 9.81
     onFloor, onFence = np.array(O.forces.f(floor)), np.array(O.forces.f(fence))
     assert onFence[2] > weight                                   # pressed down: a contact, not a refusal
     assert -onFloor[2] == pytest.approx(weight + onFence[2], rel=0.02)
     assert onFloor[0] == pytest.approx(-onFence[0], rel=0.05)
-    assert np.linalg.norm(slab.centroid() - c0) < 1e-3 and np.abs(slab.vel).max() < 0.01
+    assert np.linalg.norm(slab.centroid - c0) < 1e-3 and np.abs(slab.vel).max() < 0.01
 
 
 @pytest.mark.parametrize("gap", [-0.003, -0.03])
@@ -296,7 +296,7 @@ def test_a_piece_placed_flush_on_a_floor_is_warned_of_and_one_placed_r_above_is_
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         O.run(400, True)
-    assert block.velocity()[2] < 0.05
+    assert block.velocity[2] < 0.05
 
 
 
@@ -318,7 +318,7 @@ def test_a_block_hitting_a_thin_box_bounces_as_on_a_thick_one(scene):
         O.engines = _engines()
         O.dt = 0.5 * O.engines[1].stableTimeStep()
         O.run(int(0.06 / O.dt), True)
-        out[thickness] = (block.velocity()[2], block.centroid()[2], np.min(block.pos[:, 2]))
+        out[thickness] = (block.velocity[2], block.centroid[2], np.min(block.pos[:, 2]))
     thin, thick = out[0.004], out[0.1]
     assert thick[0] > 5.0  # thrown back up
     assert thin[0] == pytest.approx(thick[0], rel=1e-3)
@@ -383,7 +383,7 @@ def test_a_frictionless_block_slides_over_facet_seams_without_slowing(scene):
     O.run(int(0.2 / O.dt), True)
     block.vel[:, 0] += 0.5
     O.run(int(0.5 / O.dt), True)
-    assert block.velocity()[0] == pytest.approx(0.5, abs=2e-4)
+    assert block.velocity[0] == pytest.approx(0.5, abs=2e-4)
 
 
 @pytest.mark.parametrize("wallYoung, warned", [(1e4, True), (1e7, False)])

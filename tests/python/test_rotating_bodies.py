@@ -72,14 +72,14 @@ def _drift(O, kind, dtFactor, kinematicsFirst=False):
     O.dt = dtFactor * engine.stableTimeStep()
 
     def radius():
-        c = piece.centroid()
+        c = piece.centroid
         return math.hypot(c[0], c[1])
     O.run(int(0.2 / O.dt), True)
     r0, t0 = radius(), O.time
     O.run(int(1.0 / O.dt), True)
     # Still stuck, turning with the table (not left behind or thrown off).
     assert abs(radius() - R) < 2e-3
-    c = piece.centroid()
+    c = piece.centroid
     lag = (math.atan2(c[1], c[0]) - W * O.time + math.pi) % (2 * math.pi) - math.pi
     assert abs(lag) < 0.05
     return (radius() - r0) / (O.time - t0), W * W * R * O.dt / 2

@@ -61,7 +61,7 @@ def test_the_halves_of_a_cut_block_added_as_pieces_do_not_pass_through_each_othe
     As two pieces they touch and stay on their own sides."""
     w = qdem.World()
     a, b = (w.addPiece(p, rubber(radius=2e-3, viscosity=50.0)) for p in qdem.splitMesh(_cutBlock()))
-    if a.centroid()[0] > b.centroid()[0]:
+    if a.centroid[0] > b.centroid[0]:
         a, b = b, a
     a.pos[:, 0] -= 0.004                      # just apart: the reach of two 2 mm radii
     a.vel[:, 0], b.vel[:, 0] = 1.0, -1.0
@@ -72,7 +72,7 @@ def test_the_halves_of_a_cut_block_added_as_pieces_do_not_pass_through_each_othe
         touching += w.core.contactCounts["pointPolygon"] > 0
     assert touching * dt > 2e-3                              # they touched (for 4.2 ms)
     assert a.pos[:, 0].max() < b.pos[:, 0].min() + 2e-3      # no node of one past the other's face
-    assert a.velocity()[0] < 0 < b.velocity()[0]             # they bounced apart
+    assert a.velocity[0] < 0 < b.velocity[0]             # they bounced apart
 
 
 # --- pieces started inside obstacles (core) ---------------------------------
@@ -136,7 +136,7 @@ def test_a_piece_resting_on_an_obstacle_is_not_refused(make):
     w.core.gravity = (0, 0, -9.81)
     dt = 0.8 * w.stableDt()["combined"]
     w.core.step(dt, int(0.05 / dt))
-    assert np.abs(p.velocity()).max() < 0.05                  # not launched (a launch is metres per second)
+    assert np.abs(p.velocity).max() < 0.05                  # not launched (a launch is metres per second)
     assert p.pos[:, 2].min() > 0                               # and on the obstacle's top side
 
 
@@ -203,7 +203,7 @@ def test_an_obstacle_added_elsewhere_during_an_impact_leaves_the_piece_alone():
             w.core.setObstacles([floor[0], far])
             w.core.setObstacleStates(np.array([floor[1], floor[1]], dtype=float))
         w.core.step(dt, 2000)
-        return p.pos.copy(), p.velocity()
+        return p.pos.copy(), p.velocity
     (x0, v0), (x1, v1) = run(False), run(True)
     assert v0[2] > 0.3                                   # it bounced
     assert np.array_equal(x0, x1) and np.array_equal(v0, v1)
@@ -266,10 +266,10 @@ def test_a_loaded_state_knows_its_obstacles_whatever_list_was_in_force_before():
     _setAll(w, saved_list)
     _intoImpact(w, p, dt)
     saved = w.core.saveState()
-    vz = p.velocity()[2]
+    vz = p.velocity[2]
     w.core.step(dt, 5)                                            # the run without the detour
     ref = w.core.pos.copy()
-    assert p.velocity()[2] > vz                                   # the floor pushes back
+    assert p.velocity[2] > vz                                   # the floor pushes back
     w.core.loadState(saved)
     _setAll(w, [_far(7, 5.0), _far(9, 20.0)])
     w.core.step(dt, 1)
@@ -288,10 +288,10 @@ def test_a_loaded_state_knows_its_obstacles_whatever_list_was_in_force_before():
             w.core.step(dt, 1)
             w.core.loadState(saved)
         _intoImpact(w, p, dt)
-        vz = p.velocity()[2]
+        vz = p.velocity[2]
         _setAll(w, [_far(7, 5.0), _wall(9)[0], _far(11, 40.0)])
         w.core.step(dt, 5)                                        # (b): no refusal
-        assert p.velocity()[2] > vz                               # the floor pushes back
+        assert p.velocity[2] > vz                               # the floor pushes back
         return w.core.pos.copy()
 
     assert np.array_equal(impactAfterLoad(True), impactAfterLoad(False))
@@ -418,7 +418,7 @@ def test_pieces_touching_each_other_are_not_refused(gap):
     w, a, b = _twoCubes(-gap)
     dt = 0.8 * w.stableDt()["combined"]
     w.core.step(dt, 200)
-    assert a.velocity()[0] <= 1e-12 and b.velocity()[0] >= -1e-12  # apart or at rest, never drawn in
+    assert a.velocity[0] <= 1e-12 and b.velocity[0] >= -1e-12  # apart or at rest, never drawn in
 
 
 def test_a_piece_added_into_a_running_scene_is_checked_and_a_loaded_deep_contact_is_not(tmp_path):
@@ -435,7 +435,7 @@ def test_a_piece_added_into_a_running_scene_is_checked_and_a_loaded_deep_contact
     w2.addPiece(_cube(), mat, pos=(L + 0.01, 0, 0), vel=(-30.0, 0, 0))
     qdem.loadState(path, world=w2)
     w2.core.step(dt, 5)                                                    # a restart: goes on
-    w2.addPiece(qdem.boxMesh((0.03, 0.03, 0.03), (2, 2, 2)), mat, pos=a.centroid())  # wholly inside piece 0
+    w2.addPiece(qdem.boxMesh((0.03, 0.03, 0.03), (2, 2, 2)), mat, pos=a.centroid)  # wholly inside piece 0
     with pytest.raises(ValueError, match=r"piece 2 starts inside piece 0"):
         w2.core.step(dt, 1)
 
@@ -474,7 +474,7 @@ def test_a_time_stepper_between_qdem_engine_and_newton_is_refused(scene):
     O.run(200, True)
     w = qdem.defaultWorld()
     assert w.core.time == pytest.approx(O.time, rel=1e-12)
-    z = w.pieces[0].centroid()[2]
+    z = w.pieces[0].centroid[2]
     assert z - 1.0 == pytest.approx(O.bodies[0].state.pos[2] - 1.0, rel=1e-9)
 
 

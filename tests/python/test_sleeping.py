@@ -100,7 +100,7 @@ def _collision(sleep, energy=False):
     states = []
     while w.core.time < 0.32:
         w.core.step(dt, 20)
-        states.append((w.core.time, b.asleep, b.velocity()[0], a.velocity()[0]))
+        states.append((w.core.time, b.asleep, b.velocity[0], a.velocity[0]))
     return w, states, e0
 
 
@@ -177,7 +177,7 @@ def test_a_moving_piece_never_sleeps_even_with_zero_sleep_time():
     assert not b.asleep
     # The block at rest sleeps once the floor carries it; the one in flight not while it flies.
     assert _stepUntil(w, dt, lambda: rest.asleep, 400)
-    assert b.centroid()[2] > 0.2 and not b.asleep
+    assert b.centroid[2] > 0.2 and not b.asleep
 
 
 def test_slow_is_not_at_rest_a_piece_in_the_air_or_driven_through_blocked_dofs_stays_awake():
@@ -195,8 +195,8 @@ def test_slow_is_not_at_rest_a_piece_in_the_air_or_driven_through_blocked_dofs_s
     w.core.step(dt, steps)
     t = steps * dt
     assert not hanging.asleep and not thrown.asleep
-    assert hanging.centroid()[2] == pytest.approx(1.0 - 0.5 * 9.81 * t * t, rel=1e-3)
-    assert thrown.centroid()[2] == pytest.approx(1.0 + 0.5 * t - 0.5 * 9.81 * t * t, rel=1e-3)
+    assert hanging.centroid[2] == pytest.approx(1.0 - 0.5 * 9.81 * t * t, rel=1e-3)
+    assert thrown.centroid[2] == pytest.approx(1.0 + 0.5 * t - 0.5 * 9.81 * t * t, rel=1e-3)
     # No gravity: a free block pulled at 5 mm/s on one face (sleepVelocity 1 cm/s).
     w = qdem.World()
     w.core.sleepVelocity, w.core.sleepTime = 0.01, 0.01
@@ -209,7 +209,7 @@ def test_slow_is_not_at_rest_a_piece_in_the_air_or_driven_through_blocked_dofs_s
     w.core.step(dt, steps)
     assert not p.asleep
     assert np.asarray(p.pos)[face, 0].mean() == pytest.approx(0.05 + 0.005 * steps * dt, rel=1e-6)
-    assert p.centroid()[0] > 0.0005   # the rest of the block follows
+    assert p.centroid[0] > 0.0005   # the rest of the block follows
 
 
 def test_sleeping_is_off_by_default_and_checks_its_settings():
@@ -261,7 +261,7 @@ def _hitFixedBlock(hold):
     history = []
     while w.core.time < 0.4:
         w.core.step(dt, 100)
-        history.append(a.velocity()[0])
+        history.append(a.velocity[0])
     return w, a, b, np.array(history), e0
 
 
@@ -289,7 +289,7 @@ def test_a_piece_held_in_the_air_falls_freely_once_dynamic_again(tmp_path):
     b.dynamic = False
     dt = _dt(w)
     w.core.step(dt, 500)
-    z0 = b.centroid()[2]
+    z0 = b.centroid[2]
     assert z0 == pytest.approx(1.0, abs=1e-12) and b.asleep
     path = str(tmp_path / "held.npz")       # kept across a restart
     qdem.saveState(path, world=w)
@@ -302,7 +302,7 @@ def test_a_piece_held_in_the_air_falls_freely_once_dynamic_again(tmp_path):
     t0 = w2.core.time
     w2.core.step(dt, 2000)
     t = w2.core.time - t0
-    assert z0 - b2.centroid()[2] == pytest.approx(0.5 * 9.81 * t * t, rel=0.01)
+    assert z0 - b2.centroid[2] == pytest.approx(0.5 * 9.81 * t * t, rel=0.01)
     with pytest.raises(Exception, match="piece"):
         w2.core.setDynamic(5, False)
 

@@ -48,19 +48,19 @@ def test_head_on_cubes_conserve_momentum_and_rebound_by_the_law(e):
     mat = rubber(radius=1e-5, restitution=e)   # contact springs far softer than the cubes
     w, a, b = _pair(mat)
     dt = 0.2 * w.stableDt()["combined"]
-    p0 = a.momentum() + b.momentum()
-    scale = np.abs(a.momentum()).max()
+    p0 = a.momentum + b.momentum
+    scale = np.abs(a.momentum).max()
     worst, n, touched = 0.0, 0, False
     while n < 20000:
         w.core.step(dt, 10)
         n += 10
-        worst = max(worst, np.abs(a.momentum() + b.momentum() - p0).max() / scale)
+        worst = max(worst, np.abs(a.momentum + b.momentum - p0).max() / scale)
         touched = touched or w.core.contactCounts["pointPolygon"] > 0
         if touched and w.core.contactCounts["pointPolygon"] == 0:
             break
     assert touched and n < 20000
     assert worst < 1e-10
-    rebound = (b.velocity()[0] - a.velocity()[0]) / (2 * 3e-5)
+    rebound = (b.velocity[0] - a.velocity[0]) / (2 * 3e-5)
     assert rebound == pytest.approx(_lumpedRestitution(mat, a, b), rel=0.05)
 
 
@@ -70,13 +70,13 @@ def test_frictionless_collision_conserves_angular_momentum():
     a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(-0.06, 0.03, 0.01), vel=(0.05, 0, 0))
     b = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.1), (3, 3, 3)), mat, pos=(0.06, -0.02, 0), ori=((1, 2, 3), 0.4),
                    vel=(-0.05, 0, 0), angVel=(0, 0, 1))
-    L0 = a.angularMomentum(about=(0, 0, 0)) + b.angularMomentum(about=(0, 0, 0))
+    L0 = a.angularMomentumAbout((0, 0, 0)) + b.angularMomentumAbout((0, 0, 0))
     dt = 0.3 * w.stableDt()["combined"]
     touched = 0
     for _ in range(400):
         w.core.step(dt, 10)
         touched += w.core.contactCounts["pointPolygon"] + w.core.contactCounts["edgeEdge"]
-    L1 = a.angularMomentum(about=(0, 0, 0)) + b.angularMomentum(about=(0, 0, 0))
+    L1 = a.angularMomentumAbout((0, 0, 0)) + b.angularMomentumAbout((0, 0, 0))
     assert touched > 0
     assert np.abs(L1 - L0).max() < 1e-9 * np.abs(L0).max()
 
@@ -231,9 +231,9 @@ def test_block_sliding_on_a_qdem_slab_decelerates_at_mu_g():
     O.engines = [ForceResetter(), qdem.QdemEngine(), NewtonIntegrator(gravity=(0, 0, -9.81))]
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     O.run(int(0.05 / O.dt), True)
-    t1, v1 = O.time, block.velocity()[0]
+    t1, v1 = O.time, block.velocity[0]
     O.run(int(0.15 / O.dt), True)
-    t2, v2 = O.time, block.velocity()[0]
+    t2, v2 = O.time, block.velocity[0]
     assert v2 > 0.2                                  # still sliding
     assert (v1 - v2) / (t2 - t1) == pytest.approx(mu * 9.81, rel=0.03)
     O.reset()

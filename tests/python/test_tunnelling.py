@@ -58,15 +58,15 @@ def test_cubes_hitting_head_on_rebound_on_their_own_sides(speed, young, radius):
     dt = 0.8 * w.stableDt()["combined"]
     w.core.step(dt, 1)
     e0 = _mech(w.core.energy)
-    p0 = a.momentum() + b.momentum()
+    p0 = a.momentum + b.momentum
     worst = -np.inf
     for _ in range(int(0.012 / dt)):
         w.core.step(dt, 1)
         worst = max(worst, _mech(w.core.energy) - e0)
-    assert a.centroid()[0] < b.centroid()[0]                    # order kept
-    assert a.velocity()[0] < 0 < b.velocity()[0]                # rebounded
+    assert a.centroid[0] < b.centroid[0]                    # order kept
+    assert a.velocity[0] < 0 < b.velocity[0]                # rebounded
     assert _inside(a, b) == 0 and _inside(b, a) == 0
-    assert np.abs(a.momentum() + b.momentum() - p0).max() < 1e-9 * a.totalMass * speed
+    assert np.abs(a.momentum + b.momentum - p0).max() < 1e-9 * a.totalMass * speed
     assert worst <= 1e-3 * e0
 
 
@@ -86,8 +86,8 @@ def test_rotated_cube_hitting_obliquely_stays_on_its_side():
     w, a, b, mat = _pair(25.0, 1e7, ori=((1, 2, 3), 0.5), offset=(0.02, 0.01))
     dt = 0.8 * w.stableDt()["combined"]
     w.core.step(dt, int(0.012 / dt))
-    assert a.centroid()[0] < b.centroid()[0]
-    assert a.velocity()[0] < b.velocity()[0]
+    assert a.centroid[0] < b.centroid[0]
+    assert a.velocity[0] < b.velocity[0]
     assert _inside(a, b) == 0
 
 
@@ -116,7 +116,7 @@ def test_cube_hitting_a_floor_rebounds_above_it(speed):
     w.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
     dt = 0.8 * w.stableDt()["combined"]
     w.core.step(dt, int(0.01 / dt))
-    assert p.velocity()[2] > 0
+    assert p.velocity[2] > 0
     assert p.pos[:, 2].min() > 0
 
 
@@ -155,7 +155,7 @@ def test_a_node_that_jumps_through_a_thin_obstacle_in_one_step_stops_the_run(kin
     _obstacle(w2, kind)
     p2.vel[:] = (0, 0, -2.0)
     w2.core.step(dt, int(0.01 / dt))
-    assert p2.pos[:, 2].min() > 0 and p2.velocity()[2] > 0
+    assert p2.pos[:, 2].min() > 0 and p2.velocity[2] > 0
 
 
 def test_a_block_too_heavy_for_its_contact_going_through_a_floor_stops_the_run():

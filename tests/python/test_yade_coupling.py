@@ -50,9 +50,9 @@ def test_block_slides_down_steep_slope_at_coulomb_acceleration(scene):
     theta, mu = math.radians(30), 0.3
     block, down = _slope(O, theta, mu)
     O.run(int(0.1 / O.dt), True)                    # settle onto the slope
-    t1, v1 = O.time, block.velocity() @ down
+    t1, v1 = O.time, block.velocity @ down
     O.run(int(0.2 / O.dt), True)
-    t2, v2 = O.time, block.velocity() @ down
+    t2, v2 = O.time, block.velocity @ down
     a = (v2 - v1) / (t2 - t1)
     expected = 9.81 * (math.sin(theta) - mu * math.cos(theta))
     assert a == pytest.approx(expected, rel=0.02)
@@ -63,11 +63,11 @@ def test_block_stays_on_gentle_slope(scene):
     theta, mu = math.radians(10), 0.3
     block, down = _slope(O, theta, mu)
     O.run(int(0.1 / O.dt), True)
-    x1 = block.centroid() @ down
+    x1 = block.centroid @ down
     O.run(int(0.3 / O.dt), True)
-    x2 = block.centroid() @ down
+    x2 = block.centroid @ down
     assert abs(x2 - x1) < 1e-5                      # no creep
-    assert abs(block.velocity() @ down) < 1e-4
+    assert abs(block.velocity @ down) < 1e-4
 
 
 def test_energy_goes_to_O_energy_and_balances(scene):
@@ -115,13 +115,13 @@ def test_moving_wall_is_followed_and_pushes(scene):
     O.engines = _engines()
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     O.run(int(0.2 / O.dt), True)
-    z0 = block.centroid()[2]
+    z0 = block.centroid[2]
     O.bodies[floor].state.vel = (0, 0, 0.05)
     O.run(int(0.5 / O.dt), True)
     lift = O.bodies[floor].state.pos[2]
     assert lift == pytest.approx(0.05 * 0.5, rel=0.01)
-    assert block.centroid()[2] - z0 == pytest.approx(lift, rel=0.05)
-    assert block.velocity()[2] == pytest.approx(0.05, rel=0.1)
+    assert block.centroid[2] - z0 == pytest.approx(lift, rel=0.05)
+    assert block.velocity[2] == pytest.approx(0.05, rel=0.1)
 
 
 def test_block_on_facet_floor(scene):
@@ -139,7 +139,7 @@ def test_block_on_facet_floor(scene):
     load = O.forces.f(a)[2] + O.forces.f(b)[2]
     assert load == pytest.approx(-weight, rel=0.005)
     assert O.forces.f(a)[2] < 0 and O.forces.f(b)[2] < 0     # the diagonal splits the load
-    assert block.centroid()[2] == pytest.approx(0.105, abs=2e-3)
+    assert block.centroid[2] == pytest.approx(0.105, abs=2e-3)
 
 
 def test_a_box_or_facet_changed_by_the_script_is_followed(scene):
@@ -157,14 +157,14 @@ def test_a_box_or_facet_changed_by_the_script_is_followed(scene):
     O.engines = _engines()
     O.dt = 0.8 * O.engines[1].stableDt()["combined"]
     O.run(int(0.3 / O.dt), True)
-    assert block.centroid()[2] == pytest.approx(0.105, abs=2e-3)
-    assert other.centroid()[2] == pytest.approx(0.055, abs=2e-3)
+    assert block.centroid[2] == pytest.approx(0.105, abs=2e-3)
+    assert other.centroid[2] == pytest.approx(0.055, abs=2e-3)
     O.bodies[box].shape.extents = Vector3(0.2, 0.2, 0.04)        # half-extents: top 1 cm lower
     for i in f:                                                   # floor 1 cm lower
         O.bodies[i].shape.vertices = [Vector3(v[0], v[1], v[2] - 0.01) for v in O.bodies[i].shape.vertices]
     O.run(int(0.5 / O.dt), True)
-    assert block.centroid()[2] == pytest.approx(0.095, abs=2e-3)
-    assert other.centroid()[2] == pytest.approx(0.045, abs=2e-3)
+    assert block.centroid[2] == pytest.approx(0.095, abs=2e-3)
+    assert other.centroid[2] == pytest.approx(0.045, abs=2e-3)
     weight = block.totalMass * 9.81
     assert O.forces.f(box)[2] == pytest.approx(-weight, rel=0.01)
 
@@ -212,7 +212,7 @@ def test_blocks_resting_across_box_and_facet_edges_are_not_reported(scene):
         warnings.simplefilter("error")
         O.run(int(0.2 / O.dt), True)
     assert qe.edgeCrossings == 0
-    assert onFacets.centroid()[2] == pytest.approx(0.055, abs=2e-3)
+    assert onFacets.centroid[2] == pytest.approx(0.055, abs=2e-3)
 
 
 @pytest.mark.parametrize("speed", [1.0, 3.0])
@@ -243,7 +243,7 @@ def test_a_kicked_block_books_its_kinetic_energy_as_friction(scene, speed):
     for _ in range(20):
         O.run(int(0.05 * speed / O.dt), True)
         friction.append(O.energy["qdemFrictDissip"] - f0)
-    assert p.velocity()[0] == pytest.approx(0.0, abs=1e-3)                 # at rest again
+    assert p.velocity[0] == pytest.approx(0.0, abs=1e-3)                 # at rest again
     assert min(np.diff([0.0] + friction)) >= -1e-9 * given                   # friction never gives energy back
     assert books() - e0 == pytest.approx(given, rel=2e-3)                    # all of it booked
     assert friction[-1] == pytest.approx(given, rel=0.01)                    # as friction

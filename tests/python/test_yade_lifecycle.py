@@ -157,7 +157,7 @@ def test_engines_kept_across_reset_act_on_the_new_scene_with_their_settings(scen
         O.run(100, True)
         assert engine.world is qdem.defaultWorld() and recorder.world is qdem.defaultWorld()
         assert engine.damping == 0.25 and qdem.defaultWorld().core.localDamping == 0.25
-        z = p.centroid()[2]  # the piece fell (local damping slows it: compared below)
+        z = p.centroid[2]  # the piece fell (local damping slows it: compared below)
         assert z < height - 1e-4
         assert [f[1] for f in recorder.frames] == ["f-%06d.vtu" % i for i in (0, 50, 100)]
     O.reset()
@@ -165,7 +165,7 @@ def test_engines_kept_across_reset_act_on_the_new_scene_with_their_settings(scen
     O.engines = [ForceResetter(), qdem.QdemEngine(damping=0.25), NewtonIntegrator(gravity=(0, 0, -9.81))]
     O.dt = 1e-4
     O.run(100, True)
-    assert p.centroid()[2] == z
+    assert p.centroid[2] == z
 
 
 def test_scene_with_qdem_engines_but_no_state_is_refused(scene, tmp_path):
@@ -222,7 +222,7 @@ def test_a_caught_error_loses_no_qdem_step(scene):
         O.run(20, True)
         assert core.iter == O.iter
         assert core.time == pytest.approx(O.time, rel=1e-12)
-        assert piece.velocity()[2] == pytest.approx(O.bodies[ball].state.vel[2], rel=1e-9)
+        assert piece.velocity[2] == pytest.approx(O.bodies[ball].state.vel[2], rel=1e-9)
 
 
 def _droppedBlock(O):
@@ -264,15 +264,15 @@ def test_piece_handles_follow_a_rewind_and_refuse_another_scene(scene, tmp_path)
     block, _ = _droppedBlock(O)
     O.run(10, True)
     O.saveTmp("rewind")
-    z0 = block.centroid()[2]
+    z0 = block.centroid[2]
     O.run(200, True)
-    assert block.centroid()[2] < z0 - 1e-3
+    assert block.centroid[2] < z0 - 1e-3
     O.loadTmp("rewind")
     assert qdem.defaultWorld().pieces[0] is block
-    assert block.centroid()[2] == z0
+    assert block.centroid[2] == z0
     block.extForce[:, 2] = 1000.0 / len(block.mass)  # lifts it: the write reaches the loaded scene
     O.run(100, True)
-    assert block.centroid()[2] > z0
+    assert block.centroid[2] > z0
     # a scene with other pieces
     other = str(tmp_path / "other.yade")
     O.reset()
@@ -284,7 +284,7 @@ def test_piece_handles_follow_a_rewind_and_refuse_another_scene(scene, tmp_path)
     block2, _ = _droppedBlock(O)
     O.load(other)
     with pytest.raises(RuntimeError, match="qdem.defaultWorld\\(\\).pieces"):
-        block2.centroid()
+        block2.centroid
     with pytest.raises(RuntimeError, match="before O.load"):
         block2.vel[:] = 0
     # O.loadTmp of a scene with other pieces: the refusal names the method called
@@ -293,7 +293,7 @@ def test_piece_handles_follow_a_rewind_and_refuse_another_scene(scene, tmp_path)
     extra = qdem.defaultWorld().pieces[-1]
     O.loadTmp("one")
     with pytest.raises(RuntimeError, match="before O.loadTmp,"):
-        extra.centroid()
+        extra.centroid
 
 
 def test_uncaught_error_ends_yade_with_a_nonzero_exit(tmp_path):
