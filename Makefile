@@ -54,7 +54,8 @@ doc: ext
 
 # Everything, then one line: what passed and how long it took (logs in out/test/).
 test:
-	@mkdir -p out/test; start=$$(date +%s); $(MAKE) --no-print-directory test-all; rc=$$?; \
+	@mkdir -p out/test; rm -f out/test/cpp.log out/test/py.log; start=$$(date +%s); \
+	$(MAKE) --no-print-directory test-all; rc=$$?; \
 	t=$$(( $$(date +%s) - start )); \
 	cpp=$$(grep -ho "[0-9]* tests failed out of [0-9]*" out/test/cpp.log 2>/dev/null | tail -1); \
 	py=$$(grep -hoE "[0-9]+ (passed|failed)[^=]*" out/test/py.log 2>/dev/null | tail -1 | sed 's/ in [0-9.]*s.*//'); \

@@ -80,13 +80,19 @@ class ApiDirective(SphinxDirective):
 
 # -- settings tables ------------------------------------------------------------
 
-_UNIT = re.compile(r"\[([^\]\s][^\]]{0,14})\]")
+_UNIT = re.compile(r"\[([A-Za-z][A-Za-z0-9/^ .*-]{0,14})\]")
 
 
 def _unit(doc):
-    """The unit a docstring states, as '[m/s]' (first bracket), or ''."""
+    """The unit a docstring states, as '[m/s]' (the first such bracket), or
+    '-' (a count, a flag, a ratio)."""
     m = _UNIT.search(doc)
-    return m.group(1) if m else ""
+    return m.group(1) if m else "-"
+
+
+def _rule(text):
+    """'must lie in [0, 1)' -> 'in [0, 1)'; 'must be > 0 and finite' -> '> 0 and finite'."""
+    return re.sub(r"^must (lie |be )?", "", text)
 
 
 def _allowed(attr):
@@ -97,11 +103,11 @@ def _allowed(attr):
             return "one of " + ", ".join("``'%s'``" % c for c in decl["choices"])
         if decl["kind"] == "bool":
             return "True or False"
-        return decl["rule"].replace("must ", "", 1)
+        return _rule(decl["rule"])
     if attr.check is None:
         return "any"
     msg = attr.check(object())  # a validator says what it wants of a value it refuses
-    return (msg or "any").replace("must be ", "", 1).replace("must ", "", 1)
+    return _rule(msg or "any")
 
 
 def _cell(text):
@@ -158,7 +164,7 @@ class WorldSettingsDirective(SphinxDirective):
 
     def run(self):
         from qdem import _core
-        rows = [(d["name"], "``%r``" % (d["default"],), _unit(d["doc"]), d["rule"].replace("must ", "", 1), d["doc"])
+        rows = [(d["name"], "``%r``" % (d["default"],), _unit(d["doc"]), _rule(d["rule"]), d["doc"])
                 for d in _core.settings if not d["engineName"]]
         return _parse(self, _table("World settings without an engine attribute", rows))
 

@@ -10,6 +10,9 @@ import sys
 
 import pytest
 
+# One build for the module's tests: they share a worker under pytest-xdist.
+pytestmark = pytest.mark.xdist_group("docsite")
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "doc", "_ext"))
 
