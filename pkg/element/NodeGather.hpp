@@ -96,7 +96,7 @@ inline __m512d join(__m256d lo, __m256d hi) {
 // (no corner is the array's last node, `last`).  Only AVX2 builds use it:
 // there the masked load that keeps the last node from reading past the
 // array is a slower instruction (the element pass took 0.88-0.96 of its
-// time with plain loads, doc/performance.md); AVX-512's masked load costs
+// time with plain loads, doc/dev/performance_notebook.md); AVX-512's masked load costs
 // what a plain one does.  last < 0: the array's size is not known (no).
 inline bool plainGatherSafe(const int32_t (&node)[4][kLanes], int32_t last) {
     if (last < 0) return false;

@@ -262,7 +262,7 @@ def main():
            "throw_m_per_s": a.throw, "rounds": a.rounds, "busy_rule": BUSY_RULE,
            # libgomp reads these once, at start: with 'passive' every fork, barrier
            # and join costs ~20-40 us on this machine, without it < 1 us
-           # (scripts/bench/omp_sync.py; doc/performance.md, "What a fork costs").
+           # (scripts/bench/omp_sync.py; doc/dev/performance_notebook.md, "What a fork costs").
            "OMP_WAIT_POLICY": os.environ.get("OMP_WAIT_POLICY"), "GOMP_SPINCOUNT": os.environ.get("GOMP_SPINCOUNT"),
            "threads": res, "paired_variant_ratios": paired,
            "targets": targets(res)}

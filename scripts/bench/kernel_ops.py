@@ -103,7 +103,7 @@ def count(insns):
             # instruction does one operation per tet.  (A loop of another
             # trip count would make this wrong: the AVX2 count is checked
             # against the AVX-512 build's, which has no such loop, in
-            # doc/performance.md.)
+            # doc/dev/performance_notebook.md.)
             times = 1.0 if inLoop else w / K_LANES
             if inLoop:
                 lanesLooped.append("%x %s %s" % (addr, mn, ops))

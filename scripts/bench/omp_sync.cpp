@@ -4,7 +4,7 @@
 // (barrier), and from the last thread finishing to the master leaving the
 // region (join), for 2 threads, after a stretch of serial work in the master
 // (as between the phases of a step).  The step of the 27-cube stack passes
-// ~20 such points (doc/performance.md, "What a fork costs"), so their price
+// ~20 such points (doc/dev/performance_notebook.md, "What a fork costs"), so their price
 // decides how the small phases scale.
 //
 //   omp_sync [--iterations 300] [--serial-us 5,100,1000] [--work-us 50] > omp_sync.json

@@ -2,7 +2,7 @@
 // independent fused multiply-adds, the widest vectors this build targets) and
 // memory bandwidth (STREAM's triad a = b + s c, on arrays far larger than the
 // L3 cache and on arrays that fit in it), on 1 and 2 threads.  The element
-// phase's floors in doc/performance.md are its flops over the first and its
+// phase's floors in doc/dev/performance_notebook.md are its flops over the first and its
 // bytes over the second.
 //
 //   roofline [--repeats 7] [--max-others 0.2] > roofline.json

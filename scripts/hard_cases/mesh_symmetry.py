@@ -1,5 +1,5 @@
 """Mirror symmetry of qdem.boxMesh: lumped node masses and surface-area
-weights on the bottom face (doc/hard_cases.md, "Mesh symmetry").
+weights on the bottom face (doc/dev/hard_cases_notebook.md, "Mesh symmetry").
 
 For cells n x n x n (n = 2..9) and tetsPerCell 5, 6, 12 it prints
   - mass: the offset of the bottom face's lumped-mass centre from the face

@@ -175,7 +175,7 @@ TEST(Mesh, EvenBoxMeshesAreMirrorSymmetric) {
 
 // Odd counts: no split of the middle layer is symmetric; the offset of the
 // bottom face's mass centre stays within what was measured for 3..9 cells
-// (doc/hard_cases.md, "Mesh symmetry"), n times below the old 6-tet split's.
+// (doc/dev/hard_cases_notebook.md, "Mesh symmetry"), n times below the old 6-tet split's.
 TEST(Mesh, OddBoxMeshesStayNearlyBalanced) {
     for (int n : {3, 5, 7, 9})
         for (int k : {5, 6, 12}) {

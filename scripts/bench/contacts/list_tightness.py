@@ -10,7 +10,7 @@ The world's own count of listed triangles is printed for comparison.
 
     PYTHONPATH=build/python /usr/bin/python3.11 scripts/bench/contacts/list_tightness.py
 
-doc/performance.md, "Tried, not kept: point-polygon's lanes filtered".
+doc/dev/performance_notebook.md, "Tried, not kept: point-polygon's lanes filtered".
 """
 import os
 import sys

@@ -5,7 +5,7 @@ counts do not depend on the machine's load): Verlet rebuilds over the run and
 the listed triangles per step (contactCounts listedTriangles, mean over the
 run's samples), at one thread.  testedPerStep: those passing the exact
 prefilter (contactCounts listedTrianglesTested) of commit 241797d, which
-doc/performance.md "Contact phase" quotes; the prefilter was taken out
+doc/dev/performance_notebook.md "Contact phase" quotes; the prefilter was taken out
 again after it, and later builds report 0 there.
 
     PYTHONPATH=build/python /usr/bin/python3.11 scripts/bench/contacts/skin_tradeoff.py \
