@@ -29,6 +29,14 @@ class Piece:
     Handing out a writable view wakes the piece if it sleeps (doc/sleeping.md):
     what is written to it then takes effect.
 
+    The rule of its names: what the piece holds, and any sum or mean over its
+    nodes that takes no argument (``totalMass``, ``volume``, ``centroid``,
+    ``velocity``, ``momentum``, ``angularMomentum``), is a property; what the
+    core computes per element on demand (``stress()``, ``vonMises()``,
+    ``surface()``) or takes an argument (``angularMomentumAbout(point)``) is a
+    method.  The former calls ``centroid()``, ``momentum()``, ``velocity()``
+    and ``angularMomentum(about)`` still work, with a DeprecationWarning.
+
     Node order is the solver's (space-filling-curve) order; ``originalNodeIds[i]``
     is the index in the mesh you passed of solver node ``i``.  For a mesh read
     from a file (``qdem.loadMesh``, a path given to addPiece, or its
