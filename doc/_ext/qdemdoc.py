@@ -169,6 +169,33 @@ class WorldSettingsDirective(SphinxDirective):
         return _parse(self, _table("World settings without an engine attribute", rows))
 
 
+class BenchTableDirective(SphinxDirective):
+    """``bench-table:: <kind> <json> [more json]``: a table of the Performance
+    page printed from a kept benchmark JSON by scripts/bench/perf_tables.py,
+    so that no figure on the page is copied by hand."""
+    required_arguments = 2
+    optional_arguments = 2
+
+    def run(self):
+        import contextlib
+        import io
+        import json
+        import sys
+        sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+        import perf_tables
+        kind, path = self.arguments[0], self.arguments[1]
+        full = os.path.join(ROOT, path)
+        self.env.note_dependency(full)
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            d = json.load(open(full))
+            if kind == "roofline":
+                perf_tables.roofline(d, *[os.path.join(ROOT, a) for a in self.arguments[2:]])
+            else:
+                getattr(perf_tables, kind)(d)
+        return _parse(self, out.getvalue().splitlines() + ["", "(`%s`)" % path])
+
+
 def _parse(directive, lines):
     node = nodes.section()
     node.document = directive.state.document
@@ -207,6 +234,7 @@ def setup(app):
     app.add_directive("qdem-api", ApiDirective)
     app.add_directive("qdem-settings", SettingsDirective)
     app.add_directive("qdem-world-settings", WorldSettingsDirective)
+    app.add_directive("bench-table", BenchTableDirective)
     app.connect("autodoc-process-docstring", _stripAttributeList)
     app.connect("autodoc-process-docstring", _plainText)
     app.connect("autodoc-process-docstring", _requireDocstring)

@@ -129,7 +129,7 @@ def cubes27(d):
                 cell = ["%.3f (%.3f–%.3f)" % (r[k]["median"], r[k]["min"], r[k]["max"]) if r.get(k) else "—"
                         for k in ("step_ms", "ordinary_step_ms", "contact_ms", "elements")]
                 print("| %s | %s | %s |" % (th, name, " | ".join(cell)))
-    print("\nTargets (issue 16 target 2, 2 threads):")
+    print("\nTargets (2 threads):")
     for k, v in d["targets"].items():
         print("- %s: target %s, measured %s" % (k, v["target"], "not measured" if v["measured"] is None
                                                 else "%.3g" % v["measured"]))
