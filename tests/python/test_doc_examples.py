@@ -12,6 +12,7 @@ import os
 import re
 import subprocess
 import sys
+import textwrap
 
 import pytest
 
@@ -63,7 +64,8 @@ def _examples():
     for path in files:
         text = open(path).read()
         for k, m in enumerate(re.finditer(r"```python\n(.*?)```", text, re.S)):
-            out.append(pytest.param(path, k, m.group(1), id="%s#%d" % (os.path.relpath(path, ROOT), k)))
+            # (a block inside a list item is indented with it)
+            out.append(pytest.param(path, k, textwrap.dedent(m.group(1)), id="%s#%d" % (os.path.relpath(path, ROOT), k)))
     return out
 
 

@@ -106,3 +106,15 @@ def test_render_is_loaded_on_first_use_without_vtk_at_import():
             "print('ok')\n")
     r = subprocess.run([_python(), "-c", code], env=_env(), capture_output=True, text=True, timeout=300)
     assert r.returncode == 0 and "ok" in r.stdout, r.stdout + r.stderr
+
+
+def test_every_public_name_of_qdem_is_in_its_all():
+    """The reference lists qdem.__all__: a public name imported into qdem
+    but left out of __all__ would be missing from it unnoticed."""
+    import types
+    import qdem
+    left = [n for n, v in vars(qdem).items()
+            if not n.startswith("_") and not isinstance(v, types.ModuleType) and n not in qdem.__all__]
+    assert not left, "add to qdem.__all__ (py/qdem/__init__.py) so the API reference lists them: %s" % left
+    for n in qdem.__all__:
+        assert getattr(qdem, n).__doc__, "qdem.%s has no docstring" % n
