@@ -12,8 +12,9 @@ YADE    := yade -n
 export OMP_NUM_THREADS ?= 2
 
 # YADE's Python modules (the path its launcher puts first), for tools run
-# outside yade that import qdem's YADE parts: the documentation build.
-YADEPY  := $(shell sed -n "s/^sys\.path\.insert(1,'\(.*\)')$$/\1/p" $$(command -v yade 2>/dev/null) 2>/dev/null)
+# outside yade that import qdem's YADE parts: the documentation build.  Expanded
+# when used, so that a fresh machine finds it after `make deps` installed YADE.
+YADEPY   = $(shell sed -n "s/^sys\.path\.insert(1,'\(.*\)')$$/\1/p" $$(command -v yade 2>/dev/null) 2>/dev/null)
 
 .PHONY: deps configure build ext install demo doc test test-all test-cpp test-py fuzz bench bench-mpi accuracy \
         compare-builds clean

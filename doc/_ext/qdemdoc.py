@@ -71,7 +71,12 @@ class ApiDirective(SphinxDirective):
         mod, names = moduleNames(modname)
         lines = []
         for n in names:
-            obj = getattr(mod, n)
+            obj = getattr(mod, n, None)
+            if obj is None:
+                logger.warning("%s.%s cannot be imported: the reference needs YADE's Python modules on "
+                               "PYTHONPATH (make doc puts them there) and a built extension "
+                               "(make ext)" % (modname, n), location=(self.env.docname, self.lineno))
+                continue
             if isinstance(obj, type(os)):
                 continue  # a submodule: it has its own section
             lines += [".. %s:: %s.%s" % (_kind(obj), modname, n), ""]
