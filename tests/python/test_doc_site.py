@@ -118,3 +118,13 @@ def test_every_public_name_of_qdem_is_in_its_all():
     assert not left, "add to qdem.__all__ (py/qdem/__init__.py) so the API reference lists them: %s" % left
     for n in qdem.__all__:
         assert getattr(qdem, n).__doc__, "qdem.%s has no docstring" % n
+
+
+def test_readme_starts_a_newcomer_with_the_two_commands():
+    """README.md: at most 90 lines, opening with `make demo` and `make test`."""
+    import re
+    text = open(os.path.join(ROOT, "README.md")).read()
+    assert len(text.splitlines()) <= 90
+    first = re.search(r"```sh\n(.*?)```", text, re.S).group(1).splitlines()
+    assert [x.split()[:2] for x in first] == [["make", "demo"], ["make", "test"]]
+    assert text.index("```sh") < text.index("\n## ")
