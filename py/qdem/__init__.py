@@ -13,6 +13,7 @@ from . import _core
 from ._core import StabilityError
 from . import modes
 from .material import QdemMat
+from .cad import meshCad
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
 from .piece import Piece
 from .restart import loadState, saveState
@@ -36,5 +37,5 @@ else:
     _lifecycle.install()  # O.save/O.load/O.reset carry QDEM; QDEM errors reach scripts as themselves
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
-           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "splitMesh", "defaultWorld",
+           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "meshCad", "splitMesh", "defaultWorld",
            "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError"]
