@@ -402,6 +402,24 @@ def _fileRegions(m):
     return None
 
 
+def _refuseRepeatedTets(path, tets, regions):
+    """A tetrahedron listed twice (same four nodes) would be two elements
+    of double stiffness and mass and a face shared by four tets.  gmsh's MSH
+    2 format writes an element once per physical group it belongs to, so a
+    volume put in two groups gives exactly that: say so."""
+    key = np.sort(tets, axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    if not (count > 1).any():
+        return
+    k = int(first[np.flatnonzero(count > 1)[0]])
+    twin = np.flatnonzero((key == key[k]).all(axis=1))
+    groups = "" if regions is None else " (regions %s)" % ", ".join("%d" % regions[t] for t in twin)
+    raise ValueError("loadMesh: %s lists %d tetrahedra more than once (tetrahedron %d, on points %s of the file, appears %d times%s). "
+                     "gmsh's MSH 2 format writes an element once per physical group it belongs to: put each volume "
+                     "in one physical group only (or write MSH 4)"
+                     % (path, int((count - 1).sum()), k, " ".join("%d" % v for v in tets[k]), len(twin), groups))
+
+
 def loadMesh(path, fixOrientation=False, scale=1.0):
     """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
     Linear tetrahedra (meshio's 'tetra') make the piece; lower-dimensional
@@ -454,6 +472,7 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     nodes = points * scale
     if tets.min() < 0 or tets.max() >= len(nodes):
         raise ValueError("loadMesh: %s refers to nodes outside 0..%d" % (path, len(nodes) - 1))
+    _refuseRepeatedTets(path, tets, regions)  # (the file's point numbers)
     used = np.unique(tets)  # the file's index of each node we keep (nodeIds)
     if len(used) < len(nodes):  # drop points that belong to no tet (gmsh geometry points)
         remap = -np.ones(len(nodes), dtype=np.int64)

@@ -172,3 +172,18 @@ def test_bimaterial_bar_from_regions_carries_no_tension(scene, tmp_path):
     bonded = 100.0 * (L1 / (E1 * W * W) + L2 / (E2 * W * W))
     assert upper.velocity()[2] > 0
     assert upper.centroid()[2] - upper.refPos[:, 2].mean() > 10 * bonded
+
+
+def test_a_volume_in_two_physical_groups_is_named(tmp_path):
+    """MSH 2 writes an element once per physical group: every tet twice.
+    Before: 'non-manifold: face ... is shared by 4 tetrahedra'."""
+    import meshio
+    m = qdem.boxMesh((0.1, 0.1, 0.1), (2, 2, 2))
+    tets = np.vstack([m.tets, m.tets])
+    path = str(tmp_path / "twice.msh")
+    phys = np.r_[np.full(m.nTets, 1), np.full(m.nTets, 2)]
+    meshio.write(path, meshio.Mesh(m.nodes, [("tetra", tets)],
+                                   cell_data={"gmsh:physical": [phys], "gmsh:geometrical": [phys]}),
+                 file_format="gmsh22", binary=False)
+    with pytest.raises(ValueError, match=r"lists 48 tetrahedra more than once .*regions 1, 2.*one physical group"):
+        qdem.loadMesh(path)
