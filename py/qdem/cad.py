@@ -236,7 +236,8 @@ def meshCad(path, cellSize, scale=None, minSize=None, curvature=24, optimize=Tru
             # unit", a process-wide setting that gmsh sets from this option
             # and never resets.  Millimetres is OpenCASCADE's own default, so
             # asking for it leaves the process as it was (asking for metres
-            # made every STEP file gmsh wrote afterwards come out in metres).
+            # made the next STEP file gmsh wrote in the same process read
+            # back 1000 times too large).
             gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
         factor = scale * (0.001 if kind != "BREP" else 1.0)  # metres per model unit
         try:
