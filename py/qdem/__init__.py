@@ -18,6 +18,7 @@ StabilityError.__doc__ = (
     "the limit and the fix (doc/hard_cases.md).")
 from . import modes
 from .material import QdemMat
+from .cad import meshCad
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
 from .piece import Piece
 from .restart import loadState, saveState
@@ -57,5 +58,5 @@ def __dir__():
 
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
-           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "splitMesh", "defaultWorld",
+           "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "meshCad", "splitMesh", "defaultWorld",
            "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError"]

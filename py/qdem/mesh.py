@@ -39,9 +39,14 @@ class Mesh:
     nodeIds (N,) or None: the index in the mesh file of each node (loadMesh
     sets it: a file's points that no tetrahedron uses are dropped, so node i
     need not be the file's point i).  A piece added from this mesh gets
-    originalNodeIds in that numbering; None means the mesh's own indices."""
+    originalNodeIds in that numbering; None means the mesh's own indices.
 
-    def __init__(self, nodes, tets, check=True, nodeIds=None):
+    regions (T,) or None: an integer label per tetrahedron, e.g. its gmsh
+    physical group or medit reference (loadMesh) or its CAD solid (meshCad);
+    ``qdem.splitMesh(mesh, by='region')`` gives one mesh per label, for a
+    piece of each material (doc/meshes.md, "Regions and bimaterial parts")."""
+
+    def __init__(self, nodes, tets, check=True, nodeIds=None, regions=None):
         raw = np.asarray(nodes)
         if np.iscomplexobj(raw):
             raise ValueError("Mesh: nodes must hold real coordinates, got dtype %s" % raw.dtype)
@@ -69,6 +74,7 @@ class Mesh:
         self.nodes = nodes
         self.tets = np.ascontiguousarray(tets, dtype=np.int32)
         self.nodeIds = _nodeIds(nodeIds, len(nodes))
+        self.regions = _regions(regions, len(self.tets))
         if check:
             self.check()
 
@@ -112,7 +118,7 @@ class Mesh:
     def scaled(self, factor):
         """A copy scaled about the origin (factor: number or 3 numbers)."""
         return Mesh(self.nodes * np.asarray(factor, dtype=float), self.tets.copy(), check=False,
-                    nodeIds=self.nodeIds)
+                    nodeIds=self.nodeIds, regions=self.regions)
 
     def __repr__(self):
         return "Mesh(%d nodes, %d tets)" % (self.nNodes, self.nTets)
@@ -127,6 +133,17 @@ def _nodeIds(ids, n):
         raise ValueError("Mesh: nodeIds must be one integer per node (%d), got shape %s dtype %s"
                          % (n, ids.shape, ids.dtype))
     return ids.astype(np.int64)
+
+
+def _regions(regions, nTets):
+    """Mesh.regions: None, or one integer label per tetrahedron."""
+    if regions is None:
+        return None
+    r = np.asarray(regions)
+    if r.shape != (nTets,) or (nTets and not np.issubdtype(r.dtype, np.integer)):
+        raise ValueError("Mesh: regions must be one integer label per tetrahedron (%d), got shape %s dtype %s"
+                         % (nTets, r.shape, r.dtype))
+    return r.astype(np.int64)
 
 
 def _fileId(nodeIds, i):
@@ -218,29 +235,61 @@ def _checkCoincidentNodes(nodes, tets, nodeIds=None):
         % (len(k), "" if len(k) == 1 else "s", pairs, ", ..." if len(k) > 3 else ""))
 
 
-def splitMesh(mesh):
-    """The connected parts of a mesh, one Mesh each (nodes renumbered, in their
-    original order), ordered by their first tetrahedron; a part of a mesh read
-    from a file keeps the file's point indices (Mesh.nodeIds).  Tetrahedra
-    sharing a node are one part; for a mesh that passes the manifold check
-    this is the same as sharing faces.  addPiece refuses a mesh of several
-    parts (its parts would not touch each other): add each part as its own
-    piece::
+def _subMesh(mesh, keep):
+    """The tetrahedra ``keep`` (a boolean mask) of a mesh as a Mesh of their
+    own: nodes renumbered in their original order, nodeIds (the file's point
+    indices) and regions carried."""
+    tets = mesh.tets[keep]
+    used = np.unique(tets)
+    remap = -np.ones(len(mesh.nodes), dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    ids = np.arange(len(mesh.nodes))[used] if mesh.nodeIds is None else mesh.nodeIds[used]
+    return Mesh(mesh.nodes[used], remap[tets].astype(np.int32), check=False, nodeIds=ids,
+                regions=None if mesh.regions is None else mesh.regions[keep])
+
+
+def splitMesh(mesh, by="part"):
+    """Split a mesh into meshes of their own.
+
+    by='part' (default): the connected parts, a list of Mesh ordered by their
+    first tetrahedron.  Tetrahedra sharing a node are one part; for a mesh
+    that passes the manifold check this is the same as sharing faces.
+    addPiece refuses a mesh of several parts (its parts would not touch each
+    other): add each part as its own piece::
 
         for part in qdem.splitMesh(mesh):
             qdem.addPiece(part, mat)
-    """
+
+    by='region': one Mesh per label of ``mesh.regions`` (gmsh physical
+    groups, medit references, CAD solids), as a dict {label: Mesh} in
+    increasing label order, for a piece of its own material each::
+
+        mats = {1: steel, 2: rubber}
+        for label, sub in qdem.splitMesh(mesh, by='region').items():
+            qdem.addPiece(sub, mats[label])
+
+    Pieces are joined only by contact, not bonded: where two regions share an
+    interface, the two pieces start pressed into each other by their
+    contact reach (doc/meshes.md, "Regions and bimaterial parts").
+
+    Every sub-mesh keeps the nodes' indices in the file (``Mesh.nodeIds``;
+    for a mesh built in memory, its node indices) and the region labels, so
+    a piece's ``originalNodeIds`` still name the points of the original."""
     mesh = asMesh(mesh)
-    label = _core.meshParts(mesh.nodes, mesh.tets)
-    parts = []
-    for k in range(int(label.max()) + 1 if len(label) else 0):
-        tets = mesh.tets[label == k]
-        used = np.unique(tets)
-        remap = -np.ones(len(mesh.nodes), dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        ids = None if mesh.nodeIds is None else mesh.nodeIds[used]
-        parts.append(Mesh(mesh.nodes[used], remap[tets].astype(np.int32), check=False, nodeIds=ids))
-    return parts
+    if by == "part":
+        label = _core.meshParts(mesh.nodes, mesh.tets)
+        parts = [_subMesh(mesh, label == k) for k in range(int(label.max()) + 1 if len(label) else 0)]
+        if mesh.nodeIds is None:  # in-memory mesh: as before, parts number their nodes themselves
+            for p in parts:
+                p.nodeIds = None
+        return parts
+    if by == "region":
+        if mesh.regions is None:
+            raise ValueError("splitMesh: the mesh has no regions (Mesh.regions is None): regions come from gmsh "
+                             "physical groups or medit references read by qdem.loadMesh, from the solids of a "
+                             "CAD file (qdem.meshCad), or Mesh(nodes, tets, regions=labels)")
+        return {int(k): _subMesh(mesh, mesh.regions == k) for k in np.unique(mesh.regions)}
+    raise ValueError("splitMesh: by must be 'part' or 'region', got %r" % (by,))
 
 
 def boxMesh(size=(1.0, 1.0, 1.0), cells=(4, 4, 4), tetsPerCell=6):
@@ -332,6 +381,48 @@ def _scaleFactor(scale, who):
     return s
 
 
+# Cell data that label a tetrahedron's region, in the order they are looked
+# for: gmsh's physical group, medit's reference, the VTK name several
+# converters (meshio, FEniCS, ...) write them under.
+_REGION_KEYS = ("gmsh:physical", "medit:ref", "CellEntityIds")
+
+
+def _fileRegions(m):
+    """One integer label per tetrahedron (in loadMesh's order: the tetra
+    blocks concatenated) from a meshio mesh's cell data, or None when the
+    file has none, or labels every tetrahedron 0 (gmsh without physical
+    groups)."""
+    for key in _REGION_KEYS:
+        data = m.cell_data.get(key)
+        if data is None:
+            continue
+        labels = [np.asarray(d).reshape(-1) for c, d in zip(m.cells, data) if c.type == "tetra"]
+        if not labels or not all(np.issubdtype(l.dtype, np.number) for l in labels):
+            continue
+        r = np.concatenate(labels)
+        if len(r) and np.all(np.isfinite(r)) and np.all(r == np.round(r)) and np.any(r != 0):
+            return r.astype(np.int64)
+    return None
+
+
+def _refuseRepeatedTets(path, tets, regions):
+    """A tetrahedron listed twice (same four nodes) would be two elements
+    of double stiffness and mass and a face shared by four tets.  gmsh's MSH
+    2 format writes an element once per physical group it belongs to, so a
+    volume put in two groups gives exactly that: say so."""
+    key = np.sort(tets, axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    if not (count > 1).any():
+        return
+    k = int(first[np.flatnonzero(count > 1)[0]])
+    twin = np.flatnonzero((key == key[k]).all(axis=1))
+    groups = "" if regions is None else " (regions %s)" % ", ".join("%d" % regions[t] for t in twin)
+    raise ValueError("loadMesh: %s lists %d tetrahedra more than once (tetrahedron %d, on points %s of the file, appears %d times%s). "
+                     "gmsh's MSH 2 format writes an element once per physical group it belongs to: put each volume "
+                     "in one physical group only (or write MSH 4)"
+                     % (path, int((count - 1).sum()), k, " ".join("%d" % v for v in tets[k]), len(twin), groups))
+
+
 def loadMesh(path, fixOrientation=False, scale=1.0):
     """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
     Linear tetrahedra (meshio's 'tetra') make the piece; lower-dimensional
@@ -346,7 +437,12 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     the returned Mesh's ``nodeIds`` holds each node's index in the file, and
     a piece added from it (or from the path) reports those file indices as
     ``originalNodeIds``: nodes picked by their index in the file (e.g. from
-    meshio.read) are found with ``np.isin(piece.originalNodeIds, picked)``."""
+    meshio.read) are found with ``np.isin(piece.originalNodeIds, picked)``.
+
+    Regions: a tetrahedron's gmsh physical group (``gmsh:physical``), medit
+    reference (``medit:ref``) or ``CellEntityIds`` (VTK) becomes its label in
+    ``Mesh.regions`` (None when the file has none), for
+    ``qdem.splitMesh(mesh, by='region')``."""
     scale = _scaleFactor(scale, "loadMesh")
     if not os.path.exists(path):
         raise ValueError("loadMesh: no such file: %s" % path)
@@ -365,6 +461,7 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
                             " (and %d linear tetra)" % sum(len(c.data) for c in m.cells if c.type == "tetra")
                             if any(c.type == "tetra" for c in m.cells) else ""))
     blocks = [c.data for c in m.cells if c.type == "tetra"]
+    regions = _fileRegions(m)
     if not blocks:
         raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s); a surface or 2-D mesh has no "
                          "volume: mesh the solid into linear tetrahedra (gmsh -3, or qdem.meshSurface for a "
@@ -378,6 +475,7 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     nodes = points * scale
     if tets.min() < 0 or tets.max() >= len(nodes):
         raise ValueError("loadMesh: %s refers to nodes outside 0..%d" % (path, len(nodes) - 1))
+    _refuseRepeatedTets(path, tets, regions)  # (the file's point numbers)
     used = np.unique(tets)  # the file's index of each node we keep (nodeIds)
     if len(used) < len(nodes):  # drop points that belong to no tet (gmsh geometry points)
         remap = -np.ones(len(nodes), dtype=np.int64)
@@ -392,7 +490,7 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
     tets = tets.astype(np.int32)
     if fixOrientation:
         tets, _ = _core.orientPositive(nodes, tets)
-    return Mesh(nodes, tets, nodeIds=used)
+    return Mesh(nodes, tets, nodeIds=used, regions=regions)
 
 
 class _Faces:

@@ -3,7 +3,7 @@
 # apt-get line a user must run.  Idempotent: does nothing when all are there.
 set -euo pipefail
 PKGS="yade cmake g++ make libeigen3-dev libcgal-dev pybind11-dev python3-pybind11 python3-numpy
-python3-meshio python3-pytest python3-pytest-xdist python3-matplotlib python3-scipy python3-vtk9 xvfb libgtest-dev libopenmpi-dev openmpi-bin python3-mpi4py python3-hypothesis tetgen
+python3-meshio python3-pytest python3-pytest-xdist python3-matplotlib python3-scipy python3-vtk9 xvfb libgtest-dev libopenmpi-dev openmpi-bin python3-mpi4py python3-hypothesis tetgen python3-gmsh
 python3-sphinx furo python3-myst-parser"
 missing=""
 for p in $PKGS; do
