@@ -170,8 +170,8 @@ def test_bimaterial_bar_from_regions_carries_no_tension(scene, tmp_path):
     lower, upper, top = _bimaterialBar(O, tmp_path, +100.0)
     O.run(int(0.05 / O.dt), True)
     bonded = 100.0 * (L1 / (E1 * W * W) + L2 / (E2 * W * W))
-    assert upper.velocity()[2] > 0
-    assert upper.centroid()[2] - upper.refPos[:, 2].mean() > 10 * bonded
+    assert upper.velocity[2] > 0
+    assert upper.centroid[2] - upper.refPos[:, 2].mean() > 10 * bonded
 
 
 def test_a_volume_in_two_physical_groups_is_named(tmp_path):
