@@ -140,7 +140,8 @@ class Piece:
 
     @property
     def mass(self):
-        """Lumped node masses (n,) [kg], read-only view."""
+        """Lumped node masses (n,) [kg], read-only view (with the mass selective
+        mass scaling added: addPiece(targetDt=...))."""
         return self.world.core.mass[self.nodeSlice]
 
     @property
