@@ -264,8 +264,7 @@ def section(data):
          "- fall time: the added mass is real mass that gravity pulls on, so the fall itself is unchanged; what "
          "differs is how finely the larger step resolves the moment of touching (half a step).",
          "- domino pair: the blocks topple as slightly heavier bodies (the slivers sit inside them); the figure "
-         "also holds the larger step's own error on the contact sequence (edge on face, then rocking), which "
-         "the other rows show to be of the same order.",
+         "also holds the larger step's own error on the contact sequence (edge on face, then rocking).",
          "", "Removing the slivers instead (`qdem.improveMesh`) costs none of these errors.", ""]
     return "\n".join(t) + "\n"
 
