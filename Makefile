@@ -120,6 +120,7 @@ bench-mpi: build
 accuracy: build
 	@mkdir -p out/accuracy
 	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/implicit_viscosity.py --out out/accuracy
+	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/mass_scaling.py --out out/accuracy
 	@OMP_NUM_THREADS=1 PYTHONPATH=$(CURDIR)/$(BUILD)/python $(PY) scripts/accuracy/run_accuracy.py --out out/accuracy
 
 # Trajectories of this build against another one (OLD=<that build>/python):

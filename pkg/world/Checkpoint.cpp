@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <type_traits>
 
+#include "../core/Format.hpp"
 #include "../parallel/Domain.hpp"
 #include "World.hpp"
 
@@ -38,6 +39,10 @@ WorldState World::saveState() const {
     const double e[10] = {et.kinetic,        et.elastic,        et.gravity,  et.viscous,      et.contactElastic,
                           et.contactDamping, et.friction,       et.boundaryWork, et.localDamping, et.sleep};
     s.put("energy", e, 10);
+    // The mass added to each element (selective mass scaling): not state but
+    // part of the scene, kept to refuse a load into a scene built without it
+    // (its node masses, so its trajectories, would differ).
+    s.put("tetAddedMass", tetAddedMass.data(), nTets());
     // (the columns are only read here)
     for (const auto& r : const_cast<World*>(this)->stateColumns().refs)
         if (r.restart) s.putBytes(r.name, r.data, r.count, r.elemSize);
@@ -61,6 +66,19 @@ void World::loadState(const WorldState& s) {
     s.check<double>("time", 1);
     s.check<int64_t>("iter", 3);
     s.check<double>("energy", 10);
+    {
+        // A state saved before mass scaling existed had none.
+        std::vector<double> saved(nTets(), 0.0);
+        if (s.fields.count("tetAddedMass")) saved = s.getAll<double>("tetAddedMass");
+        if (saved.size() != nTets() || !std::equal(saved.begin(), saved.end(), tetAddedMass.data())) {
+            double a = 0, b = 0;
+            for (const double v : saved) a += v;
+            for (std::size_t e = 0; e < nTets(); ++e) b += tetAddedMass[e];
+            throw InputError(cat("world state: saved from pieces with ", a, " kg added by mass scaling, this world's "
+                                 "pieces have ", b, " kg (or on other elements): add the pieces with the same "
+                                 "targetDt (qdem.addPiece(..., targetDt=...)) as the run that saved it"));
+        }
+    }
     const StateColumns cols = stateColumns();
     for (const auto& r : cols.refs)
         if (r.restart) s.checkBytes(r.name, r.count, r.elemSize);

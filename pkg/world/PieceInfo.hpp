@@ -13,7 +13,13 @@ struct PieceInfo {
     int32_t surfBegin, surfEnd;  // [begin, end) in surfNodes
     int material;
     Surface surface;             // in global node / tet ids
-    double volume = 0, mass = 0;
+    double volume = 0, mass = 0;  // mass: rho V plus addedMass
+    // Selective mass scaling (World::massScaling): the mass added to the
+    // piece's elements [kg], and the largest added mass at one node over
+    // that node's own (rho V / 4 summed) mass, at node addedMaxNode (global id, -1: none).
+    double addedMass = 0, addedMaxNodeShare = 0, addedSurfaceMass = 0;
+    int32_t addedMaxNode = -1;
+    int32_t addedElements = 0;  // elements that got mass
     double minSurfaceNodeMass = 0, maxSurfaceNodeMass = 0;
     // Smallest m_i / w_i over the surface nodes (w_i: surfWeight): the
     // stiffest contact mode of the piece is sqrt(w_i kn / m_i) at that node.

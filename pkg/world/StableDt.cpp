@@ -146,6 +146,10 @@ double leapfrogStep(const Mat12& Kpm, const Mat12& Cpm, double cRate, double w2c
 
 }  // namespace
 
+double hookeStiffnessMax(const Mat3& B, double V, double lambda, double mu) {
+    return largestEigenvalue(hookeStiffness(B, V, lambda, mu));
+}
+
 double World::elementOmegaMax(const PieceInfo& p) const {
     const Material& m = materials[p.material];
     const double lam = m.lambda(), mu = m.mu();
@@ -154,8 +158,10 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     for (int32_t e = 0; e < n; ++e) {
         const Mat3 B = loadRowMajor(&tetB[9 * (p.tetBegin + e)]);
         const double sumG2 = B.squaredNorm() + (B.row(0) + B.row(1) + B.row(2)).squaredNorm();
-        // omega^2 = lambda_max(K) / (rho V / 4); V cancels.
-        bound[e] = 4.0 * (std::max(lam, 0.0) + 2 * mu) * sumG2 / m.density;
+        // omega^2 = lambda_max(K) / (rho V / 4); V cancels.  Mass added by
+        // selective mass scaling counts as density (added / V) on top of rho.
+        const int32_t t = p.tetBegin + e;
+        bound[e] = 4.0 * (std::max(lam, 0.0) + 2 * mu) * sumG2 / (m.density + tetAddedMass[t] / tetVol0[t]);
     }
     if (omega2Tet_.size() < nTets()) omega2Tet_.resize(nTets(), 0.0);
     for (int32_t e = 0; e < n; ++e) omega2Tet_[p.tetBegin + e] = bound[e];
@@ -165,7 +171,8 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     double best = 0;  // exact omega^2 maximum found so far
     // Structured meshes repeat a few element shapes thousands of times: the
     // eigenvalue depends only on B, so identical B are solved once.
-    std::map<std::array<double, 9>, double> solved;
+    // (The key holds the added mass too: two such elements may differ in it.)
+    std::map<std::array<double, 10>, double> solved;
     // The reference stiffness is the law's tangent at F = I, which every law
     // makes Hooke's with the material's (lambda, mu) (lameAtRest; checked
     // against tangent(I) in tests/cpp/test_laws.cpp): the closed form.
@@ -173,15 +180,16 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     withLaw(m, [&](const auto& law) { law.lameAtRest(lam0, mu0); });
     for (int32_t k = 0; k < n && bound[order[k]] > best; ++k) {
         const int32_t e = p.tetBegin + order[k];
-        std::array<double, 9> key;
+        std::array<double, 10> key;
         std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
+        key[9] = tetAddedMass[e];
         if (solved.count(key)) {
             omega2Tet_[e] = solved[key];
             continue;
         }
         const Mat3 B = loadRowMajor(&tetB[9 * e]);
         const Mat12 K = hookeStiffness(B, tetVol0[e], lam0, mu0);
-        const double w2 = largestEigenvalue(K) / (m.density * tetVol0[e] / 4.0);
+        const double w2 = largestEigenvalue(K) / elementNodeMass(e, m);
         solved[key] = w2;
         omega2Tet_[e] = w2;
         best = std::max(best, w2);
@@ -234,13 +242,13 @@ void World::checkCurrentDt(double dt) const {
                 // its current shape, from the reference ones by Weyl's
                 // inequality (the change of the tangent, and of the viscous
                 // operator F D0[F' .], times sigma_max(G)^2 per unit mass).
-                const double perMass = 4.0 / m.density * gradientNorm2(B);
+                const double perMass = 4.0 / (m.density + tetAddedMass[e] / tetVol0[e]) * gradientNorm2(B);
                 const double h = (F - Mat3::Identity()).norm(), s1 = std::sqrt(std::max(s2, 0.0));
                 const double w2 = omega2Tet_[e] + perMass * law.tangentChangeBound(F, s1);
                 const double rate = beta * (omega2Tet_[e] + perMass * d0 * h * (s1 + 1.0));
                 if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) continue;  // (NaN: checkFinite's)
                 // The exact condition on the element's own matrices.
-                const double nodeMass = m.density * tetVol0[e] / 4.0;
+                const double nodeMass = elementNodeMass(e, m);
                 const Mat12 K = elementStiffness(B, law.tangent(F), tetVol0[e]);
                 const Mat12 Cv = beta > 0 ? viscousMatrix(F, B, tetVol0[e], lam, mu, beta) : Mat12::Zero();
                 const Mat12 Kp = positivePart(K);

@@ -19,10 +19,19 @@ int World::addMaterial(const Material& m) {
     return static_cast<int>(materials.size()) - 1;
 }
 
-int World::addPiece(const TetMesh& mesh, int material) {
+int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) {
     if (material < 0 || material >= static_cast<int>(materials.size()))
         throw InputError(cat("addPiece: unknown material index ", material));
     checkMesh(mesh);
+    if (!tetAddedMass_.empty()) {
+        if (tetAddedMass_.size() != mesh.nTets())
+            throw InputError(cat("addPiece: tetAddedMass has ", tetAddedMass_.size(), " values for ", mesh.nTets(),
+                                 " tetrahedra (one per tetrahedron, or none)"));
+        for (std::size_t e = 0; e < tetAddedMass_.size(); ++e)
+            if (!(tetAddedMass_[e] >= 0) || !std::isfinite(tetAddedMass_[e]))
+                throw InputError(cat("addPiece: tetAddedMass[", e, "] = ", tetAddedMass_[e],
+                                     ": added mass must be finite and >= 0 kg"));
+    }
     checkOnePart(mesh);  // parts of one piece would pass through each other
     const Material& mat = materials[material];
     // Every node needs mass: checked before anything changes, so that a
@@ -78,6 +87,7 @@ int World::addPiece(const TetMesh& mesh, int material) {
     tetPiece.resize(T, pieceId);
     tetB.resize(9 * T);
     tetVol0.resize(T);
+    tetAddedMass.resize(T, 0.0);
 
     for (int32_t i = 0; i < nn; ++i)
         for (int d = 0; d < 3; ++d) {
@@ -99,6 +109,27 @@ int World::addPiece(const TetMesh& mesh, int material) {
         p.volume += V;
     }
     p.mass = mat.density * p.volume;
+    if (!tetAddedMass_.empty()) {
+        // Selective mass scaling: each element's added mass lumped as its own,
+        // a quarter to each node, after the physical masses (kept apart to
+        // report the largest share at a node).
+        std::vector<double> added(nn, 0.0);
+        for (int32_t e = 0; e < nt; ++e) {
+            const double a = tetAddedMass_[e];
+            tetAddedMass[t0 + e] = a;
+            if (a > 0) ++p.addedElements;
+            for (int k = 0; k < 4; ++k) added[mesh.tets[4 * e + k]] += a / 4.0;
+            p.addedMass += a;
+        }
+        for (int32_t i = 0; i < nn; ++i) {
+            if (!(added[i] > 0)) continue;
+            const double share = added[i] / mass[n0 + i];
+            if (share > p.addedMaxNodeShare) p.addedMaxNodeShare = share, p.addedMaxNode = n0 + i;
+            mass[n0 + i] += added[i];
+        }
+        for (const int32_t v : s.nodes) p.addedSurfaceMass += added[v];
+        p.mass += p.addedMass;
+    }
 
     // Surface in global ids.
     for (auto& v : s.triangles) v += n0;

@@ -81,7 +81,20 @@ public:
     // ---- set-up -----------------------------------------------------------
     int addMaterial(const Material& m);
     // Adds a checked mesh whose coordinates are already in the world frame.
-    int addPiece(const TetMesh& mesh, int material);
+    // tetAddedMass (empty, or one value per tet, kg >= 0): mass added to each
+    // element on top of rho V, a quarter to each of its nodes (selective mass
+    // scaling, MassScaling.cpp); real mass, which gravity and contacts see.
+    int addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass = {});
+    // Selective mass scaling (MassScaling.cpp, doc/meshes.md): per tet of
+    // `mesh` (world coordinates, as addPiece takes it) the least mass to add
+    // so that the element's own stable step, elastic and with the material's
+    // Kelvin-Voigt viscosity, reaches targetDt by the test stableDt() makes:
+    // 0 for the elements that reach it already.
+    std::vector<double> massScaling(const TetMesh& mesh, int material, double targetDt) const;
+    // The step the contact springs of piece i allow against a rigid wall
+    // (its stiffest surface node), with and without its element springs on
+    // the same node: what no mass added to slivers raises (MassScaling.cpp).
+    void rigidContactLimit(std::size_t piece, double& contact, double& combined) const;
     // Pieces asleep are woken only when the list differs from the last one
     // (or from the one of a loaded state) in kind, body, material or shape: the
     // reactions they keep are by obstacle index.
@@ -209,6 +222,9 @@ public:
     Column<int32_t> nodePiece;
     Column<int32_t> tetNodes, tetPiece;
     Column<double> tetB, tetVol0;   // inverse reference edge matrix (row-major), volume
+    // Mass added to each element by selective mass scaling [kg] (0 for most):
+    // its nodes carry (rho V + added) / 4 from it, the stable step sees it.
+    Column<double> tetAddedMass;
     Column<int32_t> surfNodes;      // global ids of the surface nodes of all pieces
     // Contact weight of each surface node (same index as surfNodes): its share
     // of the piece's surface area over the mean share, A_i / mean(A) with A_i
@@ -362,6 +378,10 @@ private:
     StateColumns stateColumns();
 
     double elementOmegaMax(const PieceInfo& p) const;
+    // The lumped mass one element puts on each of its nodes: (rho V + added) / 4.
+    double elementNodeMass(int32_t tet, const Material& m) const {
+        return (m.density * tetVol0[tet] + tetAddedMass[tet]) / 4.0;
+    }
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;

@@ -100,13 +100,57 @@ void bindWorld(py::module_& m) {
             py::arg("law") = 0)
         .def(
             "addPiece",
-            [](World& w, const Nodes& nodes, const Tets& tets, int material) {
+            [](World& w, const Nodes& nodes, const Tets& tets, int material, const std::vector<double>& added) {
                 TetMesh mesh;
                 mesh.nodes = flatten<double>(nodes, 3, "nodes");
                 mesh.tets = flatten<int32_t>(tets, 4, "tets");
-                return w.addPiece(mesh, material);
+                return w.addPiece(mesh, material, added);
             },
-            py::arg("nodes"), py::arg("tets"), py::arg("material"))
+            py::arg("nodes"), py::arg("tets"), py::arg("material"), py::arg("tetAddedMass") = std::vector<double>{},
+            "Add a piece (world coordinates); tetAddedMass: mass added to each tet [kg] (selective mass "
+            "scaling, massScaling), a quarter to each of its nodes.")
+        .def(
+            "massScaling",
+            [](const World& w, const Nodes& nodes, const Tets& tets, int material, double targetDt) {
+                TetMesh mesh;
+                mesh.nodes = flatten<double>(nodes, 3, "nodes");
+                mesh.tets = flatten<int32_t>(tets, 4, "tets");
+                const std::vector<double> a = w.massScaling(mesh, material, targetDt);
+                py::array_t<double> out(py::ssize_t(a.size()));
+                std::copy(a.begin(), a.end(), out.mutable_data());
+                return out;
+            },
+            py::arg("nodes"), py::arg("tets"), py::arg("material"), py::arg("targetDt"),
+            "Per tet, the least mass [kg] to add so that its own stable step (elastic and viscous) reaches "
+            "targetDt as stableDt() computes it (0 where it does already).")
+        .def(
+            "rigidContactLimit",
+            [](const World& w, int i) {
+                piece(w, i);
+                double contact = 0, combined = 0;
+                w.rigidContactLimit(static_cast<std::size_t>(i), contact, combined);
+                return py::make_tuple(contact, combined);
+            },
+            py::arg("piece"),
+            "(contact, combined): the stable step of piece i's contact springs against a rigid wall, alone and "
+            "with its element springs on the same node.")
+        .def(
+            "pieceMassScaling",
+            [](const World& w, int i) {
+                const PieceInfo& p = piece(w, i);
+                py::dict d;
+                d["addedMass"] = p.addedMass;
+                d["physicalMass"] = p.mass - p.addedMass;
+                d["maxNodeShare"] = p.addedMaxNodeShare;
+                d["maxNode"] = p.addedMaxNode < 0 ? -1 : p.addedMaxNode - p.nodeBegin;
+                d["surfaceMass"] = p.addedSurfaceMass;
+                d["elements"] = p.addedElements;
+                return d;
+            },
+            py::arg("piece"),
+            "Selective mass scaling of a piece: addedMass [kg], physicalMass (rho V) [kg], maxNodeShare (largest "
+            "added mass at one node over that node's own mass) at maxNode (piece-local, -1: none), surfaceMass "
+            "(added on surface nodes) [kg], elements (how many got mass).")
         .def(
             "removeLastMaterial",
             [](World& w) {
@@ -348,6 +392,9 @@ void bindWorld(py::module_& m) {
                                [](World& w) { return columnView(w.tetNodes, 0, {py::ssize_t(w.nTets()), 4}, false); })
         .def_property_readonly("tetPiece",
                                [](World& w) { return columnView(w.tetPiece, 0, {py::ssize_t(w.nTets())}, false); })
+        .def_property_readonly(
+            "tetAddedMass",
+            [](World& w) { return columnView(w.tetAddedMass, 0, {py::ssize_t(w.nTets())}, false); })
         .def_property_readonly("tetVolume",
                                [](World& w) { return columnView(w.tetVol0, 0, {py::ssize_t(w.nTets())}, false); })
         .def(

@@ -76,6 +76,8 @@ def sceneBlob(world, O):
         arrays["refPos%d" % i] = np.array(p.refPos)
         arrays["tets%d" % i] = np.array(p.tets, dtype=np.int32)
         arrays["oldOf%d" % i] = np.asarray(p.originalNodeIds, dtype=np.int32)
+        arrays["addedMass%d" % i] = np.array(core.tetAddedMass[p.tetSlice])  # selective mass scaling
+        meta["pieces"][-1]["targetDt"] = p.targetDt
     if core.mpiSize > 1:
         core.gatherState()  # collective: under mpiexec every rank runs O.save
     for name, data in core.saveState().items():
@@ -112,7 +114,8 @@ def _sameWorld(w, blob):
         return False
     for i, p in enumerate(w.pieces):
         if not (np.array_equal(np.asarray(p.refPos), data["refPos%d" % i])
-                and np.array_equal(np.asarray(p.tets, dtype=np.int32), data["tets%d" % i])):
+                and np.array_equal(np.asarray(p.tets, dtype=np.int32), data["tets%d" % i])
+                and np.array_equal(np.asarray(p.addedMassPerTet), _addedMass(data, i, len(p.addedMassPerTet)))):
             return False
     return True
 
@@ -130,6 +133,13 @@ def savedSettings(settings):
                       "it acted as acos(cos(%g)) = %.6g rad, which is set. Angles are in radians." %
                       (v, v, out["edgeFeatureAngle"]), RuntimeWarning, stacklevel=3)
     return out
+
+
+def _addedMass(data, i, nTets):
+    """Piece i's mass added per tet (selective mass scaling): zeros for a
+    scene saved before it was kept."""
+    key = "addedMass%d" % i
+    return np.array(data[key]) if key in data.files else np.zeros(nTets)
 
 
 def restoreWorld(blob, into=None):
@@ -153,8 +163,10 @@ def restoreWorld(blob, into=None):
         w.materialIndex(m)
     for i, pm in enumerate(meta["pieces"]):
         mat = mats[pm["material"]]
-        pid = w.core.addPiece(data["refPos%d" % i], data["tets%d" % i], w.materialIndex(mat))
+        tets = data["tets%d" % i]
+        pid = w.core.addPiece(data["refPos%d" % i], tets, w.materialIndex(mat), _addedMass(data, i, len(tets)))
         w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
+        w.pieces[-1].targetDt = pm.get("targetDt")
         mat._inUse = True
     for k, v in savedSettings(meta["settings"]).items():
         setattr(w.core, k, v)

@@ -148,7 +148,8 @@ class Piece:
 
     @property
     def mass(self):
-        """Lumped node masses (n,) [kg], read-only view."""
+        """Lumped node masses (n,) [kg], read-only view (with the mass selective
+        mass scaling added: addPiece(targetDt=...))."""
         return self.world.core.mass[self.nodeSlice]
 
     @property
@@ -211,6 +212,40 @@ class Piece:
     def volume(self):
         """Volume of the piece's reference (undeformed) mesh [m^3]."""
         return self.world.core.pieceVolume(self.id)
+
+    # -- selective mass scaling (addPiece(targetDt=...), doc/meshes.md) ---------
+    targetDt = None
+    """The targetDt [s] the piece was added with (None: no mass scaling)."""
+
+    @property
+    def addedMass(self):
+        """Mass added by selective mass scaling [kg] (0 without targetDt); part
+        of totalMass, of the node masses and of the weight."""
+        return self.world.core.pieceMassScaling(self.id)["addedMass"]
+
+    @property
+    def addedMassFraction(self):
+        """addedMass over the piece's own mass rho V (what maxAddedMass bounds)."""
+        d = self.world.core.pieceMassScaling(self.id)
+        return d["addedMass"] / d["physicalMass"]
+
+    @property
+    def addedMassMaxNodeShare(self):
+        """The largest share of added mass at one node: the mass added at that
+        node over the node's own mass (rho V / 4 of its elements); at node
+        ``addedMassMaxNode`` (piece-local, -1 without added mass)."""
+        return self.world.core.pieceMassScaling(self.id)["maxNodeShare"]
+
+    @property
+    def addedMassMaxNode(self):
+        """The node (piece-local index) with the largest addedMassMaxNodeShare, -1 if none."""
+        return self.world.core.pieceMassScaling(self.id)["maxNode"]
+
+    @property
+    def addedMassPerTet(self):
+        """Mass added to each tetrahedron [kg] (t,), read-only view; a quarter
+        of it sits on each of the tet's nodes."""
+        return self.world.core.tetAddedMass[self.tetSlice]
 
     @property
     def centroid(self):

@@ -109,10 +109,23 @@ class World:
         return self._materialIndex[key][1]
 
     def addPiece(self, mesh, material=None, pos=(0, 0, 0), ori=None, vel=(0, 0, 0), angVel=(0, 0, 0),
-                 reorder=True):
+                 reorder=True, targetDt=None, maxAddedMass=0.01):
         """Add a deformable piece: ``mesh`` (Mesh, (nodes, tets) or file) is placed
         with its origin at ``pos`` and rotated by ``ori``; it starts with rigid
-        velocity ``vel`` + ``angVel`` x (x - pos).  Returns a Piece."""
+        velocity ``vel`` + ``angVel`` x (x - pos).  Returns a Piece.
+
+        ``targetDt`` [s] turns on selective mass scaling (doc/meshes.md,
+        "Selective mass scaling"): the elements whose own stable step (elastic,
+        and with the material's viscosity) is below ``targetDt`` - slivers - get
+        just the mass that brings it to ``targetDt``, a quarter to each of their
+        nodes, so that ``stableDt()``'s elastic and viscous steps of this piece
+        are at least ``targetDt``.  The added mass is real mass: gravity, contacts
+        and momentum see it.  It is reported as ``Piece.addedMass``,
+        ``Piece.addedMassFraction`` and ``Piece.addedMassMaxNodeShare``, and the
+        piece is refused (ValueError) when ``addedMass`` exceeds ``maxAddedMass``
+        times the piece's own mass (rho V).  Contact limits are not raised by it:
+        a RuntimeWarning says so when ``targetDt`` is above them, and when mass
+        lands on surface nodes (their contacts see the heavier nodes)."""
         # Every argument is checked before anything is added: a refused call
         # leaves the world (and the material) as they were.
         mesh = asMesh(mesh)
@@ -123,6 +136,15 @@ class World:
         pos = _finiteVector("addPiece", "pos", pos)
         vel = _finiteVector("addPiece", "vel", vel)
         angVel = _finiteVector("addPiece", "angVel", angVel)
+        if targetDt is not None:
+            targetDt = _finiteNumber("addPiece", "targetDt", targetDt)
+            if not targetDt > 0:
+                raise ValueError("addPiece: targetDt=%r must be a positive step in seconds (or None: no mass "
+                                 "scaling)" % targetDt)
+        maxAddedMass = _finiteNumber("addPiece", "maxAddedMass", maxAddedMass)
+        if not maxAddedMass >= 0:
+            raise ValueError("addPiece: maxAddedMass=%r must be >= 0 (a fraction of the piece's mass: 0.01 is "
+                             "1 %%)" % maxAddedMass)
         nodes, tets = mesh.nodes, mesh.tets
         oldOf = np.arange(len(nodes), dtype=np.int32)
         if reorder:
@@ -135,7 +157,11 @@ class World:
         wasInUse = material.__dict__.get("_inUse", False)
         index = self.materialIndex(material)
         try:
-            pid = self.core.addPiece(x, tets, index)
+            added = []
+            if targetDt is not None:
+                added = self.core.massScaling(x, tets, index, targetDt)
+                _refuseTooMuchMass(x, tets, material, added, targetDt, maxAddedMass)
+            pid = self.core.addPiece(x, tets, index, added)
         except BaseException:
             if newMaterial:  # the material was registered for this piece alone: forget it
                 del self._materialIndex[id(material)]
@@ -144,13 +170,72 @@ class World:
             raise
         p = Piece(self, pid, material, mesh.originalIds(oldOf))  # file point indices for a loaded mesh
         p.vel[:] = v
+        p.targetDt = targetDt
         self.pieces.append(p)
+        if targetDt is not None:
+            _warnMassScaling(self.core, p, targetDt)
         return p
 
     def stableDt(self):
         """Stable time step: dict with elastic, viscous, contact, combined [s] and limitedBy;
         combinedExplicit / combinedImplicit: combined with explicit / implicit viscosity."""
         return self.core.stableDt()
+
+
+def _tetVolumes(x, tets):
+    t = np.asarray(tets)
+    a, b, c, d = (x[t[:, k]] for k in range(4))
+    return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6.0
+
+
+def _refuseTooMuchMass(x, tets, material, added, targetDt, maxAddedMass):
+    """ValueError naming the figures and the remedies when selective mass
+    scaling would add more than maxAddedMass of the piece's own mass."""
+    added = np.asarray(added)
+    if not added.size or not added.any():
+        return
+    own = material.density * _tetVolumes(x, tets)
+    total, physical = float(added.sum()), float(own.sum())
+    if total <= maxAddedMass * physical:
+        return
+    # The slivers' own step: M_e = rho V + added meets the target, so the
+    # element's unscaled omega^2 is (M_e / rho V) times the target's.
+    beta = material.viscosity / (material.young / (2 * (1 + material.poisson)))
+    omega = 2.0 / math.sqrt(targetDt * (targetDt + 2 * beta))
+    w0 = omega * math.sqrt(float(((own + added) / own).max()))
+    xi = 0.5 * beta * w0
+    dt0 = 2.0 / w0 * (math.sqrt(1 + xi * xi) - xi)
+    n = int(np.count_nonzero(added))
+    raise ValueError(
+        "addPiece: selective mass scaling to targetDt=%.3g s would add %.4g kg, %.3g %% of the piece's %.4g kg, "
+        "above maxAddedMass=%.3g %%: %d of %d elements are below targetDt, the worst allows %.3g s (a factor %.3g "
+        "below). Remedies: remove the slivers with mesh = qdem.improveMesh(mesh) (no added mass; doc/meshes.md), "
+        "accept more added mass with a larger maxAddedMass (it slows the piece's waves and its fall is unchanged, "
+        "but its dynamics are those of a heavier body: doc/accuracy.md), or ask a smaller targetDt."
+        % (targetDt, total, 100 * total / physical, physical, 100 * maxAddedMass, n, len(added), dt0,
+           targetDt / dt0))
+
+
+def _warnMassScaling(core, piece, targetDt):
+    """RuntimeWarnings for what mass scaling does not do: raise the contact
+    springs' step, or leave the surface's contact dynamics as they were."""
+    import warnings
+    info = core.pieceMassScaling(piece.id)
+    if info["surfaceMass"] > 0:
+        warnings.warn(
+            "addPiece: selective mass scaling put %.3g kg (of %.3g kg added) on surface nodes of piece %d: their "
+            "contacts see heavier nodes (a node's contact frequency goes as 1/sqrt(mass), its impact lasts longer). "
+            "qdem.improveMesh(mesh) removes the slivers instead." % (info["surfaceMass"], info["addedMass"],
+                                                                     piece.id),
+            RuntimeWarning, stacklevel=3)
+    contact, combined = core.rigidContactLimit(piece.id)
+    if targetDt > contact:
+        warnings.warn(
+            "addPiece: targetDt=%.3g s is above the step piece %d's contact springs allow against a rigid wall "
+            "(%.3g s; with its elements on the same node %.3g s), which no mass on the slivers raises: the run's "
+            "step stays below that. Ask targetDt <= %.3g s, or soften the contacts (a smaller QdemMat radius or "
+            "young)." % (targetDt, piece.id, contact, combined, contact),
+            RuntimeWarning, stacklevel=3)
 
 
 _default = None
@@ -196,9 +281,11 @@ def reset():
 
 
 def addPiece(mesh, material=None, pos=(0, 0, 0), ori=None, vel=(0, 0, 0), angVel=(0, 0, 0), reorder=True,
-             world=None):
-    """Add a deformable piece to the default world; see World.addPiece."""
-    return (world or defaultWorld()).addPiece(mesh, material, pos, ori, vel, angVel, reorder)
+             world=None, targetDt=None, maxAddedMass=0.01):
+    """Add a deformable piece to the default world; see World.addPiece
+    (``targetDt``, ``maxAddedMass``: selective mass scaling)."""
+    return (world or defaultWorld()).addPiece(mesh, material, pos, ori, vel, angVel, reorder, targetDt=targetDt,
+                                              maxAddedMass=maxAddedMass)
 
 
 def stableDt(world=None):

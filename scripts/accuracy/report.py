@@ -281,6 +281,15 @@ precision throughout, as Debian's YADE.
             with open(iv) as f:
                 text += implicit_viscosity.section(json.load(f))
             break
+    # Selective mass scaling (its own script, run by make accuracy before this
+    # one; the committed log when it was not run).
+    for ms in (os.path.join(outdir, "mass_scaling.json"), os.path.join(ROOT, "bench", "logs", "mass_scaling.json")):
+        if os.path.exists(ms):
+            sys.path.insert(0, HERE)
+            import mass_scaling
+            with open(ms) as f:
+                text += mass_scaling.section(json.load(f))
+            break
     text += "## Set-ups (the scripts' docstrings)\n\n"
     sys.path.insert(0, HERE)
     import run_accuracy
