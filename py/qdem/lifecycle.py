@@ -76,6 +76,7 @@ def sceneBlob(world, O):
         arrays["refPos%d" % i] = np.array(p.refPos)
         arrays["tets%d" % i] = np.array(p.tets, dtype=np.int32)
         arrays["oldOf%d" % i] = np.asarray(p.originalNodeIds, dtype=np.int32)
+        arrays["tetIds%d" % i] = np.asarray(core.tetIds(p.id), dtype=np.int32)
     if core.mpiSize > 1:
         core.gatherState()  # collective: under mpiexec every rank runs O.save
     for name, data in core.saveState().items():
@@ -155,6 +156,8 @@ def restoreWorld(blob, into=None):
         mat = mats[pm["material"]]
         pid = w.core.addPiece(data["refPos%d" % i], data["tets%d" % i], w.materialIndex(mat))
         w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
+        if "tetIds%d" % i in data.files:  # (scenes saved before elements kept their mesh's numbering: local)
+            w.core.setTetIds(pid, data["tetIds%d" % i])
         mat._inUse = True
     for k, v in savedSettings(meta["settings"]).items():
         setattr(w.core, k, v)
