@@ -3,7 +3,9 @@ checks say"): elements that cut the piece's stable step far below what its
 median element allows (slivers), and a mesh whose size, against its
 material and the scene, looks like millimetres."""
 import math
+import os
 import re
+import sys
 import warnings
 
 import numpy as np
@@ -21,6 +23,16 @@ _REMEDIES = ("qdem.improveMesh(mesh) remeshes the slivers away keeping the surfa
              "optimiser: Mesh.Optimize / Mesh.OptimizeNetgen)")
 
 
+def _userStacklevel():
+    """warnings.warn's stacklevel that points at the first frame outside the
+    qdem package (the user's addPiece call, through qdem.addPiece or World.addPiece)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    f, level = sys._getframe(1), 1
+    while f is not None and os.path.dirname(os.path.abspath(f.f_code.co_filename)) == here:
+        f, level = f.f_back, level + 1
+    return level
+
+
 def stepFactors(report):
     """(elastic, viscous) factors by which a piece's stiffest element cuts its
     stable step against its median element, from World.pieceStepReport."""
@@ -30,7 +42,7 @@ def stepFactors(report):
             ratio(report["medianViscous"], report["stepViscous"]))
 
 
-def warnSlivers(world, pid, stacklevel=3):
+def warnSlivers(world, pid):
     """RuntimeWarning when piece ``pid``'s worst elements cut its stable step
     more than SLIVER_FACTOR below its median element's (undamped steps, the
     shape's measure; with viscosity the cut is up to its square, both are
@@ -51,7 +63,7 @@ def warnSlivers(world, pid, stacklevel=3):
            " (with the material's viscosity %.3g x: %.3g s instead of %.3g s)" % (fv, r["stepViscous"],
                                                                              r["medianViscous"]) if viscous else "",
            n, " lies" if n == 1 else "s lie", ids, r["worstQuality"], _REMEDIES),
-        RuntimeWarning, stacklevel=stacklevel)
+        RuntimeWarning, stacklevel=_userStacklevel())
     return r
 
 
@@ -91,17 +103,14 @@ def unitsClues(world, pid, nodes, tets, material):
     other pieces, 1000x the YADE spheres' diameter.  A 30 m boulder with a
     contact radius of 0.5 m (elements 6x the radius) is none of these."""
     ext = float(np.ptp(nodes, axis=0).max()) if len(nodes) else 0.0
-    clues, weak, strong = [], 0, False
     if not ext >= 10:
-        return False, ext, clues
+        return False, ext, []
+    clues, weak, strong = ["%.4g-unit coordinates" % ext], int(ext >= 50), False
     r = float(material.radius)
     h = _medianEdge(nodes, tets)
     if r > 0 and h / r >= 200:
         strong = True
         clues.append("elements of median edge %.3g beside a contact radius of %.3g m, %.0fx smaller" % (h, r, h / r))
-    if ext >= 50:
-        weak += 1
-        clues.append("%.4g-unit coordinates" % ext)
     others = [float(np.ptp(np.asarray(p.refPos), axis=0).max()) for p in world.pieces if p.id != pid]
     if others:
         lo = float(np.median(others))
@@ -112,8 +121,6 @@ def unitsClues(world, pid, nodes, tets, material):
     if rs and ext / (2 * rs) >= 1000:
         weak += 1
         clues.append("beside spheres of radius %.3g m" % rs)
-    if not any(c.endswith("coordinates") for c in clues):
-        clues.insert(0, "%.4g-unit coordinates" % ext)
     return strong or weak >= 2, ext, clues
 
 
@@ -123,7 +130,7 @@ def unitsAdvice(ext):
             "qdem.meshSurface(..., scale=0.001)), which makes it a %.3g m body" % (0.001 * ext))
 
 
-def warnUnits(world, pid, nodes, tets, material, stacklevel=3):
+def warnUnits(world, pid, nodes, tets, material):
     """RuntimeWarning when the piece clearly looks like millimetres
     (unitsClues); returns (clear, note): the phrase a later refusal of its
     placement adds ('' for a body under 10 units)."""
@@ -131,7 +138,7 @@ def warnUnits(world, pid, nodes, tets, material, stacklevel=3):
     if clear:
         note = "the mesh looks like millimetres (%s): %s" % ("; ".join(clues), unitsAdvice(ext))
         warnings.warn("qdem.addPiece: piece %d: %s. QDEM's lengths are metres." % (pid, note), RuntimeWarning,
-                      stacklevel=stacklevel)
+                      stacklevel=_userStacklevel())
         return True, note
     if ext >= 10:
         return False, ("if the mesh is in millimetres (%.4g-unit coordinates, a %.4g m body as given), %s"
