@@ -29,7 +29,7 @@ def _unitsWarnings(record):
 def _floorScene(O):
     from yade import ForceResetter, NewtonIntegrator, utils
     floor = O.bodies.append(utils.wall(0, axis=2, sense=1))
-    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50, threads=1),
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", checkPeriod=50, threads=1, viscousIntegration="implicit"),
                  NewtonIntegrator(gravity=(0, 0, -G))]
     return floor
 
@@ -54,7 +54,7 @@ def test_a_box_mesh_in_millimetres_is_named_at_addPiece_and_at_the_refusal(scene
 
 def _mmBlock(tmp_path):
     """A 120 x 80 x 40 mm block, its surface written in mm and meshed by
-    TetGen with quality on (elements up to 4000 mm^3)."""
+    TetGen with quality on (elements up to 20000 mm^3)."""
     if shutil.which("tetgen") is None:
         pytest.skip("TetGen is not installed (Debian: apt install tetgen)")
     v = np.array([(x, y, z) for x in (-60, 60) for y in (-40, 40) for z in (-20, 20)], dtype=float)
@@ -65,7 +65,7 @@ def _mmBlock(tmp_path):
         o.writelines("%.17g %.17g %.17g\n" % tuple(p) for p in v)
         for a, b, c, d in quads:
             o.write("3 %d %d %d\n3 %d %d %d\n" % (a, b, c, a, c, d))
-    subprocess.run(["tetgen", "-pqQa4000", str(off)], check=True, capture_output=True)
+    subprocess.run(["tetgen", "-pqQa20000", str(off)], check=True, capture_output=True)
     return str(tmp_path / "block_mm.1.ele")
 
 
