@@ -63,7 +63,7 @@ struct StableDt {
     // their worst quality (min height / longest edge), and the steps its
     // median element allows undamped and with viscosity.
     int piece = -1;
-    std::vector<int32_t> elements;
+    std::vector<int32_t> elements{};
     int64_t elementsNearLimit = 0;
     double worstQuality = std::numeric_limits<double>::quiet_NaN();
     double pieceElastic = std::numeric_limits<double>::infinity(), pieceViscous = pieceElastic;

@@ -235,3 +235,23 @@ def test_the_limiting_piece_is_the_one_with_the_smallest_element_step(scene):
         qdem.addPiece(mesh, mat, pos=(1, 0, 1))
     d = qdem.stableDt()
     assert d["piece"] == 1 and d["elements"][0] == sliver
+
+
+def test_a_saved_and_loaded_scene_names_the_same_elements(scene):
+    """O.save keeps each element's id in its mesh's numbering: a scene loaded
+    into an emptied world (O.reset, then O.loadTmp) names the same sliver."""
+    from yade import ForceResetter, NewtonIntegrator
+    O = scene
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mesh, sliver = _slivered_box()
+        qdem.addPiece(mesh, _mat(), pos=(0, 0, 1))
+    O.engines = [ForceResetter(), qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81))]
+    before = qdem.stableDt()
+    O.saveTmp("sliver")
+    O.reset()
+    assert len(qdem.defaultWorld().pieces) == 0
+    O.loadTmp("sliver")
+    after = qdem.stableDt()
+    assert after["elements"] == before["elements"] and after["elements"][0] == sliver
+    assert after["medianFactorElastic"] == before["medianFactorElastic"]
