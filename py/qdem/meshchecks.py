@@ -77,17 +77,16 @@ def _medianEdge(nodes, tets, cap=20000):
     return float(np.median(np.concatenate(e)))
 
 
-def _sceneSpheres(cap=5000):
-    """Median radius of (up to ``cap``) YADE spheres in O.bodies, or None."""
+def _sceneSpheres(cap=20000):
+    """Median radius of the YADE spheres among the first ``cap`` bodies of O.bodies, or None."""
     try:
         from yade import O
         radii = []
-        for b in O.bodies:
-            if b is None or b.shape is None or type(b.shape).__name__ != "Sphere":
-                continue
-            radii.append(float(b.shape.radius))
-            if len(radii) >= cap:
+        for k, b in enumerate(O.bodies):
+            if k >= cap:
                 break
+            if b is not None and b.shape is not None and type(b.shape).__name__ == "Sphere":
+                radii.append(float(b.shape.radius))
         return float(np.median(radii)) if radii else None
     except Exception:  # outside yade, or a scene without bodies
         return None
