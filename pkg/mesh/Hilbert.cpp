@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 namespace qdem {
 
@@ -48,7 +49,7 @@ uint64_t hilbertKey(const double p[3], const double lo[3], const double hi[3]) {
     return key;
 }
 
-std::vector<int32_t> hilbertReorder(TetMesh& m) {
+std::vector<int32_t> hilbertReorder(TetMesh& m, std::vector<int32_t>* tetOldOf) {
     const std::size_t nn = m.nNodes(), nt = m.nTets();
     double lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {
@@ -93,6 +94,7 @@ std::vector<int32_t> hilbertReorder(TetMesh& m) {
         for (int d = 0; d < 3; ++d) nodes[3 * i + d] = m.nodes[3 * oldOf[i] + d];
     m.nodes.swap(nodes);
     m.tets.swap(tets);
+    if (tetOldOf) *tetOldOf = std::move(order);
     return oldOf;
 }
 

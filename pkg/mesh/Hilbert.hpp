@@ -13,7 +13,8 @@ namespace qdem {
 uint64_t hilbertKey(const double p[3], const double lo[3], const double hi[3]);
 
 // Sorts tets by the Hilbert key of their centroid and renumbers nodes by
-// first use in that order.  Returns, for each new node index, the old one.
-std::vector<int32_t> hilbertReorder(TetMesh& m);
+// first use in that order.  Returns, for each new node index, the old one;
+// tetOldOf (when given) receives, for each new tet index, the old one.
+std::vector<int32_t> hilbertReorder(TetMesh& m, std::vector<int32_t>* tetOldOf = nullptr);
 
 }  // namespace qdem

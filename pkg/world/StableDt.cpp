@@ -150,6 +150,14 @@ double hookeStiffnessMax(const Mat3& B, double V, double lambda, double mu) {
     return largestEigenvalue(hookeStiffness(B, V, lambda, mu));
 }
 
+// The exact largest frequency squared of one element at rest on its own
+// lumped mass density V / 4 per node (StepReport.cpp; the density includes
+// the mass selective mass scaling added to the element).
+double restElementOmega2(const double* B9, double V, double lambda, double mu, double density) {
+    const Mat3 B = loadRowMajor(B9);
+    return largestEigenvalue(hookeStiffness(B, V, lambda, mu)) / (density * V / 4.0);
+}
+
 double World::elementOmegaMax(const PieceInfo& p) const {
     const Material& m = materials[p.material];
     const double lam = m.lambda(), mu = m.mu();
@@ -456,6 +464,29 @@ StableDt World::stableDt() const {
         r.combinedExplicit = std::min(r.combinedExplicit, r.obstacle);
         r.combinedImplicit = std::min(r.combinedImplicit, r.obstacle);
     }
+    // The piece whose elements set the element step (the viscous one while
+    // explicit viscosity limits it): its worst elements against its median.
+    const bool viscousCounts = settings.viscosityOn && !implicit;
+    double pieceLimit = inf;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const double we = omegaCache_[i];
+        const double beta = settings.viscosityOn ? materials[pieces[i].material].beta() : 0.0;
+        const double d = viscousCounts ? leapfrogLimit(we, 0.5 * beta * we) : leapfrogLimit(we, 0.0);
+        if (d < pieceLimit) pieceLimit = d, r.piece = static_cast<int>(i);
+    }
+    if (r.piece >= 0) {
+        const PieceStepReport& pr = pieceStepReport(r.piece);
+        const PieceInfo& p = pieces[r.piece];
+        const double beta = settings.viscosityOn ? materials[p.material].beta() : 0.0;
+        const double we = omegaCache_[r.piece], wm = pr.omegaMedian;
+        r.pieceElastic = leapfrogLimit(we, 0.0);
+        r.pieceViscous = leapfrogLimit(we, 0.5 * beta * we);
+        r.medianElastic = leapfrogLimit(wm, 0.0);
+        r.medianViscous = leapfrogLimit(wm, 0.5 * beta * wm);
+        for (int32_t local : pr.worst) r.elements.push_back(tetId(p.tetBegin + local));
+        r.elementsNearLimit = pr.nearLimit;
+        r.worstQuality = pr.worstQuality;
+    }
     const double lim = std::min({r.elastic, implicit ? r.elastic : r.viscous, r.contact});
     if (std::isfinite(lim)) {
         if (r.obstacleIndex >= 0 && r.obstacle <= r.combined)
@@ -486,7 +517,11 @@ void World::checkDt(double dt) const {
         throw StabilityError(cat("QDEM: O.dt=", dt, " s exceeds the stable time step ", s.combined,
                                  " s by a factor ", dt / s.combined, " (limited by ", s.limitedBy,
                                  "; elastic limit ", s.elastic, " s, with viscosity ", s.viscous,
-                                 " s, contact ", s.contact, " s). Lower O.dt, the viscosity or the stiffness",
+                                 " s, contact ", s.contact, " s",
+                                 s.limitedBy == "viscosity" || s.limitedBy == "elasticity (P-wave)"
+                                     ? cat("; the smallest element steps: ", describeElementLimit(s))
+                                     : std::string(),
+                                 "). Lower O.dt, the viscosity or the stiffness",
                                  s.limitedBy == "viscosity"
                                      ? cat(", or set QdemEngine(viscousIntegration='implicit') (limit ",
                                            s.combinedImplicit, " s).")

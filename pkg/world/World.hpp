@@ -27,6 +27,7 @@
 #include "Energy.hpp"
 #include "PieceBounds.hpp"
 #include "PieceInfo.hpp"
+#include "StepReport.hpp"
 #include "../phases/ElementPhase.hpp"
 #include "../phases/IntegrationPhase.hpp"
 #include "../phases/ObstaclePhase.hpp"
@@ -56,6 +57,17 @@ struct StableDt {
     // none): already in contact and combined.
     double obstacle = std::numeric_limits<double>::infinity();
     int obstacleIndex = -1;
+    // The piece whose elements set the element step (-1: no piece), as
+    // PieceStepReport says (StepReport.cpp): its smallest-step elements in
+    // its own numbering (tetIds), how many lie within 2x of the limit and
+    // their worst quality (min height / longest edge), and the steps its
+    // median element allows undamped and with viscosity.
+    int piece = -1;
+    std::vector<int32_t> elements{};
+    int64_t elementsNearLimit = 0;
+    double worstQuality = std::numeric_limits<double>::quiet_NaN();
+    double pieceElastic = std::numeric_limits<double>::infinity(), pieceViscous = pieceElastic;
+    double medianElastic = std::numeric_limits<double>::infinity(), medianViscous = medianElastic;
 };
 
 // An obstacle edge found crossing a piece's surface by World::obstacleEdgeCrossing.
@@ -122,6 +134,21 @@ public:
     // Throws StabilityError (naming the limit) when dt exceeds the stable step.
     void checkDt(double dt) const;
     StableDt stableDt() const;
+    // The piece's smallest-step elements against its median one (StepReport.cpp);
+    // computed once per piece, when first asked.
+    const PieceStepReport& pieceStepReport(std::size_t piece) const;
+    // One clause naming what in the element step limit() points to: the
+    // piece, its elements, how many lie near the limit, their quality and the
+    // median element's step (empty when no piece sets it).
+    std::string describeElementLimit(const StableDt& s) const;
+    // Each element's id in the piece's own numbering (the mesh handed to
+    // addPiece, before the solver's reordering): ids[local tet].  Default:
+    // the solver's local index.
+    void setTetIds(int piece, const std::vector<int32_t>& ids);
+    int32_t tetId(int32_t globalTet) const {
+        return globalTet < static_cast<int32_t>(tetIds_.size()) && tetIds_[globalTet] >= 0
+                   ? tetIds_[globalTet] : globalTet - pieces[tetPiece[globalTet]].tetBegin;
+    }
     // The same limit on the current shape: stretched elements of a Saint-
     // Venant-Kirchhoff material stiffen beyond the reference step.  Throws
     // StabilityError naming the element, its stretch and the current limit
@@ -405,6 +432,9 @@ private:
     mutable std::size_t shareCacheN_ = 0;
     mutable double shareMin1_ = 0, shareMin2_ = 0;
     mutable std::size_t shareArgMin_ = 0;
+    mutable std::vector<PieceStepReport> stepReports_;  // per piece (pieceStepReport)
+    mutable std::vector<char> stepReportDone_;
+    std::vector<int32_t> tetIds_;  // per tet, its id in the piece's own numbering (-1: the local index)
     mutable std::vector<double> omega2Tet_;   // per tet, reference omega^2 (exact, or an upper bound below the max)
 };
 

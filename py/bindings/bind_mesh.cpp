@@ -89,12 +89,17 @@ void bindMesh(py::module_& m) {
         "Boundary of a positively oriented mesh: dict of triangles (outward), triTet, edges, nodes, tets.");
     m.def(
         "hilbertReorder",
-        [](const Nodes& n, const Tets& t) {
+        [](const Nodes& n, const Tets& t, bool tetOrder) {
             TetMesh mesh = toMesh(n, t);
-            const std::vector<int32_t> oldOf = hilbertReorder(mesh);
+            std::vector<int32_t> tetOldOf;
+            const std::vector<int32_t> oldOf = hilbertReorder(mesh, &tetOldOf);
+            if (tetOrder)
+                return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4), toArray(oldOf, 1).reshape({-1}),
+                                      toArray(tetOldOf, 1).reshape({-1}));
             return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4),
                                   toArray(oldOf, 1).reshape({-1}));
         },
-        py::arg("nodes"), py::arg("tets"),
-        "Reorder along a Hilbert curve: returns (nodes, tets, oldIndexOfNewNode).");
+        py::arg("nodes"), py::arg("tets"), py::arg("tetOrder") = false,
+        "Reorder along a Hilbert curve: returns (nodes, tets, oldIndexOfNewNode), and oldIndexOfNewTet "
+        "with tetOrder=True.");
 }

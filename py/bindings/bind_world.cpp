@@ -253,8 +253,61 @@ void bindWorld(py::module_& m) {
                  d["combinedImplicit"] = s.combinedImplicit;
                  d["limitedBy"] = s.limitedBy;
                  d["obstacle"] = s.obstacle;  // the stiffest dynamic YADE obstacle's (inf: none)
+                 // What in the element step sets it (StableDt, StepReport.hpp).
+                 d["piece"] = s.piece;
+                 d["elements"] = s.elements;
+                 d["elementsNearLimit"] = s.elementsNearLimit;
+                 d["worstQuality"] = s.worstQuality;
+                 d["medianElastic"] = s.medianElastic;
+                 d["medianViscous"] = s.medianViscous;
+                 d["medianFactorElastic"] = s.piece >= 0 ? s.medianElastic / s.pieceElastic : 1.0;
+                 d["medianFactorViscous"] = s.piece >= 0 ? s.medianViscous / s.pieceViscous : 1.0;
+                 d["elementLimit"] = w.describeElementLimit(s);
                  return d;
              })
+        .def("pieceStepReport",
+             [](const World& w, int piece) {
+                 if (piece < 0 || piece >= static_cast<int>(w.pieces.size()))
+                     throw InputError(cat("pieceStepReport: no piece ", piece));
+                 const PieceStepReport& r = w.pieceStepReport(piece);
+                 const PieceInfo& p = w.pieces[piece];
+                 std::vector<int32_t> ids;
+                 for (int32_t local : r.worst) ids.push_back(w.tetId(p.tetBegin + local));
+                 py::dict d;
+                 d["omegaMax"] = r.omegaMax;
+                 d["omegaMedian"] = r.omegaMedian;
+                 d["elements"] = ids;
+                 d["elementsNearLimit"] = r.nearLimit;
+                 d["worstQuality"] = r.worstQuality;
+                 // The steps they allow, undamped and with the material's
+                 // Kelvin-Voigt damping (whether the engine's viscosity is on or not).
+                 const double beta = w.materials[p.material].beta();
+                 d["stepElastic"] = leapfrogLimit(r.omegaMax, 0.0);
+                 d["stepViscous"] = leapfrogLimit(r.omegaMax, 0.5 * beta * r.omegaMax);
+                 d["medianElastic"] = leapfrogLimit(r.omegaMedian, 0.0);
+                 d["medianViscous"] = leapfrogLimit(r.omegaMedian, 0.5 * beta * r.omegaMedian);
+                 return d;
+             },
+             py::arg("piece"),
+             "The piece's stiffest elements at rest against its median one: dict of omegaMax, omegaMedian "
+             "[rad/s], elements (up to 10 ids in its mesh's numbering, smallest step first), "
+             "elementsNearLimit (steps within 2x of the smallest), worstQuality (min height / longest edge), the "
+             "steps stepElastic, stepViscous of the stiffest and medianElastic, medianViscous of the median "
+             "element [s] (viscous: with the material's damping).")
+        .def("setTetIds",
+             [](World& w, int piece, const std::vector<int32_t>& ids) { w.setTetIds(piece, ids); },
+             py::arg("piece"), py::arg("ids"),
+             "Each element's id in the piece's own mesh numbering (ids[solver's local tet]).")
+        .def("tetIds",
+             [](const World& w, int piece) {
+                 if (piece < 0 || piece >= static_cast<int>(w.pieces.size()))
+                     throw InputError(cat("tetIds: no piece ", piece));
+                 const PieceInfo& p = w.pieces[piece];
+                 std::vector<int32_t> ids;
+                 for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) ids.push_back(w.tetId(e));
+                 return ids;
+             },
+             py::arg("piece"), "Each element's id in the piece's own mesh numbering (see setTetIds).")
         .def("stress",
              [](const World& w) {
                  py::array_t<double> a({static_cast<py::ssize_t>(w.nTets()), py::ssize_t(6)});

@@ -17,7 +17,7 @@ import weakref
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, lifecycle, mpyglue, parallel, setupcheck, yadeglue
+from . import _core, lifecycle, meshchecks, mpyglue, parallel, setupcheck, yadeglue
 from .spheres import SphereCoupling
 from .attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
 from .yadeclass import EngineMeta
@@ -228,7 +228,10 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         """Stable time step (dict: elastic, viscous, contact, combined, limitedBy), with the
         current YADE obstacles included.  combinedExplicit and combinedImplicit are the
         combined limit with the viscous force integrated explicitly and implicitly
-        (viscousIntegration); combined is the one in force."""
+        (viscousIntegration); combined is the one in force.  piece, elements,
+        elementsNearLimit, worstQuality, medianElastic, medianViscous,
+        medianFactorElastic, medianFactorViscous and elementLimit name what in the
+        element step sets it (see qdem.World.stableDt)."""
         self._activate()  # this engine's settings decide its stable step
         if self._mpy is None:  # (under yade.mpy the step's allgather set them, alike on every rank)
             self._syncObstacles()
@@ -248,7 +251,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                 "QdemEngine.stableTimeStep(): no time step is stable in this scene: it is limited by %s, which "
                 "allows none. A dynamic YADE body of zero mass or moment of inertia (YADE's facets have none) "
                 "cannot be integrated: make it fixed (utils.facet(..., fixed=True), or body.dynamic = False) or "
-                "give it a mass and an inertia" % d.get("limitedBy", "?"))
+                "give it a mass and an inertia%s" % (d.get("limitedBy", "?"), "; the smallest element steps: "
+                                                       + d["elementLimit"] if d.get("elementLimit") else ""))
         return dt
 
     # -- save / load (lifecycle.py) ------------------------------------------------
@@ -446,7 +450,13 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                               % (missed, O.iter, core.iter, core.time, float(O.time) - yadeTime), RuntimeWarning,
                               stacklevel=3)
                 core.iter, core.time = core.iter + missed, core.time + (float(O.time) - yadeTime)
-        core.step(dt)
+        try:
+            core.step(dt)
+        except ValueError as e:  # (InputError) a piece started inside an obstacle: say when its mesh looks like mm
+            explained = meshchecks.explainRefusal(self.world, e)
+            if explained is None:
+                raise
+            raise type(e)(explained) from None
         # Where YADE's next step starts, and QDEM's step now: kept with the
         # world, so that a new engine on it notices steps none made.
         self.world._stepMark = (int(O.iter) + 1, float(O.time) + dt, core.iter)

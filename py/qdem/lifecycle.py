@@ -78,6 +78,7 @@ def sceneBlob(world, O):
         arrays["oldOf%d" % i] = np.asarray(p.originalNodeIds, dtype=np.int32)
         arrays["addedMass%d" % i] = np.array(core.tetAddedMass[p.tetSlice])  # selective mass scaling
         meta["pieces"][-1]["targetDt"] = p.targetDt
+        arrays["tetIds%d" % i] = np.asarray(core.tetIds(p.id), dtype=np.int32)
     if core.mpiSize > 1:
         core.gatherState()  # collective: under mpiexec every rank runs O.save
     for name, data in core.saveState().items():
@@ -167,6 +168,8 @@ def restoreWorld(blob, into=None):
         pid = w.core.addPiece(data["refPos%d" % i], tets, w.materialIndex(mat), _addedMass(data, i, len(tets)))
         w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
         w.pieces[-1].targetDt = pm.get("targetDt")
+        if "tetIds%d" % i in data.files:  # (scenes saved before elements kept their mesh's numbering: local)
+            w.core.setTetIds(pid, data["tetIds%d" % i])
         mat._inUse = True
     for k, v in savedSettings(meta["settings"]).items():
         setattr(w.core, k, v)

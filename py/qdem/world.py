@@ -3,7 +3,7 @@ import math
 
 import numpy as np
 
-from . import _core
+from . import _core, meshchecks
 from .material import QdemMat
 from .mesh import asMesh
 from .piece import Piece
@@ -147,8 +147,9 @@ class World:
                              "1 %%)" % maxAddedMass)
         nodes, tets = mesh.nodes, mesh.tets
         oldOf = np.arange(len(nodes), dtype=np.int32)
+        tetOldOf = None  # the mesh's own tet numbering (stableDt names its elements so)
         if reorder:
-            nodes, tets, oldOf = _core.hilbertReorder(nodes, tets)
+            nodes, tets, oldOf, tetOldOf = _core.hilbertReorder(nodes, tets, tetOrder=True)
         x = nodes @ R.T + pos
         if not np.all(np.isfinite(x)):
             raise ValueError("addPiece: pos/ori give non-finite node coordinates")
@@ -174,11 +175,23 @@ class World:
         self.pieces.append(p)
         if targetDt is not None:
             _warnMassScaling(self.core, p, targetDt)
+        if tetOldOf is not None:
+            self.core.setTetIds(pid, tetOldOf)
+        # What the mesh's shape and size say (doc/meshes.md, "What the checks say").
+        meshchecks.warnSlivers(self, pid)
+        p._unitsNote = meshchecks.warnUnits(self, pid, x, tets, material)
         return p
 
     def stableDt(self):
         """Stable time step: dict with elastic, viscous, contact, combined [s] and limitedBy;
-        combinedExplicit / combinedImplicit: combined with explicit / implicit viscosity."""
+        combinedExplicit / combinedImplicit: combined with explicit / implicit viscosity.
+        What in the element step sets it (doc/meshes.md, "What the checks say"): piece (its
+        index, -1 without pieces), elements (up to 10 of its tetrahedra with the smallest
+        steps, smallest first, in its mesh's numbering), elementsNearLimit (how many allow a
+        step within 2x of the smallest), worstQuality (their smallest min height / longest
+        edge), medianElastic / medianViscous (the steps its median element allows [s]),
+        medianFactorElastic / medianFactorViscous (those over the piece's limit) and
+        elementLimit (all of it in one sentence)."""
         return self.core.stableDt()
 
 
