@@ -1,0 +1,457 @@
+#include "TetRemesher.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <memory>
+#include <new>
+#include <set>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "Surface.hpp"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mesh_3/tet_soup_to_c3t3.h>
+#include <CGAL/Tetrahedral_remeshing/Remeshing_triangulation_3.h>
+#include <CGAL/tetrahedral_remeshing.h>
+
+namespace qdem {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+using Vec = K::Vector_3;
+using Tr = CGAL::Tetrahedral_remeshing::Remeshing_triangulation_3<K>;
+using Vh = Tr::Vertex_handle;
+using Triangle = K::Triangle_3;
+using TriIt = std::vector<Triangle>::const_iterator;
+using AabbTree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, TriIt>>>;
+
+// The remesher's edge_is_constrained_map: a writable set of vertex pairs
+// (ordered as CGAL orders them), shared by the copies CGAL makes of it.
+struct ConstrainedEdges {
+    using key_type = std::pair<Vh, Vh>;
+    using value_type = bool;
+    using reference = bool;
+    using category = boost::read_write_property_map_tag;
+    std::shared_ptr<std::set<key_type>> edges = std::make_shared<std::set<key_type>>();
+
+    friend bool get(const ConstrainedEdges& m, const key_type& k) { return m.edges->count(k) > 0; }
+    friend void put(const ConstrainedEdges& m, const key_type& k, bool v) {
+        if (v)
+            m.edges->insert(k);
+        else
+            m.edges->erase(k);
+    }
+};
+
+std::pair<Vh, Vh> orderedPair(Vh a, Vh b) { return b < a ? std::make_pair(b, a) : std::make_pair(a, b); }
+
+Point point(const TetMesh& m, std::size_t i) { return {m.nodes[3 * i], m.nodes[3 * i + 1], m.nodes[3 * i + 2]}; }
+
+// The mesh without the nodes no tet uses (CGAL's triangulation would hold
+// them as isolated vertices).
+TetMesh compact(const TetMesh& in) {
+    std::vector<int32_t> index(in.nNodes(), -1);
+    TetMesh out;
+    out.tets.reserve(in.tets.size());
+    for (int32_t v : in.tets) {
+        if (index[v] < 0) {
+            index[v] = static_cast<int32_t>(out.nNodes());
+            out.nodes.insert(out.nodes.end(), in.nodes.begin() + 3 * v, in.nodes.begin() + 3 * v + 3);
+        }
+        out.tets.push_back(index[v]);
+    }
+    return out;
+}
+
+uint64_t edgeKey(int32_t a, int32_t b) {
+    const uint64_t lo = static_cast<uint32_t>(std::min(a, b)), hi = static_cast<uint32_t>(std::max(a, b));
+    return lo << 32 | hi;
+}
+
+Vec triangleNormal(const TetMesh& m, const int32_t* tri) {
+    const Point a = point(m, tri[0]), b = point(m, tri[1]), c = point(m, tri[2]);
+    return CGAL::cross_product(b - a, c - a);
+}
+
+// Height of tet t over its largest face, against its longest edge: 0 for a
+// flat tet, 0.816 for the regular one.
+double flatness(const TetMesh& m, std::size_t t) {
+    const int32_t* c = &m.tets[4 * t];
+    std::array<Point, 4> p;
+    for (int k = 0; k < 4; ++k) p[k] = point(m, c[k]);
+    double maxArea2 = 0, maxEdge2 = 0;
+    for (int k = 0; k < 4; ++k) {
+        const Point &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &d = p[(k + 3) % 4];
+        maxArea2 = std::max(maxArea2, CGAL::cross_product(b - a, d - a).squared_length());
+        for (int j = k + 1; j < 4; ++j) maxEdge2 = std::max(maxEdge2, CGAL::squared_distance(p[k], p[j]));
+    }
+    const double six = std::fabs(tetSixVolume(m, t));
+    // height = 3 V / area = 6 V / (2 area) = six / |cross|
+    return maxArea2 > 0 && maxEdge2 > 0 ? six / std::sqrt(maxArea2) / std::sqrt(maxEdge2) : 0.0;
+}
+
+// Removes flat tets lying in the boundary (two or three faces on it, their
+// normals within acos(cosMax) of each other) whose removal keeps the surface
+// manifold; repeated while any is found.  Returns the number removed.
+std::size_t peelFlatBoundaryTets(TetMesh& m, double ratio, double cosMax) {
+    std::size_t removed = 0;
+    for (int round = 0; round < 20; ++round) {
+        const Surface s = extractSurface(m);
+        std::vector<int> boundaryFaces(m.nTets(), 0);
+        std::vector<int32_t> firstFace(m.nTets(), -1), nextFace(s.nTriangles(), -1);
+        for (std::size_t f = 0; f < s.nTriangles(); ++f) {
+            const int32_t t = s.triTet[f];
+            ++boundaryFaces[t];
+            nextFace[f] = firstFace[t];
+            firstFace[t] = static_cast<int32_t>(f);
+        }
+        std::unordered_map<uint64_t, int> boundaryEdge;
+        boundaryEdge.reserve(s.edges.size());
+        for (std::size_t e = 0; e < s.nEdges(); ++e) boundaryEdge[edgeKey(s.edges[2 * e], s.edges[2 * e + 1])] = 1;
+        std::vector<char> drop(m.nTets(), 0), touched(m.nNodes(), 0);
+        std::size_t n = 0;
+        for (std::size_t t = 0; t < m.nTets(); ++t) {
+            if (boundaryFaces[t] < 2 || boundaryFaces[t] > 3 || flatness(m, t) >= ratio) continue;
+            const int32_t* c = &m.tets[4 * t];
+            if (touched[c[0]] || touched[c[1]] || touched[c[2]] || touched[c[3]]) continue;  // next round
+            // Its faces on the boundary (the face opposite corner k), which
+            // must be nearly coplanar: a flat tet folded over a feature edge
+            // is the feature itself.
+            std::array<bool, 4> faceOut{};
+            std::vector<Vec> normals;
+            for (int32_t f = firstFace[t]; f >= 0; f = nextFace[f]) {
+                const int32_t* tri = &s.triangles[3 * f];
+                for (int k = 0; k < 4; ++k)
+                    if (c[k] != tri[0] && c[k] != tri[1] && c[k] != tri[2]) faceOut[k] = true;
+                normals.push_back(triangleNormal(m, tri));
+            }
+            bool coplanar = true;
+            for (std::size_t i = 0; i < normals.size(); ++i)
+                for (std::size_t j = i + 1; j < normals.size(); ++j)
+                    if (normals[i] * normals[j] <
+                        cosMax * std::sqrt(normals[i].squared_length() * normals[j].squared_length()))
+                        coplanar = false;
+            if (!coplanar) continue;
+            // An edge of t in none of those faces becomes a boundary edge; if
+            // it already is one (of another part of the surface), the surface
+            // would pinch there.
+            bool ok = true;
+            for (int a = 0; a < 4 && ok; ++a)
+                for (int b = a + 1; b < 4 && ok; ++b) {
+                    // edge (a, b) lies in the faces opposite the two other corners
+                    int o1 = -1, o2 = -1;
+                    for (int k = 0; k < 4; ++k)
+                        if (k != a && k != b) (o1 < 0 ? o1 : o2) = k;
+                    const bool inBoundaryFaceOfT = faceOut[o1] || faceOut[o2];
+                    if (!inBoundaryFaceOfT && boundaryEdge.count(edgeKey(c[a], c[b]))) ok = false;
+                }
+            if (!ok) continue;
+            drop[t] = 1;
+            for (int k = 0; k < 4; ++k) touched[c[k]] = 1;
+            ++n;
+        }
+        if (n == 0) break;
+        std::vector<int32_t> kept;
+        kept.reserve(m.tets.size());
+        for (std::size_t t = 0; t < m.nTets(); ++t)
+            if (!drop[t]) kept.insert(kept.end(), m.tets.begin() + 4 * t, m.tets.begin() + 4 * t + 4);
+        m.tets.swap(kept);  // (node indices kept: the caller compacts)
+        removed += n;
+    }
+    return removed;
+}
+
+std::vector<int32_t> featureEdgesOf(const TetMesh& m, const Surface& s, double featureAngleDeg) {
+    // The two boundary triangles of every boundary edge.
+    std::unordered_map<uint64_t, std::array<int32_t, 2>> faces;
+    faces.reserve(s.edges.size());
+    for (std::size_t f = 0; f < s.nTriangles(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            auto [it, fresh] = faces.try_emplace(edgeKey(s.triangles[3 * f + k], s.triangles[3 * f + (k + 1) % 3]),
+                                                 std::array<int32_t, 2>{static_cast<int32_t>(f), -1});
+            if (!fresh) it->second[1] = static_cast<int32_t>(f);
+        }
+    const double cosMax = std::cos(featureAngleDeg * M_PI / 180.0);
+    std::vector<int32_t> out;
+    for (std::size_t e = 0; e < s.nEdges(); ++e) {
+        const auto& f = faces.at(edgeKey(s.edges[2 * e], s.edges[2 * e + 1]));
+        if (f[1] < 0) continue;
+        const Vec n1 = triangleNormal(m, &s.triangles[3 * f[0]]), n2 = triangleNormal(m, &s.triangles[3 * f[1]]);
+        const double c = n1 * n2 / std::sqrt(n1.squared_length() * n2.squared_length());
+        if (c < cosMax) {
+            out.push_back(s.edges[2 * e]);
+            out.push_back(s.edges[2 * e + 1]);
+        }
+    }
+    return out;
+}
+
+// Surface patches: boundary triangles connected across non-feature edges
+// share a patch (numbered from 1).  CGAL fits one smooth surface per patch
+// and projects the moved boundary vertices onto it, and it keeps every edge
+// between two patches as a feature: a box's faces stay flat, its edges sharp.
+std::map<std::array<int, 3>, int> surfacePatches(const Surface& s, const std::vector<int32_t>& features,
+                                                 std::size_t* nPatches) {
+    std::unordered_map<uint64_t, int> isFeature;
+    for (std::size_t e = 0; e < features.size() / 2; ++e) isFeature[edgeKey(features[2 * e], features[2 * e + 1])] = 1;
+    std::unordered_map<uint64_t, std::vector<int32_t>> edgeFaces;
+    for (std::size_t f = 0; f < s.nTriangles(); ++f)
+        for (int k = 0; k < 3; ++k)
+            edgeFaces[edgeKey(s.triangles[3 * f + k], s.triangles[3 * f + (k + 1) % 3])].push_back(
+                static_cast<int32_t>(f));
+    std::vector<int> patch(s.nTriangles(), 0);
+    int next = 0;
+    std::vector<int32_t> stack;
+    for (std::size_t seed = 0; seed < s.nTriangles(); ++seed) {
+        if (patch[seed]) continue;
+        patch[seed] = ++next;
+        stack.assign(1, static_cast<int32_t>(seed));
+        while (!stack.empty()) {
+            const int32_t f = stack.back();
+            stack.pop_back();
+            for (int k = 0; k < 3; ++k) {
+                const uint64_t key = edgeKey(s.triangles[3 * f + k], s.triangles[3 * f + (k + 1) % 3]);
+                if (isFeature.count(key)) continue;
+                for (int32_t g : edgeFaces[key])
+                    if (!patch[g]) {
+                        patch[g] = next;
+                        stack.push_back(g);
+                    }
+            }
+        }
+    }
+    *nPatches = static_cast<std::size_t>(next);
+    // Keyed as CGAL's tet-soup loader looks facets up: the smallest index
+    // first, in either orientation.
+    std::map<std::array<int, 3>, int> out;
+    for (std::size_t f = 0; f < s.nTriangles(); ++f) {
+        std::array<int, 3> t{s.triangles[3 * f], s.triangles[3 * f + 1], s.triangles[3 * f + 2]};
+        std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+        out[t] = patch[f];
+    }
+    return out;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+}
+
+std::vector<Triangle> surfaceTriangles(const TetMesh& m, const Surface& s) {
+    std::vector<Triangle> tris;
+    tris.reserve(s.nTriangles());
+    for (std::size_t f = 0; f < s.nTriangles(); ++f)
+        tris.emplace_back(point(m, s.triangles[3 * f]), point(m, s.triangles[3 * f + 1]),
+                          point(m, s.triangles[3 * f + 2]));
+    return tris;
+}
+
+// Largest distance from the vertices and face centres of surface `from` to
+// the triangles of `to`.
+double sampledDistance(const std::vector<Triangle>& from, const std::vector<Triangle>& to) {
+    AabbTree tree(to.begin(), to.end());
+    tree.accelerate_distance_queries();
+    double d2 = 0;
+    for (const Triangle& t : from) {
+        for (int k = 0; k < 3; ++k) d2 = std::max(d2, tree.squared_distance(t.vertex(k)));
+        d2 = std::max(d2, tree.squared_distance(CGAL::centroid(t)));
+    }
+    return std::sqrt(d2);
+}
+
+// The cells of the body; dimension[i] is CGAL's in_dimension of node i (0
+// corner, 1 on a feature edge, 2 on the surface, 3 inside).
+TetMesh extract(const Tr& tr, std::vector<int>& dimension) {
+    TetMesh m;
+    dimension.clear();
+    std::unordered_map<Vh, int32_t> index;
+    for (auto c : tr.finite_cell_handles()) {
+        if (c->subdomain_index() == 0) continue;
+        std::array<int32_t, 4> ids{};
+        for (int k = 0; k < 4; ++k) {
+            const Vh v = c->vertex(k);
+            auto it = index.find(v);
+            if (it == index.end()) {
+                if (index.size() >= static_cast<std::size_t>(std::numeric_limits<int32_t>::max()))
+                    throw InputError("improveMesh: the remeshed mesh has too many nodes for 32-bit indices");
+                it = index.emplace(v, static_cast<int32_t>(index.size())).first;
+                const Point& p = v->point();
+                m.nodes.push_back(p.x());
+                m.nodes.push_back(p.y());
+                m.nodes.push_back(p.z());
+                dimension.push_back(v->in_dimension());
+            }
+            ids[k] = it->second;
+        }
+        m.tets.insert(m.tets.end(), ids.begin(), ids.end());
+    }
+    for (std::size_t t = 0; t < m.nTets(); ++t)
+        if (tetSixVolume(m, t) < 0) std::swap(m.tets[4 * t + 2], m.tets[4 * t + 3]);
+    return m;
+}
+
+// Moves the surface nodes (dimension 2) onto the closest point of the input
+// surface.  CGAL projects them onto a moving-least-squares fit of it, which
+// on a coarsely faceted curved surface lies inside it (a 32-gon cylinder
+// lost 1 % of its volume).  A move that would flatten or invert a tet (its
+// flatness below half of what it was) is undone.  Returns the number moved.
+std::size_t projectOntoInput(TetMesh& m, const std::vector<int>& dimension, const std::vector<Triangle>& input) {
+    AabbTree tree(input.begin(), input.end());
+    tree.accelerate_distance_queries();
+    const std::vector<double> before = m.nodes;
+    std::vector<double> flat0(m.nTets());
+    for (std::size_t t = 0; t < m.nTets(); ++t) flat0[t] = flatness(m, t);
+    std::vector<char> moved(m.nNodes(), 0);
+    for (std::size_t i = 0; i < m.nNodes(); ++i) {
+        if (dimension[i] != 2) continue;
+        const Point p = point(m, i), q = tree.closest_point(p);
+        if (p == q) continue;
+        m.nodes[3 * i] = q.x();
+        m.nodes[3 * i + 1] = q.y();
+        m.nodes[3 * i + 2] = q.z();
+        moved[i] = 1;
+    }
+    for (int pass = 0; pass < 10; ++pass) {
+        bool undone = false;
+        for (std::size_t t = 0; t < m.nTets(); ++t) {
+            const int32_t* c = &m.tets[4 * t];
+            if (!(moved[c[0]] || moved[c[1]] || moved[c[2]] || moved[c[3]])) continue;
+            if (tetSixVolume(m, t) > 0 && flatness(m, t) >= 0.5 * flat0[t]) continue;
+            for (int k = 0; k < 4; ++k)
+                if (moved[c[k]]) {
+                    std::copy(before.begin() + 3 * c[k], before.begin() + 3 * c[k] + 3, m.nodes.begin() + 3 * c[k]);
+                    moved[c[k]] = 0;
+                    undone = true;
+                }
+        }
+        if (!undone) break;
+    }
+    return static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+}
+
+}  // namespace
+
+std::vector<int32_t> boundaryFeatureEdges(const TetMesh& m, double featureAngleDeg) {
+    checkMesh(m);
+    return featureEdgesOf(m, extractSurface(m), featureAngleDeg);
+}
+
+RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt, double peelRatio) {
+    if (!(std::isfinite(opt.targetEdge)))
+        throw InputError(cat("improveMesh: cellSize must be finite (<= 0: the median boundary edge), got ",
+                             opt.targetEdge));
+    if (opt.iterations < 1 || opt.iterations > 1000)
+        throw InputError(cat("improveMesh: iterations must be 1..1000, got ", opt.iterations));
+    if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg < 180))
+        throw InputError(cat("improveMesh: featureAngle must be in (0, 180) degrees, got ", opt.featureAngleDeg));
+    if (input.nTets() == 0) throw InputError("improveMesh: the mesh has no tetrahedra");
+    checkMesh(input);
+    TetMesh m = compact(input);
+    const Surface s0 = extractSurface(m);  // names a non-manifold surface
+    const std::vector<Triangle> inputSurface = surfaceTriangles(m, s0);
+
+    RemeshResult r;
+    r.featureEdges = featureEdgesOf(m, s0, opt.featureAngleDeg);
+    {
+        std::vector<int> degree(m.nNodes(), 0);
+        for (int32_t v : r.featureEdges) ++degree[v];
+        for (std::size_t v = 0; v < m.nNodes(); ++v)
+            if (degree[v] == 1 || degree[v] >= 3) r.corners.push_back(static_cast<int32_t>(v));
+    }
+    std::vector<double> lengths;
+    lengths.reserve(s0.nEdges());
+    for (std::size_t e = 0; e < s0.nEdges(); ++e)
+        lengths.push_back(std::sqrt(CGAL::squared_distance(point(m, s0.edges[2 * e]), point(m, s0.edges[2 * e + 1]))));
+    r.targetEdge = opt.targetEdge > 0 ? opt.targetEdge : median(lengths);
+    if (!(r.targetEdge > 0)) throw InputError("improveMesh: the mesh's boundary edges have zero length");
+
+    // Feature edges stay features of the peeled mesh: peeling exposes faces
+    // within a flat tet's height of the old ones, and the feature map below
+    // is keyed on the input's vertices, which peeling keeps.
+    r.peeled = peelFlatBoundaryTets(m, peelRatio, std::cos(opt.featureAngleDeg * M_PI / 180.0));
+    m = compact(m);
+    if (m.nTets() == 0) throw InputError("improveMesh: every tetrahedron of the mesh is a flat boundary sliver");
+
+    Tr tr;
+    try {
+        std::vector<Point> points;
+        points.reserve(m.nNodes());
+        for (std::size_t i = 0; i < m.nNodes(); ++i) points.push_back(point(m, i));
+        std::vector<std::array<int, 5>> cells(m.nTets());
+        for (std::size_t t = 0; t < m.nTets(); ++t) {
+            for (int k = 0; k < 4; ++k) cells[t][k] = m.tets[4 * t + k];
+            cells[t][4] = 1;  // one subdomain: the body
+        }
+        // Patches of the peeled mesh's surface, from the input's features
+        // (found by position: peeling renumbered nothing, compacting did).
+        std::map<std::array<double, 3>, int32_t> nodeAt;
+        for (std::size_t i = 0; i < m.nNodes(); ++i)
+            nodeAt[{m.nodes[3 * i], m.nodes[3 * i + 1], m.nodes[3 * i + 2]}] = static_cast<int32_t>(i);
+        const TetMesh original = compact(input);
+        std::vector<int32_t> features;  // in m's numbering
+        for (std::size_t e = 0; e < r.featureEdges.size() / 2; ++e) {
+            const int32_t a = r.featureEdges[2 * e], b = r.featureEdges[2 * e + 1];
+            auto ia = nodeAt.find({original.nodes[3 * a], original.nodes[3 * a + 1], original.nodes[3 * a + 2]});
+            auto ib = nodeAt.find({original.nodes[3 * b], original.nodes[3 * b + 1], original.nodes[3 * b + 2]});
+            if (ia != nodeAt.end() && ib != nodeAt.end()) {
+                features.push_back(ia->second);
+                features.push_back(ib->second);
+            }
+        }
+        const std::map<std::array<int, 3>, int> patches = surfacePatches(extractSurface(m), features, &r.patches);
+        std::vector<Vh> handles;
+        if (!CGAL::build_triangulation<Tr, false>(tr, points, cells, patches, handles))
+            throw InputError("improveMesh: CGAL could not build a triangulation from the mesh (its boundary is not "
+                             "a closed manifold surface)");
+
+        // Features inside a patch (a crease that fades out) are constrained too.
+        ConstrainedEdges constrained;
+        for (std::size_t e = 0; e < features.size() / 2; ++e)
+            constrained.edges->insert(orderedPair(handles[features[2 * e] + 1], handles[features[2 * e + 1] + 1]));
+        CGAL::tetrahedral_isotropic_remeshing(
+            tr, r.targetEdge,
+            CGAL::parameters::number_of_iterations(static_cast<unsigned>(opt.iterations))
+                .edge_is_constrained_map(constrained)
+                .remesh_boundaries(true)
+                .smooth_constrained_edges(false));
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(cat("improveMesh: CGAL's tetrahedral remeshing failed: ", e.what()));
+    }
+
+    std::vector<int> dimension;
+    r.mesh = extract(tr, dimension);
+    if (r.mesh.nTets() == 0) throw InputError("improveMesh: the remeshed mesh has no tetrahedra");
+    try {
+        checkMesh(r.mesh);
+        r.projected = projectOntoInput(r.mesh, dimension, inputSurface);
+        const Surface s1 = extractSurface(r.mesh);
+        const std::vector<Triangle> outputSurface = surfaceTriangles(r.mesh, s1);
+        r.maxDeviationOut = sampledDistance(outputSurface, inputSurface);
+        r.maxDeviationIn = sampledDistance(inputSurface, outputSurface);
+        r.maxDeviation = std::max(r.maxDeviationOut, r.maxDeviationIn);
+    } catch (const InputError& e) {
+        throw InputError(cat("improveMesh: CGAL's remeshing produced an invalid mesh (", e.what(),
+                             "); try another cellSize or fewer iterations"));
+    }
+    return r;
+}
+
+}  // namespace qdem

@@ -1,0 +1,60 @@
+// Sliver removal from an existing tetrahedral mesh with CGAL's tetrahedral
+// isotropic remeshing (Tetrahedral_remeshing, CGAL >= 5.1).  Compiled only
+// when CGAL is available (QDEM_HAVE_CGAL, target qdemmesher).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "TetMesh.hpp"
+
+namespace qdem {
+
+struct RemeshOptions {
+    // Target edge length of the result; <= 0 selects the median length of
+    // the input's boundary edges (the resolution of the surface it keeps).
+    double targetEdge = -1.0;
+    // Full passes of split / collapse / flip / smooth (CGAL adds three passes
+    // of flip and smooth after them).
+    int iterations = 5;
+    // A boundary edge is a feature (kept: its vertices do not move, it is
+    // only split or collapsed along itself) where the outward normals of its
+    // two boundary triangles turn by more than this angle [degrees].
+    double featureAngleDeg = 40.0;
+};
+
+struct RemeshResult {
+    TetMesh mesh;                         // positively oriented, no unused nodes
+    std::vector<int32_t> featureEdges;    // 2 per feature edge of the input (input node indices)
+    std::vector<int32_t> corners;         // input nodes fixed in place: >= 3 or exactly 1 feature edge
+    std::size_t peeled = 0;               // flat boundary tets removed before remeshing
+    std::size_t projected = 0;            // surface nodes moved onto the input surface afterwards
+    std::size_t patches = 0;              // smooth surface patches between the feature edges
+    double targetEdge = 0;                // the target edge length used
+    double maxDeviation = 0;              // two-sided sampled distance between the surfaces (below)
+    double maxDeviationOut = 0;           // result's boundary vertices and face centres to the input surface
+    double maxDeviationIn = 0;            // input's boundary vertices and face centres to the result's surface
+};
+
+// Remeshes the interior and the boundary of `in` to a uniform edge length,
+// removing slivers, while the boundary surface keeps its shape: boundary
+// vertices move only on the surface (CGAL projects them back onto a local
+// fit of the input surface), feature edges and corners stay.
+//
+// Flat tets lying in the boundary (two faces on it, all four nodes on it,
+// height below peelRatio x their longest edge) cannot be removed by the
+// remesher, which flips interior edges only: they are removed first, which
+// exposes their two other faces, within the tet's height of the old surface.
+//
+// Throws InputError naming the problem for an invalid input (see checkMesh;
+// a non-manifold surface) or when CGAL fails or yields an invalid mesh.
+// The deviation is sampled at vertices and face centres with an AABB tree of
+// the other surface's triangles (a lower bound of the Hausdorff distance,
+// equal to it for faces smaller than their curvature radius).
+RemeshResult remeshTets(const TetMesh& in, const RemeshOptions& opt, double peelRatio = 0.02);
+
+// Feature edges of a mesh's boundary (pairs of node indices, a < b): the
+// outward normals of the two boundary triangles turn by more than
+// featureAngleDeg.
+std::vector<int32_t> boundaryFeatureEdges(const TetMesh& m, double featureAngleDeg);
+
+}  // namespace qdem
