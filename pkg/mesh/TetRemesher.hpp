@@ -15,7 +15,7 @@ struct RemeshOptions {
     double targetEdge = -1.0;
     // Full passes of split / collapse / flip / smooth (CGAL adds three passes
     // of flip and smooth after them).
-    int iterations = 5;
+    int iterations = 8;
     // A boundary edge is a feature (kept: its vertices do not move, it is
     // only split or collapsed along itself) where the outward normals of its
     // two boundary triangles turn by more than this angle [degrees].

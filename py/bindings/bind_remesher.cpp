@@ -16,7 +16,7 @@ namespace py = pybind11;
 namespace {
 
 constexpr const char* kRemeshDoc =
-    "remeshTets(nodes, tets, targetEdge=-1.0, iterations=5, featureAngle=40.0, peelRatio=0.02)\n\n"
+    "remeshTets(nodes, tets, targetEdge=-1.0, iterations=8, featureAngle=40.0, peelRatio=0.02)\n\n"
     "Remesh a tetrahedral mesh to a uniform edge length with CGAL's tetrahedral isotropic remeshing,\n"
     "keeping its boundary surface (vertices move on it), feature edges (outward normals turning by more\n"
     "than featureAngle degrees) and corners.  Flat boundary tets (two faces on the boundary, height below\n"
@@ -75,7 +75,7 @@ void bindRemesher(py::module_& m) {
             d["maxDeviationIn"] = r.maxDeviationIn;
             return d;
         },
-        py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 5,
+        py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 8,
         py::arg("featureAngle") = 40.0, py::arg("peelRatio") = 0.02, kRemeshDoc);
     m.def(
         "boundaryFeatureEdges",
@@ -92,7 +92,7 @@ void bindRemesher(py::module_& m) {
         [](const py::object&, const py::object&, double, int, double, double) -> py::dict {
             throw std::runtime_error("qdem was built without CGAL: install libcgal-dev and rebuild");
         },
-        py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 5,
+        py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 8,
         py::arg("featureAngle") = 40.0, py::arg("peelRatio") = 0.02, kRemeshDoc);
     m.def(
         "boundaryFeatureEdges",

@@ -15,6 +15,7 @@ from . import modes
 from .material import QdemMat
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
 from .piece import Piece
+from .remesh import improveMesh, meshQuality
 from .restart import loadState, saveState
 from .shapes import ballMesh
 from .world import World, addPiece, defaultWorld, reset, stableDt
@@ -37,4 +38,5 @@ else:
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "splitMesh", "defaultWorld",
-           "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError"]
+           "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError",
+           "improveMesh", "meshQuality"]

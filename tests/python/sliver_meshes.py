@@ -26,16 +26,22 @@ def _grid(n0, n1):
     return tris
 
 
-def boxSurface(size=(0.2, 0.1, 0.1), h=0.02):
-    """A box centred on the origin, each face a grid of cells about h."""
+def boxSurface(size=(0.2, 0.1, 0.1), h=0.02, jitter=0.25, seed=1):
+    """A box centred on the origin, each face a grid of cells about h whose
+    vertices are moved at random by up to ``jitter`` cells within the face
+    (along the edge for an edge's vertices; corners stay): flat faces, sharp
+    edges, and the irregular triangles that make TetGen leave slivers."""
     size = np.asarray(size, float)
+    rng = np.random.default_rng(seed)
     n = np.maximum(1, np.round(size / h).astype(int))
     verts, tris, index = [], [], {}
 
     def vid(ijk):
         if ijk not in index:
             index[ijk] = len(verts)
-            verts.append((np.asarray(ijk) / n - 0.5) * size)
+            free = np.array([0 < ijk[a] < n[a] for a in range(3)])
+            shift = np.where(free, rng.uniform(-jitter, jitter, 3), 0.0)
+            verts.append(((np.asarray(ijk) + shift) / n - 0.5) * size)
         return index[ijk]
 
     for axis in range(3):
