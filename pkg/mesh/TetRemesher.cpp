@@ -103,77 +103,6 @@ double flatness(const TetMesh& m, std::size_t t) {
     return maxArea2 > 0 && maxEdge2 > 0 ? six / std::sqrt(maxArea2) / std::sqrt(maxEdge2) : 0.0;
 }
 
-// Removes flat tets lying in the boundary (two or three faces on it, their
-// normals within acos(cosMax) of each other) whose removal keeps the surface
-// manifold; repeated while any is found.  Returns the number removed.
-std::size_t peelFlatBoundaryTets(TetMesh& m, double ratio, double cosMax) {
-    std::size_t removed = 0;
-    for (int round = 0; round < 20; ++round) {
-        const Surface s = extractSurface(m);
-        std::vector<int> boundaryFaces(m.nTets(), 0);
-        std::vector<int32_t> firstFace(m.nTets(), -1), nextFace(s.nTriangles(), -1);
-        for (std::size_t f = 0; f < s.nTriangles(); ++f) {
-            const int32_t t = s.triTet[f];
-            ++boundaryFaces[t];
-            nextFace[f] = firstFace[t];
-            firstFace[t] = static_cast<int32_t>(f);
-        }
-        std::unordered_map<uint64_t, int> boundaryEdge;
-        boundaryEdge.reserve(s.edges.size());
-        for (std::size_t e = 0; e < s.nEdges(); ++e) boundaryEdge[edgeKey(s.edges[2 * e], s.edges[2 * e + 1])] = 1;
-        std::vector<char> drop(m.nTets(), 0), touched(m.nNodes(), 0);
-        std::size_t n = 0;
-        for (std::size_t t = 0; t < m.nTets(); ++t) {
-            if (boundaryFaces[t] < 2 || boundaryFaces[t] > 3 || flatness(m, t) >= ratio) continue;
-            const int32_t* c = &m.tets[4 * t];
-            if (touched[c[0]] || touched[c[1]] || touched[c[2]] || touched[c[3]]) continue;  // next round
-            // Its faces on the boundary (the face opposite corner k), which
-            // must be nearly coplanar: a flat tet folded over a feature edge
-            // is the feature itself.
-            std::array<bool, 4> faceOut{};
-            std::vector<Vec> normals;
-            for (int32_t f = firstFace[t]; f >= 0; f = nextFace[f]) {
-                const int32_t* tri = &s.triangles[3 * f];
-                for (int k = 0; k < 4; ++k)
-                    if (c[k] != tri[0] && c[k] != tri[1] && c[k] != tri[2]) faceOut[k] = true;
-                normals.push_back(triangleNormal(m, tri));
-            }
-            bool coplanar = true;
-            for (std::size_t i = 0; i < normals.size(); ++i)
-                for (std::size_t j = i + 1; j < normals.size(); ++j)
-                    if (normals[i] * normals[j] <
-                        cosMax * std::sqrt(normals[i].squared_length() * normals[j].squared_length()))
-                        coplanar = false;
-            if (!coplanar) continue;
-            // An edge of t in none of those faces becomes a boundary edge; if
-            // it already is one (of another part of the surface), the surface
-            // would pinch there.
-            bool ok = true;
-            for (int a = 0; a < 4 && ok; ++a)
-                for (int b = a + 1; b < 4 && ok; ++b) {
-                    // edge (a, b) lies in the faces opposite the two other corners
-                    int o1 = -1, o2 = -1;
-                    for (int k = 0; k < 4; ++k)
-                        if (k != a && k != b) (o1 < 0 ? o1 : o2) = k;
-                    const bool inBoundaryFaceOfT = faceOut[o1] || faceOut[o2];
-                    if (!inBoundaryFaceOfT && boundaryEdge.count(edgeKey(c[a], c[b]))) ok = false;
-                }
-            if (!ok) continue;
-            drop[t] = 1;
-            for (int k = 0; k < 4; ++k) touched[c[k]] = 1;
-            ++n;
-        }
-        if (n == 0) break;
-        std::vector<int32_t> kept;
-        kept.reserve(m.tets.size());
-        for (std::size_t t = 0; t < m.nTets(); ++t)
-            if (!drop[t]) kept.insert(kept.end(), m.tets.begin() + 4 * t, m.tets.begin() + 4 * t + 4);
-        m.tets.swap(kept);  // (node indices kept: the caller compacts)
-        removed += n;
-    }
-    return removed;
-}
-
 std::vector<int32_t> featureEdgesOf(const TetMesh& m, const Surface& s, double featureAngleDeg) {
     // The two boundary triangles of every boundary edge.
     std::unordered_map<uint64_t, std::array<int32_t, 2>> faces;
@@ -350,7 +279,7 @@ std::vector<int32_t> boundaryFeatureEdges(const TetMesh& m, double featureAngleD
     return featureEdgesOf(m, extractSurface(m), featureAngleDeg);
 }
 
-RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt, double peelRatio) {
+RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt) {
     if (!(std::isfinite(opt.targetEdge)))
         throw InputError(cat("improveMesh: cellSize must be finite (<= 0: the median boundary edge), got ",
                              opt.targetEdge));
@@ -379,13 +308,6 @@ RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt, double p
     r.targetEdge = opt.targetEdge > 0 ? opt.targetEdge : median(lengths);
     if (!(r.targetEdge > 0)) throw InputError("improveMesh: the mesh's boundary edges have zero length");
 
-    // Feature edges stay features of the peeled mesh: peeling exposes faces
-    // within a flat tet's height of the old ones, and the feature map below
-    // is keyed on the input's vertices, which peeling keeps.
-    r.peeled = peelFlatBoundaryTets(m, peelRatio, std::cos(opt.featureAngleDeg * M_PI / 180.0));
-    m = compact(m);
-    if (m.nTets() == 0) throw InputError("improveMesh: every tetrahedron of the mesh is a flat boundary sliver");
-
     Tr tr;
     try {
         std::vector<Point> points;
@@ -396,23 +318,8 @@ RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt, double p
             for (int k = 0; k < 4; ++k) cells[t][k] = m.tets[4 * t + k];
             cells[t][4] = 1;  // one subdomain: the body
         }
-        // Patches of the peeled mesh's surface, from the input's features
-        // (found by position: peeling renumbered nothing, compacting did).
-        std::map<std::array<double, 3>, int32_t> nodeAt;
-        for (std::size_t i = 0; i < m.nNodes(); ++i)
-            nodeAt[{m.nodes[3 * i], m.nodes[3 * i + 1], m.nodes[3 * i + 2]}] = static_cast<int32_t>(i);
-        const TetMesh original = compact(input);
-        std::vector<int32_t> features;  // in m's numbering
-        for (std::size_t e = 0; e < r.featureEdges.size() / 2; ++e) {
-            const int32_t a = r.featureEdges[2 * e], b = r.featureEdges[2 * e + 1];
-            auto ia = nodeAt.find({original.nodes[3 * a], original.nodes[3 * a + 1], original.nodes[3 * a + 2]});
-            auto ib = nodeAt.find({original.nodes[3 * b], original.nodes[3 * b + 1], original.nodes[3 * b + 2]});
-            if (ia != nodeAt.end() && ib != nodeAt.end()) {
-                features.push_back(ia->second);
-                features.push_back(ib->second);
-            }
-        }
-        const std::map<std::array<int, 3>, int> patches = surfacePatches(extractSurface(m), features, &r.patches);
+        const std::vector<int32_t>& features = r.featureEdges;
+        const std::map<std::array<int, 3>, int> patches = surfacePatches(s0, features, &r.patches);
         std::vector<Vh> handles;
         if (!CGAL::build_triangulation<Tr, false>(tr, points, cells, patches, handles))
             throw InputError("improveMesh: CGAL could not build a triangulation from the mesh (its boundary is not "

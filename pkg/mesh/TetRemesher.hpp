@@ -24,9 +24,8 @@ struct RemeshOptions {
 
 struct RemeshResult {
     TetMesh mesh;                         // positively oriented, no unused nodes
-    std::vector<int32_t> featureEdges;    // 2 per feature edge of the input (input node indices)
+    std::vector<int32_t> featureEdges;    // 2 per feature edge of the input (node indices, unused nodes dropped)
     std::vector<int32_t> corners;         // input nodes fixed in place: >= 3 or exactly 1 feature edge
-    std::size_t peeled = 0;               // flat boundary tets removed before remeshing
     std::size_t projected = 0;            // surface nodes moved onto the input surface afterwards
     std::size_t patches = 0;              // smooth surface patches between the feature edges
     double targetEdge = 0;                // the target edge length used
@@ -40,17 +39,12 @@ struct RemeshResult {
 // vertices move only on the surface (CGAL projects them back onto a local
 // fit of the input surface), feature edges and corners stay.
 //
-// Flat tets lying in the boundary (two faces on it, all four nodes on it,
-// height below peelRatio x their longest edge) cannot be removed by the
-// remesher, which flips interior edges only: they are removed first, which
-// exposes their two other faces, within the tet's height of the old surface.
-//
 // Throws InputError naming the problem for an invalid input (see checkMesh;
 // a non-manifold surface) or when CGAL fails or yields an invalid mesh.
 // The deviation is sampled at vertices and face centres with an AABB tree of
 // the other surface's triangles (a lower bound of the Hausdorff distance,
 // equal to it for faces smaller than their curvature radius).
-RemeshResult remeshTets(const TetMesh& in, const RemeshOptions& opt, double peelRatio = 0.02);
+RemeshResult remeshTets(const TetMesh& in, const RemeshOptions& opt);
 
 // Feature edges of a mesh's boundary (pairs of node indices, a < b): the
 // outward normals of the two boundary triangles turn by more than

@@ -16,13 +16,12 @@ namespace py = pybind11;
 namespace {
 
 constexpr const char* kRemeshDoc =
-    "remeshTets(nodes, tets, targetEdge=-1.0, iterations=8, featureAngle=40.0, peelRatio=0.02)\n\n"
+    "remeshTets(nodes, tets, targetEdge=-1.0, iterations=8, featureAngle=40.0)\n\n"
     "Remesh a tetrahedral mesh to a uniform edge length with CGAL's tetrahedral isotropic remeshing,\n"
     "keeping its boundary surface (vertices move on it), feature edges (outward normals turning by more\n"
-    "than featureAngle degrees) and corners.  Flat boundary tets (two faces on the boundary, height below\n"
-    "peelRatio x longest edge) are removed first.  targetEdge <= 0: the median boundary edge.\n"
+    "than featureAngle degrees) and corners.  targetEdge <= 0: the median boundary edge.\n"
     "Returns a dict: nodes (N,3), tets (T,4), featureEdges (E,2) and corners (C,) in the input's node\n"
-    "indices (unused nodes dropped first), peeled, patches, projected, targetEdge, maxDeviation, maxDeviationOut,\n"
+    "indices (unused nodes dropped first), patches, projected, targetEdge, maxDeviation, maxDeviationOut,\n"
     "maxDeviationIn (sampled surface distances).  Raises ValueError naming the problem.";
 
 constexpr const char* kFeatureDoc =
@@ -47,8 +46,7 @@ void bindRemesher(py::module_& m) {
     using Tets = py::array_t<int32_t, py::array::c_style | py::array::forcecast>;
     m.def(
         "remeshTets",
-        [](const Nodes& nodes, const Tets& tets, double targetEdge, int iterations, double featureAngle,
-           double peelRatio) {
+        [](const Nodes& nodes, const Tets& tets, double targetEdge, int iterations, double featureAngle) {
             qdem::TetMesh in;
             in.nodes = qdem::py_::flatten<double>(nodes, 3, "nodes");
             in.tets = qdem::py_::flatten<int32_t>(tets, 4, "tets");
@@ -59,14 +57,13 @@ void bindRemesher(py::module_& m) {
             qdem::RemeshResult r;
             {
                 py::gil_scoped_release release;
-                r = qdem::remeshTets(in, opt, peelRatio);
+                r = qdem::remeshTets(in, opt);
             }
             py::dict d;
             d["nodes"] = toArray(r.mesh.nodes, 3);
             d["tets"] = toArray(r.mesh.tets, 4);
             d["featureEdges"] = toArray(r.featureEdges, 2);
             d["corners"] = toArray(r.corners, 1).attr("ravel")();
-            d["peeled"] = r.peeled;
             d["patches"] = r.patches;
             d["projected"] = r.projected;
             d["targetEdge"] = r.targetEdge;
@@ -76,7 +73,7 @@ void bindRemesher(py::module_& m) {
             return d;
         },
         py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 8,
-        py::arg("featureAngle") = 40.0, py::arg("peelRatio") = 0.02, kRemeshDoc);
+        py::arg("featureAngle") = 40.0, kRemeshDoc);
     m.def(
         "boundaryFeatureEdges",
         [](const Nodes& nodes, const Tets& tets, double featureAngle) {
@@ -89,11 +86,11 @@ void bindRemesher(py::module_& m) {
 #else
     m.def(
         "remeshTets",
-        [](const py::object&, const py::object&, double, int, double, double) -> py::dict {
+        [](const py::object&, const py::object&, double, int, double) -> py::dict {
             throw std::runtime_error("qdem was built without CGAL: install libcgal-dev and rebuild");
         },
         py::arg("nodes"), py::arg("tets"), py::arg("targetEdge") = -1.0, py::arg("iterations") = 8,
-        py::arg("featureAngle") = 40.0, py::arg("peelRatio") = 0.02, kRemeshDoc);
+        py::arg("featureAngle") = 40.0, kRemeshDoc);
     m.def(
         "boundaryFeatureEdges",
         [](const py::object&, const py::object&, double) -> py::object {

@@ -86,8 +86,8 @@ def improveMesh(mesh, cellSize=None, iterations=8, featureAngle=40.0, maxVolumeC
     The returned Mesh carries ``improveReport``, a dict: before / after
     (meshQuality of each: stepFactor, worstHeightRatio, medianElementSize,
     volume), volumeChange (relative), maxDeviation [m] and its ratio to
-    cellSize, cellSize, featureEdges, corners, patches, peeled (flat boundary
-    tets removed first), nTetsBefore, nTets, seconds.  verbose=True prints it."""
+    cellSize, cellSize, featureEdges, corners, patches (smooth surface
+    regions between feature edges), nTetsBefore, nTets, seconds.  verbose=True prints it."""
     mesh = asMesh(mesh)
     if not getattr(_core, "haveCgal", False):
         raise RuntimeError("improveMesh: qdem was built without CGAL: install libcgal-dev and rebuild (make build)")
@@ -111,7 +111,7 @@ def improveMesh(mesh, cellSize=None, iterations=8, featureAngle=40.0, maxVolumeC
     report = {"before": before, "after": after, "volumeChange": after["volume"] / before["volume"] - 1.0,
               "maxDeviation": r["maxDeviation"], "deviationPerCell": r["maxDeviation"] / h, "cellSize": h,
               "featureEdges": len(r["featureEdges"]), "corners": len(r["corners"]), "patches": r["patches"],
-              "peeled": r["peeled"], "nTetsBefore": mesh.nTets, "nTets": out.nTets, "seconds": seconds}
+              "nTetsBefore": mesh.nTets, "nTets": out.nTets, "seconds": seconds}
     if verbose:
         print(_describe(report))
     if abs(report["volumeChange"]) > maxVolumeChange:
@@ -132,8 +132,8 @@ def _describe(r):
     b, a = r["before"], r["after"]
     return ("improveMesh: %d -> %d tets at cellSize %.3g m in %.2f s; worst element cuts the step %.3gx -> %.3gx "
             "against the median (height/longest edge %.3g -> %.3g); volume %+.3g %%; surface within %.3g m "
-            "(%.3g x cellSize); %d feature edges, %d corners, %d patches kept; %d flat boundary tets peeled"
+            "(%.3g x cellSize); %d feature edges, %d corners, %d surface patches kept"
             % (r["nTetsBefore"], r["nTets"],
                r["cellSize"], r["seconds"], b["stepFactor"], a["stepFactor"], b["worstHeightRatio"],
                a["worstHeightRatio"], 100 * r["volumeChange"], r["maxDeviation"], r["deviationPerCell"],
-               r["featureEdges"], r["corners"], r["patches"], r["peeled"]))
+               r["featureEdges"], r["corners"], r["patches"]))

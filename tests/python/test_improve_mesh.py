@@ -149,3 +149,23 @@ def test_bad_input_and_broken_tolerances_are_refused(meshes):
     inverted[0, [2, 3]] = inverted[0, [3, 2]]
     with pytest.raises(ValueError, match="inverted|negative"):
         qdem.improveMesh((before.nodes, inverted))
+
+
+def test_a_flat_sliver_lying_on_the_surface_is_removed():
+    """A tet of height 1e-5 x its edges glued onto a face of a box (three of
+    its faces on the surface, all four nodes on it): the surface vertices
+    move, so it goes; the surface moves by its height only."""
+    box = qdem.boxMesh((0.1, 0.1, 0.1), (4, 4, 4))
+    surf = box.surface()
+    tri = surf["triangles"][np.flatnonzero(np.isclose(box.nodes[surf["triangles"]][:, :, 2], 0.05).all(axis=1))[0]]
+    apex = box.nodes[tri].mean(axis=0) + (0, 0, 1e-5 * 0.025)
+    nodes = np.vstack([box.nodes, apex])
+    tets = np.vstack([box.tets, [[tri[0], tri[1], tri[2], len(box.nodes)]]])
+    tets[-1, [1, 2]] = tets[-1, [2, 1]] if qdem.Mesh(nodes, tets, check=False).volumes()[-1] < 0 else tets[-1, [1, 2]]
+    m = qdem.Mesh(nodes, tets)
+    assert qdem.meshQuality(m)["stepFactor"] > 1000
+    out = qdem.improveMesh(m)
+    rep = out.improveReport
+    assert rep["after"]["stepFactor"] < 3
+    assert out.volumes().sum() == pytest.approx(1e-3, rel=1e-9)
+    assert rep["maxDeviation"] < 1e-6
