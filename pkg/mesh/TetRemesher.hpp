@@ -20,6 +20,10 @@ struct RemeshOptions {
     // only split or collapsed along itself) where the outward normals of its
     // two boundary triangles turn by more than this angle [degrees].
     double featureAngleDeg = 40.0;
+    // While the worst element cuts the elastic step by more than this
+    // against the median one, up to extraRounds more rounds of 3 passes.
+    double maxStepFactor = 3.0;
+    int extraRounds = 3;
 };
 
 struct RemeshResult {
@@ -27,7 +31,8 @@ struct RemeshResult {
     std::vector<int32_t> featureEdges;    // 2 per feature edge of the input (node indices, unused nodes dropped)
     std::vector<int32_t> corners;         // input nodes fixed in place: >= 3 or exactly 1 feature edge
     std::size_t projected = 0;            // surface nodes moved onto the input surface afterwards
-    std::size_t patches = 0;              // smooth surface patches between the feature edges
+    std::size_t patches = 0;
+    int rounds = 0;                       // calls of CGAL's remeshing (1 + extra rounds used)              // smooth surface patches between the feature edges
     double targetEdge = 0;                // the target edge length used
     double maxDeviation = 0;              // two-sided sampled distance between the surfaces (below)
     double maxDeviationOut = 0;           // result's boundary vertices and face centres to the input surface
