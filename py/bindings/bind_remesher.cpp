@@ -20,7 +20,7 @@ constexpr const char* kRemeshDoc =
     "Remesh a tetrahedral mesh to a uniform edge length with CGAL's tetrahedral isotropic remeshing,\n"
     "keeping its boundary surface (vertices move on it), feature edges (outward normals turning by more\n"
     "than featureAngle degrees) and corners.  targetEdge <= 0: the median boundary edge.  While the worst\n"
-    "element cuts the step by more than 3x against the median one, up to 3 more rounds of 3 passes.\n"
+    "element cuts the step by more than 2.5x against the median one, up to 3 more rounds of 3 passes.\n"
     "Returns a dict: nodes (N,3), tets (T,4), featureEdges (E,2) and corners (C,) in the input's node\n"
     "indices (unused nodes dropped first), patches, projected, rounds, targetEdge, maxDeviation, maxDeviationOut,\n"
     "maxDeviationIn (sampled surface distances).  Raises ValueError naming the problem.";
