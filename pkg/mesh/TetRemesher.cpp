@@ -361,6 +361,9 @@ RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt) {
         // worst element cuts the step by more than maxStepFactor, with the
         // boundary held (remeshing it again from its own fit drifted: a
         // bumpy ball's volume change went from -0.42 % to -0.88 %).
+        // The best round is kept: a round can also make the worst element worse.
+        Tr best;
+        double bestFactor = std::numeric_limits<double>::infinity();
         for (int round = 0; round <= opt.extraRounds; ++round) {
             CGAL::tetrahedral_isotropic_remeshing(
                 tr, r.targetEdge,
@@ -370,7 +373,16 @@ RemeshResult remeshTets(const TetMesh& input, const RemeshOptions& opt) {
                     .remesh_boundaries(round == 0)
                     .smooth_constrained_edges(false));
             r.rounds = round + 1;
-            if (stepFactor(tr) <= opt.maxStepFactor) break;
+            const double f = stepFactor(tr);
+            if (f <= opt.maxStepFactor) {
+                bestFactor = f;
+                break;
+            }
+            if (f < bestFactor) {
+                bestFactor = f;
+                best = tr;
+            }
+            if (round == opt.extraRounds) tr.swap(best);
         }
     } catch (const InputError&) {
         throw;
