@@ -10,6 +10,7 @@ namespace py = pybind11;
 void bindMesh(py::module_& m);
 void bindWorld(py::module_& m);
 void bindMesher(py::module_& m);
+void bindRemesher(py::module_& m);
 void bindSpheres(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
@@ -33,4 +34,5 @@ PYBIND11_MODULE(_core, m) {
     bindWorld(m);
     bindSpheres(m);
     bindMesher(m);
+    bindRemesher(m);
 }

@@ -21,6 +21,7 @@ from .material import QdemMat
 from .cad import meshCad
 from .mesh import Mesh, boxMesh, loadMesh, loadSurface, meshSurface, splitMesh
 from .piece import Piece
+from .remesh import improveMesh, meshQuality
 from .restart import loadState, saveState
 from .shapes import ballMesh
 from .world import World, addPiece, defaultWorld, reset, stableDt
@@ -59,4 +60,5 @@ def __dir__():
 
 __all__ = ["QdemMat", "Mesh", "Piece", "World", "StabilityError", "QdemEngine", "VtkRecorder",
            "addPiece", "boxMesh", "loadMesh", "loadSurface", "meshSurface", "meshCad", "splitMesh", "defaultWorld",
-           "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError"]
+           "reset", "stableDt", "saveState", "loadState", "ballMesh", "SetupError",
+           "improveMesh", "meshQuality"]
