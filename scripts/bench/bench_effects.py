@@ -8,14 +8,21 @@ round so that no variant always follows the same one; the load and other
 processes' CPU are recorded per run and busy runs left out of 'clean'.  A
 variant that does not exist (no zero-valued form of "point-polygon on", of
 energy tracking, ...) is null: not measured, never copied from another.
+Each run records the whole step and QDEM's own share of it (the core's
+phase timers summed over the steps, per phase too), and each effect the
+per-round ratios on/off and zero/off of both: the rounds interleave the
+variants, so a ratio compares runs that saw the same machine, where medians
+of whole runs swing 20-40 % on a shared machine.  The doc's table
+(perf_tables.py effects) reads those ratios and the minima.
 
     /usr/bin/python3.11 scripts/bench/bench_effects.py [--steps 60] [--rounds 5] [--out out/bench]
 
 Effects: viscosity, friction, edge-edge, point-polygon, energy sums, gravity
 (World switches of the same names, QdemEngine attributes), contacts (all
 contact phases on / off / the same cubes out of each other's reach), YADE
-spheres (2,025 on the stack's top / none / listed but 1 m above it), and the
-stress output (per recorder frame, not per step: 'on' only)."""
+spheres (2,025 on the stack's top / none / 1 m above it, listed with no
+piece near, as YADE's collider hands them over; and listed with every piece,
+a broad phase listing every pair: yadeSpheresAllPairs), and the stress output (per recorder frame, not per step: 'on' only)."""
 import argparse
 import json
 import math
@@ -30,9 +37,10 @@ from qdem import _core
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bench_cubes27  # noqa: E402
-from benchutil import BUSY_RULE, LoadProbe, summarise  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, stats, summarise  # noqa: E402
 
 VARIANTS = ("on", "off", "zero")
+OFF_OF = {"yadeSpheresAllPairs": "yadeSpheres"}   # an effect without an 'off' of its own: whose to compare with
 DT = 6.4e-6
 
 
@@ -43,16 +51,34 @@ def settled(**matArgs):
 
 
 def timed(world, steps):
-    """(ms per step, load record) of `steps` steps after a 3-step warm-up;
-    the record has the step on CPU too (CPU time over the 2 threads)."""
+    """(ms per step, load record) of `steps` steps after a 3-step warm-up,
+    stepped one by one.  The record has the step on CPU (CPU time over the 2
+    threads) and QDEM's own share of the step: the core's phase timers
+    (World.timings, wall time of each phase of the last step) summed over
+    the steps, per phase and in all ("qdem_ms_per_step").  What the step
+    takes beyond them is the Python call and, in a YADE scene, YADE's own
+    engines; here (a bare core world) only the call."""
     world.core.step(DT, 3)
+    phases = {}
     probe = LoadProbe()
     t = time.perf_counter()
-    world.core.step(DT, steps)
+    for _ in range(steps):
+        world.core.step(DT, 1)
+        for k, v in world.core.timings.items():
+            phases[k] = phases.get(k, 0.0) + v
     wall = time.perf_counter() - t
     rec = probe.finish(wall)
     rec["ms_per_step_on_cpu"] = 1e3 * rec["own_cpu_s"] / 2 / steps
+    rec["qdem_ms_per_step"] = 1e3 * sum(phases.values()) / steps
+    rec["phases_ms_per_step"] = {k: 1e3 * v / steps for k, v in phases.items()}
     return 1e3 * wall / steps, rec
+
+
+def paired(runs, num, den, key):
+    """Per-round ratios num/den of `key` (the rounds interleave the
+    variants, so both see the same machine): stats, or None."""
+    a, b = runs.get(num) or [], runs.get(den) or []
+    return stats([x[key] / y[key] for x, y in zip(a, b) if x.get(key) and y.get(key)])
 
 
 def main():
@@ -88,12 +114,16 @@ def main():
     props = [np.full(k, v) for v in (R, 1e8, 0.3, 0.5, -1.0, 1.0)]
     pairs = (np.arange(0, k * npc + 1, npc, dtype=np.int32), np.tile(np.arange(npc, dtype=np.int32), k))
 
-    def spheres(z):
+    noPairs = (np.zeros(k + 1, dtype=np.int32), np.zeros(0, dtype=np.int32))
+
+    def spheres(z, listed=pairs):
+        """The spheres QdemEngine hands over: ids, properties, and for each
+        sphere the pieces YADE's collider found near it (`listed`)."""
         if z is None:
             base.core.setSpheres(np.zeros(0, np.int32), *[np.zeros(0)] * 6, np.zeros(1, np.int32),
                                  np.zeros(0, np.int32))
         else:
-            base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *pairs)
+            base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *listed)
             base.core.setSphereStates(np.column_stack([xy, np.full(k, z)]), np.zeros((k, 3)), np.zeros((k, 3)))
         return base
 
@@ -124,7 +154,8 @@ def main():
         "gravity": {"on": switch("gravity", G), "off": switch("gravity", (0, 0, 0)), "zero": switch(None, None, flat)},
         "contacts": {"on": contacts(True), "off": contacts(False), "zero": switch(None, None, apart)},
         "yadeSpheres": {"on": lambda: spheres(top + 0.04 + R - 0.002), "off": lambda: spheres(None),
-                        "zero": lambda: spheres(top + 1.0)},
+                        "zero": lambda: spheres(top + 1.0, noPairs)},
+        "yadeSpheresAllPairs": {"on": None, "off": None, "zero": lambda: spheres(top + 1.0)},
     }
     notes = {
         "pointPolygon": "zero: no zero-valued form (not measured)",
@@ -132,8 +163,11 @@ def main():
         "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
         "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
                     "(no piece can reach another)",
-        "yadeSpheres": "on: 2,025 spheres resting on the stack's top; off: none; zero: the same spheres listed "
-                       "but 1 m above it",
+        "yadeSpheres": "on: 2,025 spheres resting on the stack's top, each listed with every piece; off: none; "
+                       "zero: the same spheres 1 m above it, listed with no piece (what YADE's collider finds "
+                       "near them: nothing)",
+        "yadeSpheresAllPairs": "zero: the spheres 1 m above the stack, each listed with all 27 pieces (54,675 "
+                               "pairs checked per step: a broad phase that listed every pair)",
     }
 
     def restore():
@@ -172,12 +206,21 @@ def main():
                          " BUSY" if rec["busy"] else ""), flush=True)
     res = {}
     for name, byVariant in runs.items():
-        e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "runs": byVariant}
+        e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "qdem": {"clean": {}, "all": {}},
+             "runs": byVariant}
         for v, rs in byVariant.items():
-            s = summarise(rs, ["ms_per_step", "ms_per_step_on_cpu"])
+            s = summarise(rs, ["ms_per_step", "ms_per_step_on_cpu", "qdem_ms_per_step"])
             e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
             e["on_cpu"]["clean"][v], e["on_cpu"]["all"][v] = (s["clean"]["ms_per_step_on_cpu"],
                                                               s["all"]["ms_per_step_on_cpu"])
+            e["qdem"]["clean"][v], e["qdem"]["all"][v] = s["clean"]["qdem_ms_per_step"], s["all"]["qdem_ms_per_step"]
+        # The robust figures: paired ratios of the rounds (both variants of a
+        # ratio ran back to back in each round), on QDEM's share and on the
+        # whole step.
+        off = {"off": runs[OFF_OF.get(name, name)]["off"]}
+        e["paired"] = {"%s_over_off" % v: {"qdem": paired(dict(byVariant, **off), v, "off", "qdem_ms_per_step"),
+                                           "whole": paired(dict(byVariant, **off), v, "off", "ms_per_step")}
+                       for v in ("on", "zero")}
         if name in notes:
             e["note"] = notes[name]
         res[name] = e
@@ -194,11 +237,19 @@ def main():
     s = summarise(frames, ["ms_per_step"])
     res["stressOutput"] = {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
                            "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None},
+                           "qdem": {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
+                                    "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None}},
+                           "paired": {"on_over_off": {"qdem": None, "whole": None},
+                                      "zero_over_off": {"qdem": None, "whole": None}},
                            "runs": {"on": frames},
                            "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
     out = {"benchmark": "bench_effects", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "tets": base.core.nTets, "threads": 2, "steps": a.steps, "rounds": a.rounds, "busy_rule": BUSY_RULE,
-           "units": "ms per step, median / min / max over the rounds", "effects": res}
+           "units": "ms per step, median / min / max over the rounds; 'qdem': the core's phase timers summed "
+                    "(QDEM's own share of the step), beside the whole step; 'paired': per-round ratios of a "
+                    "variant to 'off' (the rounds interleave the variants)",
+           "statistic": "paired ratios of interleaved rounds (median, min-max) for on/off and zero/off; "
+                        "minimum over the rounds for ms per step", "effects": res}
     with open(os.path.join(a.out, "effects.json"), "w") as f:
         json.dump(out, f, indent=1)
 
