@@ -35,6 +35,7 @@ import sys
 import time
 
 import numpy as np
+from scipy.spatial import ConvexHull
 
 import qdem
 from qdem import _core, shogi
@@ -103,16 +104,24 @@ def awake(w):
 
 
 def tipTowardRook(pieces, radius, gap, push):
-    """Put the king where it is `gap` from the rook, turned about its base
-    point as a rigid body, with the angular velocity it has there after the
+    """Put the king where it is `gap` from the rook, turned about the front
+    edge of its base as a rigid body, with the angular velocity it has there after the
     push and its fall (energy: I w^2 / 2 = I w0^2 / 2 + m g (z0 - z)).
     Returns (angle, angular velocity).  At real size the king deforms by
     ~1e-6 of its size on the way: the rigid approach stands for the
     overdamped one (its stress relaxes within the first steps)."""
     king, rook = pieces[0], pieces[1]
-    pivot = np.array([0.0, 0.0, radius])                # its base point (the mesh origin; domino.py's pivot)
-    X0, m = king.pos.copy() - pivot, king.mass.copy()
-    face = rook.pos[:, 0].min() - gap
+    P = king.pos.copy()
+    base = P[:, 2] < P[:, 2].min() + 1e-3 * (P[:, 2].max() - P[:, 2].min())
+    pivot = np.array([P[base, 0].max(), 0.0, P[:, 2].min()])   # the front edge of its base: it tips about it
+    X0, m = P - pivot, king.mass.copy()
+    # The rook is convex: a point's distance to it is at least the largest
+    # signed distance to the planes of its hull's faces.
+    hull = ConvexHull(rook.pos)
+    normals, offsets = hull.equations[:, :3], hull.equations[:, 3]
+
+    def clearance(X):
+        return float((X @ normals.T + offsets).max(axis=1).min())
 
     def turned(th):
         c, s = math.cos(th), math.sin(th)
@@ -121,7 +130,7 @@ def tipTowardRook(pieces, radius, gap, push):
     lo, hi = 0.0, 0.5 * math.pi
     for _ in range(60):                                 # bisection: the king's front just `gap` from the rook
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if turned(mid)[:, 0].max() < face else (lo, mid)
+        lo, hi = (mid, hi) if clearance(turned(mid) + pivot) > gap else (lo, mid)
     th = lo
     X = turned(th)
     inertia = float((m * (X0[:, 0] ** 2 + X0[:, 2] ** 2)).sum())
