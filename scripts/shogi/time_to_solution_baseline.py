@@ -236,7 +236,10 @@ def main():
            "table1_scale": table1Scale(), "tets": w.core.nTets, "pieces": w.core.nPieces, "dt": dt, "stable_dt_implicit": w.stableDt()[
                "combinedImplicit"],
            "checkpoint": {"path": path, "t_s": None,
-                          "rook_hit_s": float(extra["hit_s"]), "steps_from_push": int(extra["steps"]),
+                          "rook_hit_s": float(extra["hit_s"]), "steps_from_setup": int(extra["steps"]),
+                          "times_from": "the set-up: the king placed --gap from the rook, turned about its "
+                                        "base's front edge with the angular velocity of its fall",
+                          "king_angle_deg": float(extra["king_angle_deg"]), "gap_m": float(extra["gap_m"]),
                           "wall_s_to_make": float(extra["wall_s"]),
                           "held": "pieces %d-40 held (dynamic = False) ahead of the front: the cost of sleeping "
                                   "pieces" % (HELD_FROM + 1)},
