@@ -40,6 +40,11 @@ import bench_cubes27  # noqa: E402
 from benchutil import BUSY_RULE, LoadProbe, stats, summarise  # noqa: E402
 
 VARIANTS = ("on", "off", "zero")
+UNITS = ("ms per step, median / min / max over the rounds; 'qdem': the core's phase timers summed (QDEM's own "
+         "share of the step, wall clock), 'on_cpu': the process's CPU time over the 2 threads, beside the whole "
+         "step; 'paired': per-round ratios of a variant to 'off' (the rounds interleave the variants)")
+STATISTIC = ("paired ratios of interleaved rounds (median, min-max) for on/off and zero/off; the minimum over "
+             "the rounds for ms per step")
 OFF_OF = {"yadeSpheresAllPairs": "yadeSpheres"}   # an effect without an 'off' of its own: whose to compare with
 DT = 6.4e-6
 
@@ -81,12 +86,76 @@ def paired(runs, num, den, key):
     return stats([x[key] / y[key] for x, y in zip(a, b) if x.get(key) and y.get(key)])
 
 
+KEYS = {"whole": "ms_per_step", "cpu": "ms_per_step_on_cpu", "qdem": "qdem_ms_per_step"}
+
+
+def summariseEffect(byVariant, offRuns):
+    """The figures of one effect from its runs (variant -> run records):
+    clean / all statistics of the whole step, of it on CPU and of QDEM's
+    share, and the paired per-round ratios of 'on' and 'zero' to 'off'
+    (offRuns: the 'off' runs to compare with, the effect's own or another's)."""
+    e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "qdem": {"clean": {}, "all": {}},
+         "runs": byVariant}
+    for v, rs in byVariant.items():
+        s = summarise(rs, list(KEYS.values()))
+        e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
+        for group, key in (("on_cpu", "ms_per_step_on_cpu"), ("qdem", "qdem_ms_per_step")):
+            e[group]["clean"][v], e[group]["all"][v] = s["clean"][key], s["all"][key]
+    # The robust figures: ratios within each round (both variants ran back
+    # to back, on the same machine), of QDEM's share (wall), of the process's
+    # CPU time (in this bare core world all QDEM's but the Python call) and
+    # of the whole step.
+    withOff = dict(byVariant, off=offRuns)
+    e["paired"] = {"%s_over_off" % v: {name: paired(withOff, v, "off", key) for name, key in KEYS.items()}
+                   for v in ("on", "zero")}
+    return e
+
+
+def summariseStress(frames):
+    """The stress output's figures (ms per recorder frame, 'on' only): all
+    of it QDEM's; on CPU from the frames' CPU time over the 2 threads."""
+    for r in frames:
+        r["ms_per_step_on_cpu"] = 1e3 * r["own_cpu_s"] / 2
+    s = summarise(frames, ["ms_per_step", "ms_per_step_on_cpu"])
+
+    def on(key, which):
+        return {"on": s[which][key], "off": None, "zero": None}
+
+    return {"clean": on("ms_per_step", "clean"), "all": on("ms_per_step", "all"),
+            "qdem": {"clean": on("ms_per_step", "clean"), "all": on("ms_per_step", "all")},
+            "on_cpu": {"clean": on("ms_per_step_on_cpu", "clean"), "all": on("ms_per_step_on_cpu", "all")},
+            "paired": {"%s_over_off" % v: dict.fromkeys(KEYS) for v in ("on", "zero")},
+            "runs": {"on": frames}, "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
+
+
+def resummarise(path):
+    """Recompute an effects.json's figures from the runs it keeps."""
+    with open(path) as f:
+        d = json.load(f)
+    for name, e in d["effects"].items():
+        if name == "stressOutput":
+            d["effects"][name] = summariseStress(e["runs"]["on"])
+            continue
+        note = e.get("note")
+        d["effects"][name] = summariseEffect(e["runs"], d["effects"][OFF_OF.get(name, name)]["runs"]["off"])
+        if note:
+            d["effects"][name]["note"] = note
+    d["statistic"] = STATISTIC
+    d["units"] = UNITS
+    with open(path, "w") as f:
+        json.dump(d, f, indent=1)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--out", default="out/bench")
+    ap.add_argument("--resummarise", metavar="EFFECTS_JSON", help="recompute the figures of a written "
+                    "effects.json from the runs it keeps (no timing)")
     a = ap.parse_args()
+    if a.resummarise:
+        return resummarise(a.resummarise)
     if a.steps < 1 or a.rounds < 1:
         ap.error("--steps and --rounds must be at least 1")
     os.makedirs(a.out, exist_ok=True)
@@ -206,24 +275,9 @@ def main():
                          " BUSY" if rec["busy"] else ""), flush=True)
     res = {}
     for name, byVariant in runs.items():
-        e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "qdem": {"clean": {}, "all": {}},
-             "runs": byVariant}
-        for v, rs in byVariant.items():
-            s = summarise(rs, ["ms_per_step", "ms_per_step_on_cpu", "qdem_ms_per_step"])
-            e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
-            e["on_cpu"]["clean"][v], e["on_cpu"]["all"][v] = (s["clean"]["ms_per_step_on_cpu"],
-                                                              s["all"]["ms_per_step_on_cpu"])
-            e["qdem"]["clean"][v], e["qdem"]["all"][v] = s["clean"]["qdem_ms_per_step"], s["all"]["qdem_ms_per_step"]
-        # The robust figures: paired ratios of the rounds (both variants of a
-        # ratio ran back to back in each round), on QDEM's share and on the
-        # whole step.
-        off = {"off": runs[OFF_OF.get(name, name)]["off"]}
-        e["paired"] = {"%s_over_off" % v: {"qdem": paired(dict(byVariant, **off), v, "off", "qdem_ms_per_step"),
-                                           "whole": paired(dict(byVariant, **off), v, "off", "ms_per_step")}
-                       for v in ("on", "zero")}
+        res[name] = summariseEffect(byVariant, runs[OFF_OF.get(name, name)]["off"])
         if name in notes:
-            e["note"] = notes[name]
-        res[name] = e
+            res[name]["note"] = notes[name]
     # Stress output: computed only when a recorder asks (per frame, not per step).
     frames = []
     for _ in range(a.rounds):
@@ -234,22 +288,10 @@ def main():
         rec = probe.finish(wall)
         rec["ms_per_step"] = 1e3 * wall
         frames.append(rec)
-    s = summarise(frames, ["ms_per_step"])
-    res["stressOutput"] = {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
-                           "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None},
-                           "qdem": {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
-                                    "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None}},
-                           "paired": {"on_over_off": {"qdem": None, "whole": None},
-                                      "zero_over_off": {"qdem": None, "whole": None}},
-                           "runs": {"on": frames},
-                           "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
+    res["stressOutput"] = summariseStress(frames)
     out = {"benchmark": "bench_effects", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "tets": base.core.nTets, "threads": 2, "steps": a.steps, "rounds": a.rounds, "busy_rule": BUSY_RULE,
-           "units": "ms per step, median / min / max over the rounds; 'qdem': the core's phase timers summed "
-                    "(QDEM's own share of the step), beside the whole step; 'paired': per-round ratios of a "
-                    "variant to 'off' (the rounds interleave the variants)",
-           "statistic": "paired ratios of interleaved rounds (median, min-max) for on/off and zero/off; "
-                        "minimum over the rounds for ms per step", "effects": res}
+           "units": UNITS, "statistic": STATISTIC, "effects": res}
     with open(os.path.join(a.out, "effects.json"), "w") as f:
         json.dump(out, f, indent=1)
 

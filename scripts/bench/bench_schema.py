@@ -29,7 +29,7 @@ SCHEMA = {
                    "scenes.[].all.wall_s_per_simulated_s", "scales.runs"],
     "effects.json": ["threads", "steps", "rounds", "date", "statistic", "effects.[].all", "effects.[].qdem.all",
                      "effects.[].paired.on_over_off.qdem", "effects.[].paired.zero_over_off.qdem",
-                     "effects.[].paired.zero_over_off.whole"],
+                     "effects.[].paired.zero_over_off.whole", "effects.[].paired.zero_over_off.cpu", "effects.[].on_cpu.all"],
     "spheres.json": ["benchmark", "date", "spheres", "near.coupling_ms_per_step", "near.yade_ms_per_step", "near.spheres_listed",
                      "far.coupling_ms_per_step", "far.yade_ms_per_step", "coupling_fraction_near",
                      "coupling_fraction_far", "per_listed_sphere_us", "fixed_cost_ms_per_step"],
@@ -82,7 +82,8 @@ LATER = {"shogi.json": ["scales.runs"]}
 # log's "date"): older kept logs are checked without them.
 SINCE = {"effects.json": ("2026-11-28", ["statistic", "effects.[].qdem.all", "effects.[].paired.on_over_off.qdem",
                                          "effects.[].paired.zero_over_off.qdem",
-                                         "effects.[].paired.zero_over_off.whole"])}
+                                         "effects.[].paired.zero_over_off.whole",
+                                         "effects.[].paired.zero_over_off.cpu", "effects.[].on_cpu.all"])}
 
 
 def keysFor(name, date):

@@ -184,6 +184,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--after", type=int, default=1000, help="steps past the rook's hit before the checkpoint")
     ap.add_argument("--gap", type=float, default=3e-4, help="the king's start: this far from the rook [m]")
+    ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--dir", default="out/shogi/forty_real_front")
     ap.add_argument("--log", default="bench/logs/time_to_solution_baseline.json")
     a = ap.parse_args()
@@ -197,24 +198,27 @@ def main():
     extra = qdem.loadState(path, world=w)
     dt = float(extra["dt"])
     state = w.core.saveState()
-    _core.setThreads(2)
+    _core.setThreads(a.threads)
     runs = []
     for r in range(a.rounds):
         w.core.loadState(state)
         w.core.step(dt, 3)                  # lists and thread layout built anew after loading
-        its, awakeMax = 0, 0
+        its, phases = 0, {}
         loadBefore = os.getloadavg()
         probe = LoadProbe()
         cpu0, t0 = time.process_time(), time.perf_counter()
         for _ in range(a.steps):
             w.core.step(dt, 1)
             its += w.core.counts.get("viscousIterations", 0)
+            for k, v in w.core.timings.items():
+                phases[k] = phases.get(k, 0.0) + v
         wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
         rec = probe.finish(wall)
         rec.update(loadavg_before=list(loadBefore), loadavg_after=list(os.getloadavg()), wall_s=wall, cpu_s=cpu,
                    ms_per_step=1e3 * wall / a.steps, steps_per_s=a.steps / wall,
                    wall_s_per_simulated_s=wall / (a.steps * dt), cpu_s_per_simulated_s=cpu / (a.steps * dt),
-                   cg_iterations_per_step=its / a.steps, pieces_awake=awake(w))
+                   cg_iterations_per_step=its / a.steps, pieces_awake=awake(w),
+                   phases_ms_per_step={k: 1e3 * v / a.steps for k, v in phases.items()})
         runs.append(rec)
         print("round %d: %.2f ms/step wall, %.0f wall s / simulated s (CPU %.0f), %.1f CG its/step, %d awake; "
               "load %.2f -> %.2f, others %.2f%s" % (
@@ -230,7 +234,7 @@ def main():
             "cg_iterations_per_step", "pieces_awake")
     out = {"benchmark": "time_to_solution_baseline", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "scene": "forty", "scale": 1.0, "material": "Table 1 (E 5e8 Pa, nu 0.4, rho 700, viscosity 2.5e5 Pa s)",
-           "frictionPiece": a.friction, "viscous": "implicit (warm-started Jacobi-PCG)", "threads": 2,
+           "frictionPiece": a.friction, "viscous": "implicit (warm-started Jacobi-PCG)", "threads": a.threads,
            "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "(libgomp default)"),
            "particle_radius_m": qdem.QdemMat().radius / table1Scale(),
            "table1_scale": table1Scale(), "tets": w.core.nTets, "pieces": w.core.nPieces, "dt": dt, "stable_dt_implicit": w.stableDt()[
