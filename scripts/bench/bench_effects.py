@@ -21,8 +21,8 @@ Effects: viscosity, friction, edge-edge, point-polygon, energy sums, gravity
 (World switches of the same names, QdemEngine attributes), contacts (all
 contact phases on / off / the same cubes out of each other's reach), YADE
 spheres (2,025 on the stack's top / none / 1 m above it, listed with no
-piece near, as YADE's collider hands them over; and listed with every piece,
-a broad phase listing every pair: yadeSpheresAllPairs), and the stress output (per recorder frame, not per step: 'on' only)."""
+piece near; and listed with every piece, as the engine's listAll does:
+yadeSpheresAllPairs), and the stress output (per recorder frame, not per step: 'on' only)."""
 import argparse
 import json
 import math
@@ -53,6 +53,20 @@ def settled(**matArgs):
     w = bench_cubes27.scene(mat=qdem.QdemMat(**matArgs) if matArgs else None)
     w.core.step(DT, 20)                      # contacts formed
     return w
+
+
+NOTES = {
+    "pointPolygon": "zero: no zero-valued form (not measured)",
+    "energy": "zero: no zero-valued form (not measured)",
+    "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
+    "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
+                "(no piece can reach another)",
+    "yadeSpheres": "on: 2,025 spheres resting on the stack's top, each listed with every piece; off: none; "
+                   "zero: the same spheres 1 m above it, listed with no piece near (in a YADE scene the "
+                   "engine does not hand over spheres the collider finds near no piece)",
+    "yadeSpheresAllPairs": "zero: the spheres 1 m above the stack, each listed with all 27 pieces (54,675 "
+                           "pairs checked per step: a broad phase that listed every pair)",
+}
 
 
 def timed(world, steps):
@@ -136,7 +150,7 @@ def resummarise(path):
         if name == "stressOutput":
             d["effects"][name] = summariseStress(e["runs"]["on"])
             continue
-        note = e.get("note")
+        note = NOTES.get(name, e.get("note"))
         d["effects"][name] = summariseEffect(e["runs"], d["effects"][OFF_OF.get(name, name)]["runs"]["off"])
         if note:
             d["effects"][name]["note"] = note
@@ -226,18 +240,6 @@ def main():
                         "zero": lambda: spheres(top + 1.0, noPairs)},
         "yadeSpheresAllPairs": {"on": None, "off": None, "zero": lambda: spheres(top + 1.0)},
     }
-    notes = {
-        "pointPolygon": "zero: no zero-valued form (not measured)",
-        "energy": "zero: no zero-valued form (not measured)",
-        "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
-        "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
-                    "(no piece can reach another)",
-        "yadeSpheres": "on: 2,025 spheres resting on the stack's top, each listed with every piece; off: none; "
-                       "zero: the same spheres 1 m above it, listed with no piece (what YADE's collider finds "
-                       "near them: nothing)",
-        "yadeSpheresAllPairs": "zero: the spheres 1 m above the stack, each listed with all 27 pieces (54,675 "
-                               "pairs checked per step: a broad phase that listed every pair)",
-    }
 
     def restore():
         c = base.core
@@ -276,8 +278,8 @@ def main():
     res = {}
     for name, byVariant in runs.items():
         res[name] = summariseEffect(byVariant, runs[OFF_OF.get(name, name)]["off"])
-        if name in notes:
-            res[name]["note"] = notes[name]
+        if name in NOTES:
+            res[name]["note"] = NOTES[name]
     # Stress output: computed only when a recorder asks (per frame, not per step).
     frames = []
     for _ in range(a.rounds):
