@@ -4,19 +4,23 @@ from a checkpoint at the front, on 2 threads: the baseline the time to
 solution of the whole line is judged against.
 
     PYTHONPATH=build/python OMP_WAIT_POLICY=passive /usr/bin/python3.11 \
-        scripts/shogi/time_to_solution_baseline.py [--friction 0.1] [--steps 300] [--rounds 3] \
-        [--dir out/shogi/forty_real_front] [--log bench/logs/time_to_solution_baseline.json]
+        scripts/shogi/time_to_solution_baseline.py [--friction 0.1] [--steps 300] [--rounds 3] [--threads 2] \
+        [--gap 3e-4] [--after 1000] [--dir out/shogi/forty_real_front] \
+        [--log bench/logs/time_to_solution_baseline.json]
 
-1. The checkpoint (made once, kept in --dir; minutes to tens of minutes on
-   2 cores): the line built as scripts/shogi/cost_in_run.py builds its scenes
-   (bare core world, the floor as stiff as the pieces, gravity), Table 1's
-   material at scale 1, the king tipped as shogi.scene tips it, stepped
-   until the second piece (the rook) is hit (speed above 2 % of sqrt(g H),
-   as domino.py's hits.json counts it) and `--after` steps more.  Pieces
-   three and on are held (dynamic = False) meanwhile: standing still ahead
-   of the front, they cost what sleeping pieces cost in a run with
-   `sleep` (left out of the step), and the approach to the first hit costs
-   two pieces, not forty.
+1. The checkpoint (made once, kept in --dir; a few minutes on 2 cores):
+   the line built as scripts/shogi/cost_in_run.py builds its scenes (bare
+   core world, the floor as stiff as the pieces, gravity), Table 1's
+   material at scale 1 with the particle radius scaled alike (0.04 m / 766),
+   implicit viscosity at 0.8 of the stable step.  From rest the king would
+   take ~0.04 s (~290,000 steps, hours on a shared machine) to reach the
+   rook, so it is placed `--gap` from the rook, turned as a rigid body about
+   its base's front edge, with the angular velocity its push and fall give
+   it there (energy), and stepped until the rook is hit (speed above 2 % of
+   sqrt(g H), as domino.py's hits.json counts it) and `--after` steps more.
+   Pieces three and on are held (dynamic = False): standing still ahead of
+   the front, they cost what sleeping pieces cost in a run with `sleep`
+   (left out of the step).
 2. The timing: the checkpoint loaded into a freshly built world, `--steps`
    steps stepped one by one `--rounds` times, the state reloaded before each
    round so that every round covers the same steps; wall and CPU time, CG
@@ -237,8 +241,8 @@ def main():
            "frictionPiece": a.friction, "viscous": "implicit (warm-started Jacobi-PCG)", "threads": a.threads,
            "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "(libgomp default)"),
            "particle_radius_m": qdem.QdemMat().radius / table1Scale(),
-           "table1_scale": table1Scale(), "tets": w.core.nTets, "pieces": w.core.nPieces, "dt": dt, "stable_dt_implicit": w.stableDt()[
-               "combinedImplicit"],
+           "table1_scale": table1Scale(), "tets": w.core.nTets, "pieces": w.core.nPieces, "dt": dt,
+           "stable_dt_implicit": w.stableDt()["combinedImplicit"],
            "checkpoint": {"path": path, "t_s": None,
                           "rook_hit_s": float(extra["hit_s"]), "steps_from_setup": int(extra["steps"]),
                           "times_from": "the set-up: the king placed --gap from the rook, turned about its "
