@@ -8,14 +8,21 @@ round so that no variant always follows the same one; the load and other
 processes' CPU are recorded per run and busy runs left out of 'clean'.  A
 variant that does not exist (no zero-valued form of "point-polygon on", of
 energy tracking, ...) is null: not measured, never copied from another.
+Each run records the whole step and QDEM's own share of it (the core's
+phase timers summed over the steps, per phase too), and each effect the
+per-round ratios on/off and zero/off of both: the rounds interleave the
+variants, so a ratio compares runs that saw the same machine, where medians
+of whole runs swing 20-40 % on a shared machine.  The doc's table
+(perf_tables.py effects) reads those ratios and the minima.
 
     /usr/bin/python3.11 scripts/bench/bench_effects.py [--steps 60] [--rounds 5] [--out out/bench]
 
 Effects: viscosity, friction, edge-edge, point-polygon, energy sums, gravity
 (World switches of the same names, QdemEngine attributes), contacts (all
 contact phases on / off / the same cubes out of each other's reach), YADE
-spheres (2,025 on the stack's top / none / listed but 1 m above it), and the
-stress output (per recorder frame, not per step: 'on' only)."""
+spheres (2,025 on the stack's top / none / 1 m above it, listed with no
+piece near; and listed with every piece, as the engine's listAll does:
+yadeSpheresAllPairs), and the stress output (per recorder frame, not per step: 'on' only)."""
 import argparse
 import json
 import math
@@ -30,9 +37,15 @@ from qdem import _core
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bench_cubes27  # noqa: E402
-from benchutil import BUSY_RULE, LoadProbe, summarise  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, stats, summarise  # noqa: E402
 
 VARIANTS = ("on", "off", "zero")
+UNITS = ("ms per step, median / min / max over the rounds; 'qdem': the core's phase timers summed (QDEM's own "
+         "share of the step, wall clock), 'on_cpu': the process's CPU time over the 2 threads, beside the whole "
+         "step; 'paired': per-round ratios of a variant to 'off' (the rounds interleave the variants)")
+STATISTIC = ("paired ratios of interleaved rounds (median, min-max) for on/off and zero/off; the minimum over "
+             "the rounds for ms per step")
+OFF_OF = {"yadeSpheresAllPairs": "yadeSpheres"}   # an effect without an 'off' of its own: whose to compare with
 DT = 6.4e-6
 
 
@@ -42,17 +55,109 @@ def settled(**matArgs):
     return w
 
 
+NOTES = {
+    "pointPolygon": "zero: no zero-valued form (not measured)",
+    "energy": "zero: no zero-valued form (not measured)",
+    "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
+    "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
+                "(no piece can reach another)",
+    "yadeSpheres": "on: 2,025 spheres resting on the stack's top, each listed with every piece; off: none; "
+                   "zero: the same spheres 1 m above it, listed with no piece near (in a YADE scene the "
+                   "engine does not hand over spheres the collider finds near no piece)",
+    "yadeSpheresAllPairs": "zero: the spheres 1 m above the stack, each listed with all 27 pieces (54,675 "
+                           "pairs checked per step: a broad phase that listed every pair)",
+}
+
+
 def timed(world, steps):
-    """(ms per step, load record) of `steps` steps after a 3-step warm-up;
-    the record has the step on CPU too (CPU time over the 2 threads)."""
+    """(ms per step, load record) of `steps` steps after a 3-step warm-up,
+    stepped one by one.  The record has the step on CPU (CPU time over the 2
+    threads) and QDEM's own share of the step: the core's phase timers
+    (World.timings, wall time of each phase of the last step) summed over
+    the steps, per phase and in all ("qdem_ms_per_step").  What the step
+    takes beyond them is the Python call and, in a YADE scene, YADE's own
+    engines; here (a bare core world) only the call."""
     world.core.step(DT, 3)
+    phases = {}
     probe = LoadProbe()
     t = time.perf_counter()
-    world.core.step(DT, steps)
+    for _ in range(steps):
+        world.core.step(DT, 1)
+        for k, v in world.core.timings.items():
+            phases[k] = phases.get(k, 0.0) + v
     wall = time.perf_counter() - t
     rec = probe.finish(wall)
     rec["ms_per_step_on_cpu"] = 1e3 * rec["own_cpu_s"] / 2 / steps
+    rec["qdem_ms_per_step"] = 1e3 * sum(phases.values()) / steps
+    rec["phases_ms_per_step"] = {k: 1e3 * v / steps for k, v in phases.items()}
     return 1e3 * wall / steps, rec
+
+
+def paired(runs, num, den, key):
+    """Per-round ratios num/den of `key` (the rounds interleave the
+    variants, so both see the same machine): stats, or None."""
+    a, b = runs.get(num) or [], runs.get(den) or []
+    return stats([x[key] / y[key] for x, y in zip(a, b) if x.get(key) and y.get(key)])
+
+
+KEYS = {"whole": "ms_per_step", "cpu": "ms_per_step_on_cpu", "qdem": "qdem_ms_per_step"}
+
+
+def summariseEffect(byVariant, offRuns):
+    """The figures of one effect from its runs (variant -> run records):
+    clean / all statistics of the whole step, of it on CPU and of QDEM's
+    share, and the paired per-round ratios of 'on' and 'zero' to 'off'
+    (offRuns: the 'off' runs to compare with, the effect's own or another's)."""
+    e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "qdem": {"clean": {}, "all": {}},
+         "runs": byVariant}
+    for v, rs in byVariant.items():
+        s = summarise(rs, list(KEYS.values()))
+        e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
+        for group, key in (("on_cpu", "ms_per_step_on_cpu"), ("qdem", "qdem_ms_per_step")):
+            e[group]["clean"][v], e[group]["all"][v] = s["clean"][key], s["all"][key]
+    # The robust figures: ratios within each round (both variants ran back
+    # to back, on the same machine), of QDEM's share (wall), of the process's
+    # CPU time (in this bare core world all QDEM's but the Python call) and
+    # of the whole step.
+    withOff = dict(byVariant, off=offRuns)
+    e["paired"] = {"%s_over_off" % v: {name: paired(withOff, v, "off", key) for name, key in KEYS.items()}
+                   for v in ("on", "zero")}
+    return e
+
+
+def summariseStress(frames):
+    """The stress output's figures (ms per recorder frame, 'on' only): all
+    of it QDEM's; on CPU from the frames' CPU time over the 2 threads."""
+    for r in frames:
+        r["ms_per_step_on_cpu"] = 1e3 * r["own_cpu_s"] / 2
+    s = summarise(frames, ["ms_per_step", "ms_per_step_on_cpu"])
+
+    def on(key, which):
+        return {"on": s[which][key], "off": None, "zero": None}
+
+    return {"clean": on("ms_per_step", "clean"), "all": on("ms_per_step", "all"),
+            "qdem": {"clean": on("ms_per_step", "clean"), "all": on("ms_per_step", "all")},
+            "on_cpu": {"clean": on("ms_per_step_on_cpu", "clean"), "all": on("ms_per_step_on_cpu", "all")},
+            "paired": {"%s_over_off" % v: dict.fromkeys(KEYS) for v in ("on", "zero")},
+            "runs": {"on": frames}, "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
+
+
+def resummarise(path):
+    """Recompute an effects.json's figures from the runs it keeps."""
+    with open(path) as f:
+        d = json.load(f)
+    for name, e in d["effects"].items():
+        if name == "stressOutput":
+            d["effects"][name] = summariseStress(e["runs"]["on"])
+            continue
+        note = NOTES.get(name, e.get("note"))
+        d["effects"][name] = summariseEffect(e["runs"], d["effects"][OFF_OF.get(name, name)]["runs"]["off"])
+        if note:
+            d["effects"][name]["note"] = note
+    d["statistic"] = STATISTIC
+    d["units"] = UNITS
+    with open(path, "w") as f:
+        json.dump(d, f, indent=1)
 
 
 def main():
@@ -60,7 +165,11 @@ def main():
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--out", default="out/bench")
+    ap.add_argument("--resummarise", metavar="EFFECTS_JSON", help="recompute the figures of a written "
+                    "effects.json from the runs it keeps (no timing)")
     a = ap.parse_args()
+    if a.resummarise:
+        return resummarise(a.resummarise)
     if a.steps < 1 or a.rounds < 1:
         ap.error("--steps and --rounds must be at least 1")
     os.makedirs(a.out, exist_ok=True)
@@ -88,12 +197,16 @@ def main():
     props = [np.full(k, v) for v in (R, 1e8, 0.3, 0.5, -1.0, 1.0)]
     pairs = (np.arange(0, k * npc + 1, npc, dtype=np.int32), np.tile(np.arange(npc, dtype=np.int32), k))
 
-    def spheres(z):
+    noPairs = (np.zeros(k + 1, dtype=np.int32), np.zeros(0, dtype=np.int32))
+
+    def spheres(z, listed=pairs):
+        """The spheres QdemEngine hands over: ids, properties, and for each
+        sphere the pieces YADE's collider found near it (`listed`)."""
         if z is None:
             base.core.setSpheres(np.zeros(0, np.int32), *[np.zeros(0)] * 6, np.zeros(1, np.int32),
                                  np.zeros(0, np.int32))
         else:
-            base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *pairs)
+            base.core.setSpheres(np.arange(k, dtype=np.int32), *props, *listed)
             base.core.setSphereStates(np.column_stack([xy, np.full(k, z)]), np.zeros((k, 3)), np.zeros((k, 3)))
         return base
 
@@ -124,16 +237,8 @@ def main():
         "gravity": {"on": switch("gravity", G), "off": switch("gravity", (0, 0, 0)), "zero": switch(None, None, flat)},
         "contacts": {"on": contacts(True), "off": contacts(False), "zero": switch(None, None, apart)},
         "yadeSpheres": {"on": lambda: spheres(top + 0.04 + R - 0.002), "off": lambda: spheres(None),
-                        "zero": lambda: spheres(top + 1.0)},
-    }
-    notes = {
-        "pointPolygon": "zero: no zero-valued form (not measured)",
-        "energy": "zero: no zero-valued form (not measured)",
-        "gravity": "off: the stack with gravity set to 0 now; zero: a stack built and settled without gravity",
-        "contacts": "off: point-polygon and edge-edge switched off; zero: the same 27 cubes 5 m apart, 10 m up "
-                    "(no piece can reach another)",
-        "yadeSpheres": "on: 2,025 spheres resting on the stack's top; off: none; zero: the same spheres listed "
-                       "but 1 m above it",
+                        "zero": lambda: spheres(top + 1.0, noPairs)},
+        "yadeSpheresAllPairs": {"on": None, "off": None, "zero": lambda: spheres(top + 1.0)},
     }
 
     def restore():
@@ -172,15 +277,9 @@ def main():
                          " BUSY" if rec["busy"] else ""), flush=True)
     res = {}
     for name, byVariant in runs.items():
-        e = {"clean": {}, "all": {}, "on_cpu": {"clean": {}, "all": {}}, "runs": byVariant}
-        for v, rs in byVariant.items():
-            s = summarise(rs, ["ms_per_step", "ms_per_step_on_cpu"])
-            e["clean"][v], e["all"][v] = s["clean"]["ms_per_step"], s["all"]["ms_per_step"]
-            e["on_cpu"]["clean"][v], e["on_cpu"]["all"][v] = (s["clean"]["ms_per_step_on_cpu"],
-                                                              s["all"]["ms_per_step_on_cpu"])
-        if name in notes:
-            e["note"] = notes[name]
-        res[name] = e
+        res[name] = summariseEffect(byVariant, runs[OFF_OF.get(name, name)]["off"])
+        if name in NOTES:
+            res[name]["note"] = NOTES[name]
     # Stress output: computed only when a recorder asks (per frame, not per step).
     frames = []
     for _ in range(a.rounds):
@@ -191,14 +290,10 @@ def main():
         rec = probe.finish(wall)
         rec["ms_per_step"] = 1e3 * wall
         frames.append(rec)
-    s = summarise(frames, ["ms_per_step"])
-    res["stressOutput"] = {"clean": {"on": s["clean"]["ms_per_step"], "off": None, "zero": None},
-                           "all": {"on": s["all"]["ms_per_step"], "off": None, "zero": None},
-                           "runs": {"on": frames},
-                           "note": "ms per recorder frame (stress is computed only when a recorder asks)"}
+    res["stressOutput"] = summariseStress(frames)
     out = {"benchmark": "bench_effects", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "tets": base.core.nTets, "threads": 2, "steps": a.steps, "rounds": a.rounds, "busy_rule": BUSY_RULE,
-           "units": "ms per step, median / min / max over the rounds", "effects": res}
+           "units": UNITS, "statistic": STATISTIC, "effects": res}
     with open(os.path.join(a.out, "effects.json"), "w") as f:
         json.dump(out, f, indent=1)
 

@@ -27,7 +27,10 @@ SCHEMA = {
     "cubes27.json": ["tets", "scene", "date", "threads", "targets"],
     "shogi.json": ["date", "scenes.[].pieces", "scenes.[].tets", "scenes.[].steps", "scenes.[].all.ms_per_step",
                    "scenes.[].all.wall_s_per_simulated_s", "scales.runs"],
-    "effects.json": ["threads", "steps", "rounds", "date", "effects.[].all"],
+    "effects.json": ["threads", "steps", "rounds", "date", "statistic", "effects.[].all", "effects.[].qdem.all",
+                     "effects.[].paired.on_over_off.qdem", "effects.[].paired.zero_over_off.qdem",
+                     "effects.[].paired.zero_over_off.whole", "effects.[].paired.zero_over_off.cpu",
+                     "effects.[].on_cpu.all"],
     "spheres.json": ["benchmark", "date", "spheres", "near.coupling_ms_per_step", "near.yade_ms_per_step", "near.spheres_listed",
                      "far.coupling_ms_per_step", "far.yade_ms_per_step", "coupling_fraction_near",
                      "coupling_fraction_far", "per_listed_sphere_us", "fixed_cost_ms_per_step"],
@@ -76,6 +79,19 @@ BENCHMARK = {"roofline.json": "roofline", "omp_sync.json": "omp_sync", "elements
              "cubes27.json": "bench_cubes27", "shogi.json": "bench_shogi", "effects.json": "bench_effects",
              "spheres.json": "bench_spheres"}
 LATER = {"shogi.json": ["scales.runs"]}
+# Keys a benchmark has written only since a date (ISO, compared with the
+# log's "date"): older kept logs are checked without them.
+SINCE = {"effects.json": ("2026-11-28", ["statistic", "effects.[].qdem.all", "effects.[].paired.on_over_off.qdem",
+                                         "effects.[].paired.zero_over_off.qdem",
+                                         "effects.[].paired.zero_over_off.whole",
+                                         "effects.[].paired.zero_over_off.cpu", "effects.[].on_cpu.all"])}
+
+
+def keysFor(name, date):
+    """The keys a kept log of `name` dated `date` must hold."""
+    since, newer = SINCE.get(name, ("", []))
+    old = str(date or "") < since
+    return [k for k in SCHEMA[name] if k not in LATER.get(name, []) and not (old and k in newer)]
 
 
 def checkOutput(folder):
@@ -105,7 +121,7 @@ def checkLogs(folder):
             continue
         name = byBenchmark.get(d.get("benchmark")) if isinstance(d, dict) else None
         if name:
-            problems += checkFile(p, [k for k in SCHEMA[name] if k not in LATER.get(name, [])])
+            problems += checkFile(p, keysFor(name, d.get("date")))
     return problems
 
 

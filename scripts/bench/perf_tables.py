@@ -5,13 +5,16 @@ JSON, so that the doc is refreshed by pasting, never by retyping figures.
     /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json KERNEL_OPS.json]
     /usr/bin/python3.11 scripts/bench/perf_tables.py cubes27   bench/logs/cubes27_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py shogi     bench/logs/shogi_2026-11-24.json
-    /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-28.json \
+        [--doc doc/performance.md]   (the table written into the doc between its markers)
     /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
 "n/N" the quiet runs out of all; when no run was quiet the figure is over all
 runs and marked "busy"."""
+import contextlib
+import io
 import json
 import sys
 
@@ -149,24 +152,61 @@ def shogi(d):
             fig(s["clean"]["wall_s_per_simulated_s"], s["all"]["wall_s_per_simulated_s"], 0)))
 
 
+def ratio(r):
+    """'median (min-max)' of paired per-round ratios, or a dash."""
+    return "%.2f (%.2f–%.2f)" % (r["median"], r["min"], r["max"]) if r else "—"
+
+
 def effects(d):
-    print("Effects on the 27-cube scene, %d threads, %d steps per variant, %d rounds interleaved (%s); ms per "
-          "step, median (min–max) of quiet rounds.\n" % (d["threads"], d["steps"], d["rounds"], d["date"]))
-    print("| effect | on | off | zero-valued | on, on CPU | off, on CPU | zero-valued, on CPU |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    """The effects table: QDEM's own share of the step (the core's phase
+    timers) and the step on CPU, judged on the paired ratios of the
+    interleaved rounds and on minima (effects.json from bench_effects.py)."""
+    print("Effects on the 27-cube scene (%d tets), %d threads, %d steps per variant, %d rounds interleaved (%s). "
+          "QDEM's share: the core's phase timers summed over the steps (wall clock); on CPU: the process's CPU "
+          "time over the 2 threads (in this bare core world all QDEM's but the Python call). Ratios: median "
+          "(min–max) over the rounds of the per-round ratio to \"off\" (each round runs every variant back to "
+          "back); ms per step: the minimum over all rounds.\n" % (d["tets"], d["threads"], d["steps"], d["rounds"],
+                                                                  d["date"]))
+    print("| effect | on ÷ off, on CPU | zero ÷ off, on CPU | on ÷ off, QDEM's share | zero ÷ off, QDEM's share | "
+          "ms per step on CPU, min: on / off / zero | QDEM's share, min: on / off / zero | whole step, min |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+
+    def mins(group):
+        return " / ".join("%.2f" % group["all"][v]["min"] if group["all"].get(v) else "—"
+                          for v in ("on", "off", "zero"))
+
     for name, e in d["effects"].items():
-        cells = [fig(e["clean"].get(v), e["all"].get(v), 2) if e["all"].get(v) else "—"
-                 for v in ("on", "off", "zero")]
-        c = e.get("on_cpu", {"clean": {}, "all": {}})
-        cells += [fig(c["clean"].get(v), c["all"].get(v), 2) if c["all"].get(v) else "—"
-                  for v in ("on", "off", "zero")]
-        print("| %s | %s |" % (name, " | ".join(cells)))
+        p = e["paired"]
+        print("| %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            name, ratio(p["on_over_off"].get("cpu")), ratio(p["zero_over_off"].get("cpu")),
+            ratio(p["on_over_off"]["qdem"]), ratio(p["zero_over_off"]["qdem"]),
+            mins(e.get("on_cpu", {"all": {}})), mins(e["qdem"]), mins({"all": e["all"]})))
+
+
+BEGIN, END = "<!-- perf_tables.py effects: begin -->", "<!-- perf_tables.py effects: end -->"
+
+
+def intoDoc(doc, table, source):
+    """Put `table` between the markers in `doc` (a Markdown file), naming
+    the JSON it came from; the rest of the file is left as it is."""
+    text = open(doc).read()
+    if BEGIN not in text or END not in text:
+        sys.exit("perf_tables: %s has no %s ... %s markers" % (doc, BEGIN, END))
+    head, rest = text.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    with open(doc, "w") as f:
+        f.write("%s%s\n%s\nFrom `%s`.\n%s%s" % (head, BEGIN, table.rstrip("\n"), source, END, tail))
 
 
 def main():
     kind, path = sys.argv[1], sys.argv[2]
     d = json.load(open(path))
-    if kind == "roofline":
+    if kind == "effects" and "--doc" in sys.argv:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            effects(d)
+        intoDoc(sys.argv[sys.argv.index("--doc") + 1], buf.getvalue(), path)
+    elif kind == "roofline":
         roofline(d, *sys.argv[3:5])
     else:
         {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops}[kind](d)

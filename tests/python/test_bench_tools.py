@@ -72,3 +72,53 @@ def test_the_json_check_names_a_missing_file_and_a_missing_key(tmp_path):
     logs.mkdir()
     (logs / "anything.json").write_text(json.dumps({"benchmark": "bench_effects", "date": "x"}))
     assert any("anything.json: lacks threads" in p for p in bench_schema.checkLogs(str(logs)))
+
+
+def _effectsLog(date, qdemOn=(2.0, 2.2, 4.0), qdemOff=(1.0, 1.1, 2.0)):
+    """A small effects.json as bench_effects.py writes it: three rounds."""
+    import bench_effects
+    runs = {"on": [{"ms_per_step": 3 * q, "qdem_ms_per_step": q, "ms_per_step_on_cpu": q, "busy": True}
+                   for q in qdemOn],
+            "off": [{"ms_per_step": 3 * q, "qdem_ms_per_step": q, "ms_per_step_on_cpu": q, "busy": True}
+                    for q in qdemOff], "zero": []}
+    e = bench_effects.summariseEffect(runs, runs["off"])
+    return {"benchmark": "bench_effects", "date": date, "tets": 10, "threads": 2, "steps": 5, "rounds": 3,
+            "statistic": "paired ratios", "effects": {"viscosity": e}}
+
+
+def test_effects_table_judges_on_paired_ratios_and_minima(tmp_path):
+    """The table's ratios are per-round (on / off of the same round: 2.0,
+    2.0, 2.0 here, although the rounds' figures double from the first to the
+    last), its ms per step the minima; --doc writes only between the markers."""
+    log = tmp_path / "effects.json"
+    log.write_text(json.dumps(_effectsLog("2026-11-28T00:00:00Z")))
+    script = os.path.join(ROOT, "scripts", "bench", "perf_tables.py")
+    out = subprocess.run([PY, script, "effects", str(log)], capture_output=True, text=True, check=True).stdout
+    row = [line for line in out.splitlines() if line.startswith("| viscosity")][0].split("|")
+    assert row[2].strip() == "2.00 (2.00–2.00)"          # on / off on CPU, paired
+    assert row[4].strip() == "2.00 (2.00–2.00)"          # on / off, QDEM's share, paired
+    assert row[3].strip() == "—"                         # no zero-valued runs: not measured
+    assert row[7].strip() == "2.00 / 1.00 / —"           # QDEM's share, ms per step, minima
+    assert row[8].strip() == "6.00 / 3.00 / —"           # the whole step, minima
+    doc = tmp_path / "doc.md"
+    doc.write_text("# A\n\nbefore\n<!-- perf_tables.py effects: begin -->\nold table\n"
+                   "<!-- perf_tables.py effects: end -->\nafter\n")
+    subprocess.run([PY, script, "effects", str(log), "--doc", str(doc)], check=True)
+    text = doc.read_text()
+    assert text.startswith("# A\n\nbefore\n<!-- perf_tables.py effects: begin -->\n")
+    assert text.endswith("<!-- perf_tables.py effects: end -->\nafter\n")
+    assert "old table" not in text and "| viscosity | 2.00 (2.00–2.00) | — | 2.00 (2.00–2.00) |" in text
+
+
+def test_an_effects_log_must_hold_qdems_share_from_the_day_it_was_written(tmp_path):
+    import bench_schema
+    d = _effectsLog("2026-11-28T00:00:00Z")
+    del d["effects"]["viscosity"]["qdem"]
+    (tmp_path / "new.json").write_text(json.dumps(d))
+    old = _effectsLog("2026-11-24T12:00:00Z")
+    for k in ("qdem", "paired", "on_cpu"):
+        del old["effects"]["viscosity"][k]
+    del old["statistic"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    problems = bench_schema.checkLogs(str(tmp_path))
+    assert problems == ["%s: lacks effects.[].qdem.all (at [].qdem)" % (tmp_path / "new.json")], problems
