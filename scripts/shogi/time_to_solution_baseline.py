@@ -163,7 +163,7 @@ def makeCheckpoint(a, path):
     while True:
         w.core.step(dt, chunk)
         steps += chunk
-        if hitAt is None and np.linalg.norm(pieces[1].velocity()) > hitSpeed:
+        if hitAt is None and np.linalg.norm(pieces[1].velocity) > hitSpeed:
             hitAt = (steps, w.core.time)
             print("baseline: rook hit at t = %.5g s (step %d, %.0f s wall)" % (w.core.time, steps,
                                                                               time.time() - start), flush=True)
