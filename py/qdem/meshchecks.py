@@ -145,6 +145,36 @@ def warnUnits(world, pid, nodes, tets, material):
     return False, ""
 
 
+def thickness(nodes):
+    """The body's smallest extent across its principal axes [m] (a plate's
+    thickness, whatever its orientation)."""
+    x = np.asarray(nodes, dtype=float)
+    if len(x) < 4:
+        return 0.0
+    x = x - x.mean(axis=0)
+    _, vecs = np.linalg.eigh(x.T @ x)
+    return float(np.ptp(x @ vecs[:, 0]))
+
+
+def warnRadius(pid, nodes, tets, material):
+    """RuntimeWarning when the material's contact radius is more than half
+    the piece's thickness: its contact surface lies ``radius`` outside the
+    mesh, so the piece collides as a body 2 r thicker than its mesh, and
+    pieces side by side touch 2 r apart (the seed's radius, 0.04 m, belongs
+    to its 766x pieces, not to real-size ones)."""
+    r, t = float(material.radius), thickness(nodes)
+    if not (t > 0 and r > 0.5 * t):
+        return
+    h = _medianEdge(nodes, tets)
+    warnings.warn(
+        "qdem.addPiece: piece %d: the contact radius %.3g m is %.2gx the piece's thickness %.3g m. Its contact "
+        "surface lies %.3g m outside the mesh: it collides as a body %.3g m thick, pieces touch %.3g m apart "
+        "and rest %.3g m above a floor. Scale the radius with the body: about its element size (median edge "
+        "%.3g m) or less, QdemMat(radius=...); the contact stiffness 2 E r follows it (doc/getting_started.md, "
+        "choosing parameters)." % (pid, r, r / t, t, r, t + 2 * r, 2 * r, r, h),
+        RuntimeWarning, stacklevel=_userStacklevel())
+
+
 _START_INSIDE = re.compile(r"^piece (\d+) starts inside obstacle")
 
 

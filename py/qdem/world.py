@@ -180,6 +180,8 @@ class World:
         # What the mesh's shape and size say (doc/meshes.md, "What the checks say").
         meshchecks.warnSlivers(self, pid)
         p._unitsNote = meshchecks.warnUnits(self, pid, x, tets, material)
+        if not p._unitsNote[0]:  # (a mesh in millimetres is named as such, not as a small radius)
+            meshchecks.warnRadius(pid, x, tets, material)
         return p
 
     def stableDt(self):
