@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <map>
 #include <new>
+#include <set>
 #include <numeric>
 #include <unordered_map>
 #include <utility>
@@ -401,6 +403,106 @@ ThinParts findThinParts(const Polyhedron& poly, double cap) {
     return out;
 }
 
+// Smallest height of tet t: 3 V / its largest face area.
+double minHeight(const TetMesh& m, std::size_t t) {
+    std::array<K::Vector_3, 4> x;
+    for (int k = 0; k < 4; ++k) {
+        const double* p = &m.nodes[3 * static_cast<std::size_t>(m.tets[4 * t + k])];
+        x[k] = K::Vector_3(p[0], p[1], p[2]);
+    }
+    double largest = 0;
+    for (int k = 0; k < 4; ++k) {
+        const auto& a = x[(k + 1) % 4];
+        const auto& b = x[(k + 2) % 4];
+        const auto& c = x[(k + 3) % 4];
+        largest = std::max(largest, CGAL::cross_product(b - a, c - a).squared_length());
+    }
+    return largest > 0 ? std::fabs(tetSixVolume(m, t)) / std::sqrt(largest) : 0.0;
+}
+
+// Boundary slivers: tets lying flat on the surface, two of their faces on
+// it (outward normals within 45 degrees), four surface vertices.
+// Perturbation and exudation cannot remove them (they keep the surface
+// triangles); they set the stable step.  Those lower than the median
+// element's height / kSliverHeightFactor go: the surface moves inward by
+// their height, the volume by theirs.  A removal that would put an edge on
+// four surface triangles (a non-manifold surface) is skipped.
+constexpr double kSliverHeightFactor = 3.0;
+
+std::size_t dropSurfaceSlivers(TetMesh& m) {
+    std::size_t removed = 0;
+    for (int round = 0; round < 8; ++round) {
+        const std::size_t nt = m.nTets();
+        if (nt < 2) break;
+        std::vector<double> h(nt);
+        for (std::size_t t = 0; t < nt; ++t) h[t] = minHeight(m, t);
+        std::vector<double> sorted = h;
+        std::nth_element(sorted.begin(), sorted.begin() + nt / 2, sorted.end());
+        const double low = sorted[nt / 2] / kSliverHeightFactor;
+        auto face = [&](std::size_t t, int k) {
+            std::array<int32_t, 3> f{};
+            int n = 0;
+            for (int i = 0; i < 4; ++i)
+                if (i != k) f[n++] = m.tets[4 * t + i];
+            std::sort(f.begin(), f.end());
+            return f;
+        };
+        std::map<std::array<int32_t, 3>, int> faceCount;
+        for (std::size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 4; ++k) ++faceCount[face(t, k)];
+        std::map<std::pair<int32_t, int32_t>, int> surfaceEdges;  // edge -> surface triangles on it
+        for (const auto& [f, count] : faceCount)
+            if (count == 1)
+                for (int i = 0; i < 3; ++i) ++surfaceEdges[{f[i], f[(i + 1) % 3]}];
+        auto point = [&](int32_t v) {
+            const double* p = &m.nodes[3 * static_cast<std::size_t>(v)];
+            return K::Vector_3(p[0], p[1], p[2]);
+        };
+        std::vector<char> drop(nt, 0);
+        std::set<std::pair<int32_t, int32_t>> changed;  // opposite edges made surface this round
+        bool any = false;
+        for (std::size_t t = 0; t < nt; ++t) {
+            if (h[t] >= low) continue;
+            std::vector<int> out;
+            for (int k = 0; k < 4; ++k)
+                if (faceCount[face(t, k)] == 1) out.push_back(k);
+            if (out.size() != 2) continue;
+            // The surface faces are opposite vertices out[0], out[1]; the edge
+            // they share joins the other two, the opposite edge joins these.
+            const int32_t* c = &m.tets[4 * t];
+            const int32_t a = c[out[0]], b = c[out[1]];
+            const std::pair<int32_t, int32_t> opp{std::min(a, b), std::max(a, b)};
+            if (surfaceEdges.count(opp) || changed.count(opp)) continue;
+            // Outward normal of the face opposite vertex k: away from vertex k.
+            auto normal = [&](int k) {
+                std::array<int32_t, 3> f{};
+                int n = 0;
+                for (int i = 0; i < 4; ++i)
+                    if (i != k) f[n++] = c[i];
+                K::Vector_3 nv = CGAL::cross_product(point(f[1]) - point(f[0]), point(f[2]) - point(f[0]));
+                if (nv * (point(c[k]) - point(f[0])) > 0) nv = -nv;
+                return nv / std::sqrt(nv.squared_length());
+            };
+            if (normal(out[0]) * normal(out[1]) < std::sqrt(0.5)) continue;
+            drop[t] = 1;
+            changed.insert(opp);
+            any = true;
+        }
+        if (!any) break;
+        std::size_t kept = 0;
+        for (std::size_t t = 0; t < nt; ++t) {
+            if (drop[t]) {
+                ++removed;
+                continue;
+            }
+            for (int i = 0; i < 4; ++i) m.tets[4 * kept + i] = m.tets[4 * t + i];
+            ++kept;
+        }
+        m.tets.resize(4 * kept);
+    }
+    return removed;
+}
+
 double meshVolume(const TetMesh& m) {
     double v6 = 0;
     for (std::size_t t = 0; t < m.nTets(); ++t) v6 += tetSixVolume(m, t);
@@ -501,6 +603,7 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
             // its cells (a 0.3 x 0.3 x 0.02 box at cellSize 0.015-0.04, found by a
             // tester): those in the surface go (the shape is the same).
             dropFlatSurfaceTets(mesh);
+            dropSurfaceSlivers(mesh);
             done = SurfaceMeshReport{soup.volume, meshVolume(mesh), skin, fd, pass, thin.thinnest, thin.size->size()};
             const double lost = 1.0 - done.meshVolume / soup.volume;
             if (!adapt || lost <= 1.0 - kVolumeKept || pass == kVolumePasses || mesh.nTets() == 0) break;
