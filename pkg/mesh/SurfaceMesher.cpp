@@ -374,15 +374,15 @@ ThinParts findThinParts(const Polyhedron& poly, double cap) {
                                                    CGAL::squared_distance(c[1], c[2]),
                                                    CGAL::squared_distance(c[2], c[0])}));
         const int m = std::clamp(static_cast<int>(std::ceil(longest / (0.5 * cap))), 1, 24);
-        double thickness = std::numeric_limits<double>::infinity();
+        std::vector<double> across;  // thickness at each sample (inf: no opposite face)
         auto probe = [&](double u, double v) {
             const Point q = c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0]);
             const K::Ray_3 ray(q, -n);
             const auto hit = out.tree->first_intersection(ray, [f](FaceHandle g) { return g == f; });
-            if (!hit) return;
-            const Point* x = boost::get<Point>(&hit->first);
-            if (!x || unitNormal(hit->second) * n > kOppositeNormalsCos) return;
-            thickness = std::min(thickness, std::sqrt(CGAL::squared_distance(q, *x)));
+            const Point* x = hit ? boost::get<Point>(&hit->first) : nullptr;
+            across.push_back(!x || unitNormal(hit->second) * n > kOppositeNormalsCos
+                                 ? std::numeric_limits<double>::infinity()
+                                 : std::sqrt(CGAL::squared_distance(q, *x)));
         };
         // Centroids of the m^2 sub-triangles of an m-fold split of the face.
         for (int i = 0; i < m; ++i)
@@ -390,6 +390,11 @@ ThinParts findThinParts(const Polyhedron& poly, double cap) {
                 probe((i + 1.0 / 3) / m, (j + 1.0 / 3) / m);
                 if (i + j + 2 <= m) probe((i + 2.0 / 3) / m, (j + 2.0 / 3) / m);
             }
+        // The median over the face: a plate's faces are as thick everywhere,
+        // a wedge's large face only near its tip, which Mesh_3 keeps as a
+        // sharp feature (refining towards the tip would not end).
+        std::nth_element(across.begin(), across.begin() + across.size() / 2, across.end());
+        const double thickness = across[across.size() / 2];
         const double size = kSizePerThickness * thickness;
         if (size < cap) {
             (*out.size)[f] = size;

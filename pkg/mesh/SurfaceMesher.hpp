@@ -36,7 +36,13 @@ struct SurfaceMeshReport {
 //                  give identical meshes
 //
 // Sharp edges (dihedral angle sharper than 60 degrees) and corners of the
-// input are kept.  The result holds only the tets inside the surface, nodes
+// input are kept.  Parts thinner than twice the cell size (measured through
+// the body along the surface normals) get cells of half their thickness.
+// With surfaceSize and facetDistance both <= 0 (the defaults), the surface is
+// refined and meshed again (at most 4 meshings) until the mesh keeps 99 % of
+// the volume the surface encloses.  Slivers flat on the surface, lower than
+// the median element / 3, are removed.  `report`, when given, receives the
+// volumes and the sizes of the last meshing.  The result holds only the tets inside the surface, nodes
 // renumbered without unused ones, every tet positively oriented; it passes
 // checkMesh.  Throws InputError naming the problem for invalid input (too few
 // vertices, bad index, NaN, bad cellSize, an open or non-manifold surface, a
