@@ -458,7 +458,8 @@ std::size_t dropSurfaceSlivers(TetMesh& m) {
         std::map<std::pair<int32_t, int32_t>, int> surfaceEdges;  // edge -> surface triangles on it
         for (const auto& [f, count] : faceCount)
             if (count == 1)
-                for (int i = 0; i < 3; ++i) ++surfaceEdges[{f[i], f[(i + 1) % 3]}];
+                for (int i = 0; i < 3; ++i)
+                    ++surfaceEdges[{std::min(f[i], f[(i + 1) % 3]), std::max(f[i], f[(i + 1) % 3])}];
         auto point = [&](int32_t v) {
             const double* p = &m.nodes[3 * static_cast<std::size_t>(v)];
             return K::Vector_3(p[0], p[1], p[2]);
@@ -506,6 +507,32 @@ std::size_t dropSurfaceSlivers(TetMesh& m) {
         m.tets.resize(4 * kept);
     }
     return removed;
+}
+
+// Whether the boundary triangles of a tet mesh form a closed manifold surface.
+bool surfaceIsManifold(const TetMesh& m) {
+    std::map<std::array<int32_t, 3>, std::pair<int, std::array<int32_t, 3>>> faces;
+    for (std::size_t t = 0; t < m.nTets(); ++t)
+        for (int k = 0; k < 4; ++k) {
+            std::array<int32_t, 3> f{};
+            int n = 0;
+            for (int i = 0; i < 4; ++i)
+                if (i != k) f[n++] = m.tets[4 * t + i];
+            std::array<int32_t, 3> key = f;
+            std::sort(key.begin(), key.end());
+            auto& e = faces[key];
+            ++e.first;
+            e.second = f;
+        }
+    std::vector<int32_t> tris;
+    for (const auto& [key, e] : faces)
+        if (e.first == 1) tris.insert(tris.end(), e.second.begin(), e.second.end());
+    try {
+        checkClosedManifold(tris, m.nNodes());
+    } catch (const InputError&) {
+        return false;
+    }
+    return true;
 }
 
 double meshVolume(const TetMesh& m) {
@@ -587,11 +614,12 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
 
         Domain domain(poly, &rng);
         domain.detect_features(kFeatureAngleDeg);
-        const LocalSize cells{thin.tree, thin.size, cellSize};
+        std::shared_ptr<const std::unordered_map<FaceHandle, double>> thinSize = thin.size;
         for (int pass = 1;; ++pass) {
             CGAL::get_default_random() = CGAL::Random(seed);
             rng = CGAL::Random(seed);
-            const LocalSize surface{thin.tree, thin.size, skin};
+            const LocalSize cells{thin.tree, thinSize, cellSize};
+            const LocalSize surface{thin.tree, thinSize, skin};
             Criteria criteria(Criteria::Edge_criteria(SizeField{surface}),
                               Criteria::Facet_criteria(25.0, SizeField{surface}, 0.0),
                               Criteria::Cell_criteria(3.0, SizeField{cells}));
@@ -608,8 +636,23 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
             // its cells (a 0.3 x 0.3 x 0.02 box at cellSize 0.015-0.04, found by a
             // tester): those in the surface go (the shape is the same).
             dropFlatSurfaceTets(mesh);
-            dropSurfaceSlivers(mesh);
-            done = SurfaceMeshReport{soup.volume, meshVolume(mesh), skin, fd, pass, thin.thinnest, thin.size->size()};
+            {
+                // Kept only if the surface stays closed and manifold (checked as
+                // the input surface is); otherwise the slivers stay.
+                TetMesh peeled = mesh;
+                if (dropSurfaceSlivers(peeled) > 0 && surfaceIsManifold(peeled)) mesh = std::move(peeled);
+            }
+            // The thin-part sizing jumps from face to face; next to a sharp
+            // wedge Mesh_3 can then merge faces (a concave dart prism): mesh
+            // once more without it (the sizes asked, as everywhere else).
+            if (!thinSize->empty() && !surfaceIsManifold(mesh)) {
+                thinSize = std::make_shared<const std::unordered_map<FaceHandle, double>>();
+                --pass;
+                continue;
+            }
+            done = SurfaceMeshReport{soup.volume, meshVolume(mesh), skin, fd, pass,
+                                     thinSize->empty() ? std::numeric_limits<double>::infinity() : thin.thinnest,
+                                     thinSize->size()};
             const double lost = 1.0 - done.meshVolume / soup.volume;
             if (!adapt || lost <= 1.0 - kVolumeKept || pass == kVolumePasses || mesh.nTets() == 0) break;
             // The volume a surface triangle cuts off grows as its size squared
