@@ -5,7 +5,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <map>
 #include <new>
+#include <set>
 #include <numeric>
 #include <unordered_map>
 #include <utility>
@@ -14,6 +17,9 @@
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
 
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_criteria_3.h>
@@ -42,18 +48,98 @@ using Criteria = CGAL::Mesh_criteria_3<Tr>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 namespace P = CGAL::parameters;
 
+using FaceHandle = boost::graph_traits<Polyhedron>::face_descriptor;
+using Primitive = CGAL::AABB_face_graph_triangle_primitive<Polyhedron>;
+using AabbTree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using FacetVisitor = Criteria::Facet_criteria::Visitor;
+
+// Local element size: `cap` everywhere, smaller next to the surface of a
+// part thinner than the cap (the size of the closest input face's part).
+struct LocalSize {
+    std::shared_ptr<const AabbTree> tree;
+    std::shared_ptr<const std::unordered_map<FaceHandle, double>> thin;  // face -> size there
+    double cap = 0;
+    double at(const Point& p) const {
+        if (!thin || thin->empty()) return cap;
+        const auto it = thin->find(tree->closest_point_and_primitive(p).second);
+        return it == thin->end() ? cap : std::min(cap, it->second);
+    }
+};
+
+// LocalSize as a Mesh_3 sizing field (edges, facets, cells).
+struct SizeField {
+    LocalSize size;
+    double operator()(const Point& p, int, const Domain::Index&) const { return size.at(p); }
+};
+
+// Mesh_3's facet-distance criterion (a surface triangle must lie within
+// `distance` of the input surface), waived for triangles already smaller
+// than `minFraction` x the local size.  Plain, it refines without bound
+// where the input turns sharply without a protected feature (a scan's ear
+// tip, a noisy bump): tets 40-180 x smaller than the rest set the stable
+// step, to follow detail far below the element size.  (CGAL 6 names this
+// facet_min_size; Mesh_3 5.5 has no such bound.)
+class DistanceAboveMinSize : public CGAL::Mesh_3::Curvature_size_criterion<Tr, FacetVisitor> {
+    using Base = CGAL::Mesh_3::Abstract_criterion<Tr, FacetVisitor>;
+    using Quality = Base::Quality;
+    using Is_bad = Base::Is_bad;
+
+public:
+    DistanceAboveMinSize(double distance, LocalSize minSize, double minFraction)
+        : sqDistance_(distance * distance), minSize_(std::move(minSize)), minFraction_(minFraction) {}
+
+protected:
+    void do_accept(FacetVisitor& v) const override { v.visit(*this); }
+    DistanceAboveMinSize* do_clone() const override { return new DistanceAboveMinSize(*this); }
+    Is_bad do_is_bad(const Tr& tr, const Tr::Facet& f) const override {
+        const auto& gt = tr.geom_traits();
+        const Tr::Weighted_point& p1 = tr.point(f.first, (f.second + 1) & 3);
+        const Tr::Weighted_point& p2 = tr.point(f.first, (f.second + 2) & 3);
+        const Tr::Weighted_point& p3 = tr.point(f.first, (f.second + 3) & 3);
+        const Point c = gt.construct_weighted_circumcenter_3_object()(p1, p2, p3);
+        const Point& centre = f.first->get_facet_surface_center(f.second);
+        const double sqDist = tr.min_squared_distance(c, centre);
+        if (sqDist <= sqDistance_) return Is_bad();
+        const double sqRadius = CGAL::squared_distance(c, gt.construct_point_3_object()(p1));
+        const double small = minFraction_ * minSize_.at(centre);
+        if (sqRadius < small * small) return Is_bad();
+        return Is_bad(Quality(sqDistance_ / sqDist));
+    }
+
+private:
+    double sqDistance_;
+    LocalSize minSize_;
+    double minFraction_;
+};
+
 // Dihedral angle below which an edge of the input is kept as a sharp feature.
 constexpr double kFeatureAngleDeg = 60.0;
 // Refuse requests that would plainly exhaust memory or take hours: the
 // estimate below is about twice the real count, and CGAL needs about 0.45 kB
 // and 70 us per tet (unit cube, cellSize 0.025: 276k tets, 120 MB, 20 s).
 constexpr double kMaxEstimatedTets = 2.0e7;
-// A body thinner than about 0.4 surface cells comes out of Mesh_3 with its
-// opposite faces merged (a non-manifold mesh, after minutes for a large
-// plate): refused at once below this fraction of the surface cell size.  The
-// thickness is estimated as 2 x volume / area (a plate's thickness; half a
-// rod's diameter; a third of a cube's side).
-constexpr double kMinThicknessPerCell = 0.2;
+// A part thinner than its cells comes out of Mesh_3 with its opposite faces
+// merged (a non-manifold mesh).  Where the body is thinner than the cells,
+// the cells there are made this fraction of the thickness: two across.
+constexpr double kSizePerThickness = 0.5;
+// Two faces are opposite sides of a thin part when their outward normals
+// are more than 120 degrees apart: the sides of an edge sharper than 60
+// degrees (which Mesh_3 keeps as a feature) are not a thin part.
+constexpr double kOppositeNormalsCos = -0.5;
+// The facet-distance criterion is waived for surface triangles smaller
+// than this fraction of the local surface size (see DistanceAboveMinSize).
+constexpr double kDistanceWaivedBelow = 0.5;
+// The default surface size and facet distance are reduced until the mesh
+// keeps this fraction of the volume the surface encloses (at most
+// kVolumePasses meshings).
+constexpr double kVolumeKept = 0.99;
+// Sliver perturbation's target smallest dihedral angle.  With the default (0,
+// "as far as possible") and no time limit it runs without end on the
+// slivers it cannot reach (those with four surface vertices): a bumpy ball's
+// 2,900 tets took 70 s instead of 7 s, for a worst element 2.5 instead of 2.7
+// x below the median (exudation, run to the end, does the rest).
+constexpr double kPerturbUntilDeg = 5.0;
+constexpr int kVolumePasses = 4;
 
 struct Validated {
     std::vector<Point> points;                     // used vertices only
@@ -245,6 +331,216 @@ Polyhedron makePolyhedron(Validated& s) {
     return poly;
 }
 
+// Parts of the body thinner than the cells: the thickness under each input
+// face is the shortest distance, from points spread over the face (at most
+// half a cell apart), along the inward normal to the first opposite face
+// met.  Faces whose part needs cells smaller than `cap` are kept with that
+// size, kSizePerThickness x thickness.
+struct ThinParts {
+    std::shared_ptr<AabbTree> tree;
+    std::shared_ptr<std::unordered_map<FaceHandle, double>> size;  // thin faces only
+    double thinnest = std::numeric_limits<double>::infinity();
+    double estimatedTets = 0;  // tets the thin parts need, at their size
+};
+
+ThinParts findThinParts(const Polyhedron& poly, double cap) {
+    ThinParts out;
+    out.tree = std::make_shared<AabbTree>(faces(poly).first, faces(poly).second, poly);
+    out.tree->accelerate_distance_queries();
+    out.size = std::make_shared<std::unordered_map<FaceHandle, double>>();
+    auto corners = [](FaceHandle f) {
+        const auto h = f->halfedge();
+        return std::array<Point, 3>{h->vertex()->point(), h->next()->vertex()->point(),
+                                    h->next()->next()->vertex()->point()};
+    };
+    // The orientation orient_polygon_soup chose: outward when the signed
+    // volume is positive.
+    double vol6 = 0;
+    const Point o = faces(poly).first != faces(poly).second ? corners(*faces(poly).first)[0] : CGAL::ORIGIN;
+    for (FaceHandle f : faces(poly)) {
+        const auto c = corners(f);
+        vol6 += (c[0] - o) * CGAL::cross_product(c[1] - o, c[2] - o);
+    }
+    const double outward = vol6 >= 0 ? 1.0 : -1.0;
+    auto unitNormal = [&](FaceHandle f) {
+        const auto c = corners(f);
+        const K::Vector_3 n = CGAL::cross_product(c[1] - c[0], c[2] - c[0]);
+        return n * (outward / std::sqrt(n.squared_length()));
+    };
+    for (FaceHandle f : faces(poly)) {
+        const auto c = corners(f);
+        const K::Vector_3 n = unitNormal(f);
+        const double longest = std::sqrt(std::max({CGAL::squared_distance(c[0], c[1]),
+                                                   CGAL::squared_distance(c[1], c[2]),
+                                                   CGAL::squared_distance(c[2], c[0])}));
+        const int m = std::clamp(static_cast<int>(std::ceil(longest / (0.5 * cap))), 1, 24);
+        std::vector<double> across;  // thickness at each sample (inf: no opposite face)
+        auto probe = [&](double u, double v) {
+            const Point q = c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0]);
+            const K::Ray_3 ray(q, -n);
+            const auto hit = out.tree->first_intersection(ray, [f](FaceHandle g) { return g == f; });
+            const Point* x = hit ? boost::get<Point>(&hit->first) : nullptr;
+            across.push_back(!x || unitNormal(hit->second) * n > kOppositeNormalsCos
+                                 ? std::numeric_limits<double>::infinity()
+                                 : std::sqrt(CGAL::squared_distance(q, *x)));
+        };
+        // Centroids of the m^2 sub-triangles of an m-fold split of the face.
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; i + j < m; ++j) {
+                probe((i + 1.0 / 3) / m, (j + 1.0 / 3) / m);
+                if (i + j + 2 <= m) probe((i + 2.0 / 3) / m, (j + 2.0 / 3) / m);
+            }
+        // The median over the face: a plate's faces are as thick everywhere,
+        // a wedge's large face only near its tip, which Mesh_3 keeps as a
+        // sharp feature (refining towards the tip would not end).
+        std::nth_element(across.begin(), across.begin() + across.size() / 2, across.end());
+        const double thickness = across[across.size() / 2];
+        const double size = kSizePerThickness * thickness;
+        if (size < cap) {
+            (*out.size)[f] = size;
+            out.thinnest = std::min(out.thinnest, thickness);
+            // The face's half of its part (area x thickness / 2) at that size
+            // (the density of the estimate in meshClosedSurface).
+            const double area = 0.5 * std::sqrt(CGAL::cross_product(c[1] - c[0], c[2] - c[0]).squared_length());
+            out.estimatedTets += 4.0 * 0.5 * area * thickness / (0.513 * size * size * size);
+        }
+    }
+    return out;
+}
+
+// Smallest height of tet t: 3 V / its largest face area.
+double minHeight(const TetMesh& m, std::size_t t) {
+    std::array<K::Vector_3, 4> x;
+    for (int k = 0; k < 4; ++k) {
+        const double* p = &m.nodes[3 * static_cast<std::size_t>(m.tets[4 * t + k])];
+        x[k] = K::Vector_3(p[0], p[1], p[2]);
+    }
+    double largest = 0;
+    for (int k = 0; k < 4; ++k) {
+        const auto& a = x[(k + 1) % 4];
+        const auto& b = x[(k + 2) % 4];
+        const auto& c = x[(k + 3) % 4];
+        largest = std::max(largest, CGAL::cross_product(b - a, c - a).squared_length());
+    }
+    return largest > 0 ? std::fabs(tetSixVolume(m, t)) / std::sqrt(largest) : 0.0;
+}
+
+// Boundary slivers: tets lying flat on the surface, two of their faces on
+// it (outward normals within 45 degrees), four surface vertices.
+// Perturbation and exudation cannot remove them (they keep the surface
+// triangles); they set the stable step.  Those lower than the median
+// element's height / kSliverHeightFactor go: the surface moves inward by
+// their height, the volume by theirs.  A removal that would put an edge on
+// four surface triangles (a non-manifold surface) is skipped.
+constexpr double kSliverHeightFactor = 3.0;
+
+std::size_t dropSurfaceSlivers(TetMesh& m) {
+    std::size_t removed = 0;
+    for (int round = 0; round < 8; ++round) {
+        const std::size_t nt = m.nTets();
+        if (nt < 2) break;
+        std::vector<double> h(nt);
+        for (std::size_t t = 0; t < nt; ++t) h[t] = minHeight(m, t);
+        std::vector<double> sorted = h;
+        std::nth_element(sorted.begin(), sorted.begin() + nt / 2, sorted.end());
+        const double low = sorted[nt / 2] / kSliverHeightFactor;
+        auto face = [&](std::size_t t, int k) {
+            std::array<int32_t, 3> f{};
+            int n = 0;
+            for (int i = 0; i < 4; ++i)
+                if (i != k) f[n++] = m.tets[4 * t + i];
+            std::sort(f.begin(), f.end());
+            return f;
+        };
+        std::map<std::array<int32_t, 3>, int> faceCount;
+        for (std::size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 4; ++k) ++faceCount[face(t, k)];
+        std::map<std::pair<int32_t, int32_t>, int> surfaceEdges;  // edge -> surface triangles on it
+        for (const auto& [f, count] : faceCount)
+            if (count == 1)
+                for (int i = 0; i < 3; ++i)
+                    ++surfaceEdges[{std::min(f[i], f[(i + 1) % 3]), std::max(f[i], f[(i + 1) % 3])}];
+        auto point = [&](int32_t v) {
+            const double* p = &m.nodes[3 * static_cast<std::size_t>(v)];
+            return K::Vector_3(p[0], p[1], p[2]);
+        };
+        std::vector<char> drop(nt, 0);
+        std::set<std::pair<int32_t, int32_t>> changed;  // opposite edges made surface this round
+        bool any = false;
+        for (std::size_t t = 0; t < nt; ++t) {
+            if (h[t] >= low) continue;
+            std::vector<int> out;
+            for (int k = 0; k < 4; ++k)
+                if (faceCount[face(t, k)] == 1) out.push_back(k);
+            if (out.size() != 2) continue;
+            // The surface faces are opposite vertices out[0], out[1]; the edge
+            // they share joins the other two, the opposite edge joins these.
+            const int32_t* c = &m.tets[4 * t];
+            const int32_t a = c[out[0]], b = c[out[1]];
+            const std::pair<int32_t, int32_t> opp{std::min(a, b), std::max(a, b)};
+            if (surfaceEdges.count(opp) || changed.count(opp)) continue;
+            // Outward normal of the face opposite vertex k: away from vertex k.
+            auto normal = [&](int k) {
+                std::array<int32_t, 3> f{};
+                int n = 0;
+                for (int i = 0; i < 4; ++i)
+                    if (i != k) f[n++] = c[i];
+                K::Vector_3 nv = CGAL::cross_product(point(f[1]) - point(f[0]), point(f[2]) - point(f[0]));
+                if (nv * (point(c[k]) - point(f[0])) > 0) nv = -nv;
+                return nv / std::sqrt(nv.squared_length());
+            };
+            if (normal(out[0]) * normal(out[1]) < std::sqrt(0.5)) continue;
+            drop[t] = 1;
+            changed.insert(opp);
+            any = true;
+        }
+        if (!any) break;
+        std::size_t kept = 0;
+        for (std::size_t t = 0; t < nt; ++t) {
+            if (drop[t]) {
+                ++removed;
+                continue;
+            }
+            for (int i = 0; i < 4; ++i) m.tets[4 * kept + i] = m.tets[4 * t + i];
+            ++kept;
+        }
+        m.tets.resize(4 * kept);
+    }
+    return removed;
+}
+
+// Whether the boundary triangles of a tet mesh form a closed manifold surface.
+bool surfaceIsManifold(const TetMesh& m) {
+    std::map<std::array<int32_t, 3>, std::pair<int, std::array<int32_t, 3>>> faces;
+    for (std::size_t t = 0; t < m.nTets(); ++t)
+        for (int k = 0; k < 4; ++k) {
+            std::array<int32_t, 3> f{};
+            int n = 0;
+            for (int i = 0; i < 4; ++i)
+                if (i != k) f[n++] = m.tets[4 * t + i];
+            std::array<int32_t, 3> key = f;
+            std::sort(key.begin(), key.end());
+            auto& e = faces[key];
+            ++e.first;
+            e.second = f;
+        }
+    std::vector<int32_t> tris;
+    for (const auto& [key, e] : faces)
+        if (e.first == 1) tris.insert(tris.end(), e.second.begin(), e.second.end());
+    try {
+        checkClosedManifold(tris, m.nNodes());
+    } catch (const InputError&) {
+        return false;
+    }
+    return true;
+}
+
+double meshVolume(const TetMesh& m) {
+    double v6 = 0;
+    for (std::size_t t = 0; t < m.nTets(); ++t) v6 += tetSixVolume(m, t);
+    return v6 / 6.0;
+}
+
 TetMesh extract(const C3t3& c3t3) {
     TetMesh m;
     std::unordered_map<Tr::Vertex_handle, int32_t> index;
@@ -274,50 +570,98 @@ TetMesh extract(const C3t3& c3t3) {
 }  // namespace
 
 TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector<int32_t>& triangles,
-                          double cellSize, double facetDistance, unsigned seed, double surfaceSize) {
+                          double cellSize, double facetDistance, unsigned seed, double surfaceSize,
+                          SurfaceMeshReport* report) {
     checkArguments(vertices, triangles, cellSize, facetDistance);
     if (std::isnan(surfaceSize) || std::isinf(surfaceSize))
         throw InputError(cat("meshClosedSurface: surfaceSize must be finite (<= 0 selects cellSize), got ", surfaceSize));
-    const double skin = surfaceSize > 0 ? surfaceSize : cellSize;
+    double skin = surfaceSize > 0 ? surfaceSize : cellSize;
+    double fd = facetDistance > 0 ? facetDistance : cellSize / 10.0;
+    // The defaults are the caller's to override: only they adapt to the volume.
+    const bool adapt = !(surfaceSize > 0) && !(facetDistance > 0);
     checkClosedManifold(triangles, vertices.size() / 3);
     Validated soup = buildSoup(vertices, triangles);
 
     TetMesh mesh;
+    SurfaceMeshReport done;
     try {
         // Mesh_3 draws from CGAL's default generator (thread-local) and from
-        // the domain's generator: seed both so runs are reproducible.
-        CGAL::get_default_random() = CGAL::Random(seed);
+        // the domain's generator: both are seeded before every meshing, so
+        // runs are reproducible.
         CGAL::Random rng(seed);
 
         Polyhedron poly = makePolyhedron(soup);
         if (!(soup.volume > 0))
             throw InputError("meshClosedSurface: the surface encloses no volume");
-        const double thickness = 2.0 * soup.volume / soup.area;
-        if (thickness < kMinThicknessPerCell * skin && soup.extent > skin)
-            throw InputError(cat("meshClosedSurface: the body is too thin for ",
-                                 surfaceSize > 0 ? "surfaceSize " : "cellSize ", skin, ": it is about ", thickness,
-                                 " thick (2 x volume / surface area), and tetrahedra of that size cannot fit "
-                                 "between its opposite faces (Mesh_3 would merge them into a non-manifold mesh). "
-                                 "Use a cellSize (and surfaceSize) of at most about 2 x the thickness, here <= ",
-                                 2.0 * thickness, ", or mesh a plate as qdem.boxMesh with one or more cells across"));
+        const ThinParts thin = findThinParts(poly, std::max(cellSize, skin));
         // A regular tet of circumradius R has volume 8 R^3 / (9 sqrt 3); four
         // times that density is about twice what Mesh_3 really produces.
-        const double estimate = 4.0 * soup.volume / (0.513 * std::pow(std::min(cellSize, skin), 3));
-        if (estimate > kMaxEstimatedTets)
+        const double estimate = 4.0 * soup.volume / (0.513 * std::pow(std::min(cellSize, skin), 3)) +
+                                thin.estimatedTets;
+        if (estimate > kMaxEstimatedTets) {
+            if (thin.estimatedTets > 0.5 * estimate)
+                throw InputError(cat("meshClosedSurface: the body is too thin for ",
+                                     surfaceSize > 0 ? "surfaceSize " : "cellSize ", skin, ": parts of it are ",
+                                     thin.thinnest, " thick (measured through the body along the surface "
+                                     "normals) and need tetrahedra of about ", kSizePerThickness * thin.thinnest,
+                                     " there, about ", estimate, " tetrahedra in all (the limit is ",
+                                     kMaxEstimatedTets, "). Thicken those parts, or mesh a plate as "
+                                     "qdem.boxMesh with one or more cells across"));
             throw InputError(cat("meshClosedSurface: cellSize ", cellSize, " is too small for a body of volume ",
                                  soup.volume, " (about ", estimate, " tetrahedra; the limit is ",
                                  kMaxEstimatedTets, ")"));
+        }
 
-        const double fd = facetDistance > 0 ? facetDistance : cellSize / 10.0;
         Domain domain(poly, &rng);
         domain.detect_features(kFeatureAngleDeg);
-        Criteria criteria(P::edge_size = skin, P::facet_angle = 25.0, P::facet_size = skin,
-                          P::facet_distance = fd, P::cell_radius_edge_ratio = 3.0, P::cell_size = cellSize);
-        // Time limits 0 = none: the default limits depend on the wall-clock
-        // time of the refinement and would make the result non-deterministic.
-        C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_lloyd(), P::no_odt(),
-                                            P::perturb(P::time_limit = 0.0), P::exude(P::time_limit = 0.0));
-        mesh = extract(c3t3);
+        std::shared_ptr<const std::unordered_map<FaceHandle, double>> thinSize = thin.size;
+        for (int pass = 1;; ++pass) {
+            CGAL::get_default_random() = CGAL::Random(seed);
+            rng = CGAL::Random(seed);
+            const LocalSize cells{thin.tree, thinSize, cellSize};
+            const LocalSize surface{thin.tree, thinSize, skin};
+            Criteria criteria(Criteria::Edge_criteria(SizeField{surface}),
+                              Criteria::Facet_criteria(25.0, SizeField{surface}, 0.0),
+                              Criteria::Cell_criteria(3.0, SizeField{cells}));
+            criteria.add_facet_criterion(new DistanceAboveMinSize(fd, surface, kDistanceWaivedBelow));
+            // Time limits 0 = none: the default limits depend on the wall-clock
+            // time of the refinement and would make the result non-deterministic.
+            // Perturbation stops once every dihedral angle exceeds kPerturbUntilDeg;
+            // exudation (sliver_bound 0) raises the smallest angle as far as it can.
+            C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_lloyd(), P::no_odt(),
+                                                P::perturb(P::time_limit = 0.0, P::sliver_bound = kPerturbUntilDeg),
+                                                P::exude(P::time_limit = 0.0, P::sliver_bound = 0.0));
+            mesh = extract(c3t3);
+            // Mesh_3 leaves flat slivers on the flat faces of a plate thinner than
+            // its cells (a 0.3 x 0.3 x 0.02 box at cellSize 0.015-0.04, found by a
+            // tester): those in the surface go (the shape is the same).
+            dropFlatSurfaceTets(mesh);
+            {
+                // Kept only if the surface stays closed and manifold (checked as
+                // the input surface is); otherwise the slivers stay.
+                TetMesh peeled = mesh;
+                if (dropSurfaceSlivers(peeled) > 0 && surfaceIsManifold(peeled)) mesh = std::move(peeled);
+            }
+            // The thin-part sizing jumps from face to face; next to a sharp
+            // wedge Mesh_3 can then merge faces (a concave dart prism): mesh
+            // once more without it (the sizes asked, as everywhere else).
+            if (!thinSize->empty() && !surfaceIsManifold(mesh)) {
+                thinSize = std::make_shared<const std::unordered_map<FaceHandle, double>>();
+                --pass;
+                continue;
+            }
+            done = SurfaceMeshReport{soup.volume, meshVolume(mesh), skin, fd, pass,
+                                     thinSize->empty() ? std::numeric_limits<double>::infinity() : thin.thinnest,
+                                     thinSize->size()};
+            const double lost = 1.0 - done.meshVolume / soup.volume;
+            if (!adapt || lost <= 1.0 - kVolumeKept || pass == kVolumePasses || mesh.nTets() == 0) break;
+            // The volume a surface triangle cuts off grows as its size squared
+            // (its depth, size^2 / (2 x curvature radius), times its area) and as
+            // the facet distance: aim at 0.7 % lost.
+            const double ratio = std::max(0.1, 0.007 / lost);
+            skin *= std::sqrt(ratio);
+            fd *= ratio;
+        }
     } catch (const InputError&) {
         throw;
     } catch (const std::bad_alloc&) {
@@ -329,11 +673,6 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
     if (mesh.nTets() == 0)
         throw InputError(cat("meshClosedSurface: the mesh has no tetrahedra (cellSize ", cellSize,
                              " may be too large for a body of volume ", soup.volume, ")"));
-    // Mesh_3 leaves flat slivers on the flat faces of a plate thinner than
-    // its cells (a 0.3 x 0.3 x 0.02 box at cellSize 0.015-0.04, found by a
-    // tester): those in the surface go (the shape is the same), any other
-    // is named with the remedy rather than as a tetrahedron number alone.
-    dropFlatSurfaceTets(mesh);
     try {
         checkMesh(mesh);
     } catch (const InputError& e) {
@@ -343,6 +682,7 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
                              ": use a smaller cellSize (and surfaceSize), or another seed; a plate meshes exactly "
                              "as qdem.boxMesh"));
     }
+    if (report) *report = done;
     return mesh;
 }
 

@@ -16,12 +16,15 @@ namespace py = pybind11;
 namespace {
 
 constexpr const char* kDoc =
-    "meshClosedSurface(vertices, triangles, cellSize, facetDistance=-1.0, seed=0)\n\n"
+    "meshClosedSurface(vertices, triangles, cellSize, facetDistance=-1.0, seed=0, surfaceSize=-1.0)\n\n"
     "Fill a closed, manifold, non-self-intersecting triangle surface with tetrahedra (CGAL Mesh_3).\n"
     "vertices (V,3) float64, triangles (F,3) int32 (any orientation); cellSize bounds the tet\n"
     "circumradius and the surface triangle size; facetDistance bounds the distance to the input\n"
     "surface (<= 0: cellSize/10); surfaceSize bounds surface triangles alone (<= 0: cellSize).  Sharp edges (< 60 deg) are kept.  Equal inputs and seed give\n"
-    "identical meshes.  Returns (nodes (N,3) float64, tets (T,4) int32), tets positively oriented.\n"
+    "identical meshes.  Parts thinner than the cells get cells of half their thickness; with the default\n"
+    "surfaceSize and facetDistance the surface is refined until the mesh keeps 99 % of the volume.\n"
+    "Returns (nodes (N,3) float64, tets (T,4) int32, report dict: surfaceVolume, meshVolume,\n"
+    "surfaceSize, facetDistance, passes, thinnest, thinFaces), tets positively oriented.\n"
     "Raises ValueError naming the problem for invalid input.";
 
 #ifdef QDEM_HAVE_CGAL
@@ -47,11 +50,20 @@ void bindMesher(py::module_& m) {
             const std::vector<double> v = qdem::py_::flatten<double>(vertices, 3, "vertices");
             const std::vector<int32_t> t = qdem::py_::flatten<int32_t>(triangles, 3, "triangles");
             qdem::TetMesh mesh;
+            qdem::SurfaceMeshReport r;
             {
                 py::gil_scoped_release release;
-                mesh = qdem::meshClosedSurface(v, t, cellSize, facetDistance, seed, surfaceSize);
+                mesh = qdem::meshClosedSurface(v, t, cellSize, facetDistance, seed, surfaceSize, &r);
             }
-            return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4));
+            py::dict report;
+            report["surfaceVolume"] = r.surfaceVolume;
+            report["meshVolume"] = r.meshVolume;
+            report["surfaceSize"] = r.surfaceSize;
+            report["facetDistance"] = r.facetDistance;
+            report["passes"] = r.passes;
+            report["thinnest"] = r.thinnest;
+            report["thinFaces"] = r.thinFaces;
+            return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4), report);
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("cellSize"), py::arg("facetDistance") = -1.0,
         py::arg("seed") = 0u, py::arg("surfaceSize") = -1.0, kDoc);

@@ -620,7 +620,19 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
     """Tetrahedral mesh of the solid bounded by a closed triangle surface, with
     CGAL Mesh_3 to a target element size ``cellSize`` (``surfaceSize``, when
     given, refines the surface triangles alone).  ``surface`` is a file path
-    (OFF/STL/OBJ) or a tuple (vertices, triangles)."""
+    (OFF/STL/OBJ) or a tuple (vertices, triangles).
+
+    Parts of the body thinner than the cells (an ear, a fin, measured through
+    the body along the surface normals) get cells of half their thickness.
+    With the default ``surfaceSize`` and ``facetDistance`` the surface is
+    refined until the mesh keeps at least 99 % of the volume the surface
+    encloses; with either given, a mesh keeping less is returned with a
+    RuntimeWarning.  The returned Mesh carries ``surfaceVolume`` (enclosed by
+    the surface), ``volumeKept`` (mesh volume / surfaceVolume) and
+    ``meshReport`` (a dict: the surfaceSize and facetDistance of the last
+    meshing, the number of meshings, the thinnest part found).  Equal inputs
+    and ``seed`` give identical meshes.  doc/meshes.md gives the guarantees
+    and their cost."""
     if not getattr(_core, "haveCgal", False):
         raise RuntimeError("qdem was built without CGAL: install libcgal-dev and rebuild (make build)")
     if isinstance(surface, (str, os.PathLike)):
@@ -628,12 +640,12 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
     else:
         verts, tris = surface
         verts = np.asarray(verts, dtype=float) * scale
-    nodes, tets = _core.meshClosedSurface(np.ascontiguousarray(verts, dtype=float),
-                                          np.ascontiguousarray(tris, dtype=np.int32),
-                                          float(cellSize), float(facetDistance), int(seed),
-                                          float(surfaceSize) if surfaceSize else -1.0)
+    nodes, tets, report = _core.meshClosedSurface(np.ascontiguousarray(verts, dtype=float),
+                                                  np.ascontiguousarray(tris, dtype=np.int32),
+                                                  float(cellSize), float(facetDistance), int(seed),
+                                                  float(surfaceSize) if surfaceSize else -1.0)
     try:
-        return Mesh(nodes, tets)
+        mesh = Mesh(nodes, tets)
     except ValueError as e:
         if "non-manifold" not in str(e):
             raise
@@ -648,10 +660,22 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
         if thickness < skin:
             raise ValueError("meshSurface: %s. The body is about %.3g thick (2 x volume / surface area) against "
                              "%s %.3g: Mesh_3 merged its opposite faces. Use a cellSize (and surfaceSize) of at "
-                             "most about 2 x the thickness, here <= %.3g"
+                             "most about the thickness, here <= %.3g, or another seed"
                              % (e, thickness, "surfaceSize" if surfaceSize else "cellSize", skin,
-                                2.0 * thickness)) from None
+                                thickness)) from None
         raise
+    mesh.surfaceVolume = report["surfaceVolume"]
+    mesh.volumeKept = report["meshVolume"] / report["surfaceVolume"]
+    mesh.meshReport = report
+    if mesh.volumeKept < 0.99:
+        import warnings
+        warnings.warn("meshSurface: the mesh keeps %.1f %% of the volume the surface encloses (its mass is %.1f %% "
+                      "low): %s; leave surfaceSize and facetDistance at their defaults to refine the surface until "
+                      "99 %% is kept, or use smaller ones"
+                      % (100 * mesh.volumeKept, 100 * (1 - mesh.volumeKept),
+                         ", ".join("%s=%.3g" % (k, report[k]) for k in ("surfaceSize", "facetDistance"))),
+                      RuntimeWarning, stacklevel=2)
+    return mesh
 
 
 def asMesh(obj):
