@@ -46,6 +46,19 @@ class Mesh:
     ``qdem.splitMesh(mesh, by='region')`` gives one mesh per label, for a
     piece of each material (doc/meshes.md, "Regions and bimaterial parts")."""
 
+    surfaceVolume = None
+    """Volume enclosed by the surface a mesh was made from [m^3] (meshSurface
+    sets it; None for other meshes)."""
+    volumeKept = None
+    """The mesh's volume over surfaceVolume (meshSurface; None for other
+    meshes): 0.99 means the piece is 1 % lighter than the solid."""
+    meshReport = None
+    """meshSurface's report (a dict: the sizes of the last meshing, how many
+    meshings the volume took, the thinnest part found, ...; None for other meshes)."""
+    improveReport = None
+    """improveMesh's report (a dict: worst element and step factor before and
+    after, volume change, surface deviation, time; None for other meshes)."""
+
     def __init__(self, nodes, tets, check=True, nodeIds=None, regions=None):
         raw = np.asarray(nodes)
         if np.iscomplexobj(raw):
