@@ -136,7 +136,8 @@ std::string World::describeElementLimit(const StableDt& s) const {
                s.elementsNearLimit == 1 ? " element" : " elements", " within 2x of its step ", step,
                " s, worst shape quality ", s.worstQuality, " as min height / longest edge, 0.816 regular): ",
                median / step, "x below the ", median, " s its median element allows",
-               s.medianElastic / s.pieceElastic > 4 ? " (slivers: qdem.improveMesh(mesh) remeshes them away, "
+               // Good meshes reach ~4.5 (qdem.meshchecks.SLIVER_FACTOR): name remedies above 5.
+               s.medianElastic / s.pieceElastic > 5 ? " (slivers: qdem.improveMesh(mesh) remeshes them away, "
                                    "qdem.addPiece(..., targetDt=...) adds mass to them alone, or mesh again with "
                                    "TetGen -q or gmsh's optimiser)"
                                  : "");
