@@ -152,6 +152,19 @@ def shogi(d):
             fig(s["clean"]["wall_s_per_simulated_s"], s["all"]["wall_s_per_simulated_s"], 0)))
 
 
+def spheres(d):
+    """The sphere-coupling table (doc/spheres.md) from bench_spheres.py's JSON."""
+    print("%d YADE spheres around one QDEM block, %d threads (%s); ms per step over the measured steps.\n"
+          % (d["spheres"], d["threads"], d["date"]))
+    print("| scene | YADE's own step | sphere coupling | fraction | spheres listed | contacts |")
+    print("|---|---|---|---|---|---|")
+    for name, label in (("near", "near (settling onto the block)"), ("far", "far (block 10 m above its container)")):
+        s = d[name]
+        print("| %s | %.2f ms | %.3f ms | **%.1f %%** | %d | %d |" % (
+            label, s["yade_ms_per_step"], s["coupling_ms_per_step"], 100 * s["coupling_fraction"],
+            s["spheres_listed"], s["sphere_contacts"]))
+
+
 def ratio(r):
     """'median (min-max)' of paired per-round ratios, or a dash."""
     return "%.2f (%.2f–%.2f)" % (r["median"], r["min"], r["max"]) if r else "—"
@@ -209,7 +222,8 @@ def main():
     elif kind == "roofline":
         roofline(d, *sys.argv[3:5])
     else:
-        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops}[kind](d)
+        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops,
+         "spheres": spheres}[kind](d)
 
 
 if __name__ == "__main__":
