@@ -42,15 +42,11 @@ x = np.array(dist.core.pos)
 asleepEverywhere = comm.gather([dist.core.asleep(i) for i in range(dist.core.nPieces)], root=0)
 if comm.rank == 0:
     from qdem import _core
-    _core.setThreads(2)  # the licence: how far 1 and 2 threads part serially
-    s2 = build()
-    run(s2)
     _core.setThreads(1)
     s = build()
     ss = run(s)
     xs = np.array(s.core.pos)
     print("RESULT " + json.dumps({"ranks": comm.size, "series": series, "serialSeries": ss,
                                   "disp": float(np.abs(xs - x0).max()), "dx": float(np.abs(x - xs).max()),
-                                  "dxThreads": float(np.abs(np.array(s2.core.pos) - xs).max()),
                                   "asleep": asleepEverywhere,
                                   "serialAsleep": [s.core.asleep(i) for i in range(s.core.nPieces)]}), flush=True)

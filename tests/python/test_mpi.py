@@ -328,9 +328,12 @@ def test_sleeping_pieces_on_ranks_as_serially(P):
     assert np.array_equal(s[:, 0], ss[:, 0])  # pieces asleep, every 100 steps
     assert ss[-1, 0] == len(r["serialAsleep"])  # the scene comes to rest
     assert all(a == r["serialAsleep"] for a in r["asleep"])
-    # Sleeping thresholds turn rounding into ~1e-4 of the displacement, the
-    # same between 1 and 2 threads serially: that is the licence.
-    assert r["dx"] <= max(10 * r["dxThreads"], 1e-12 * r["disp"])
+    # Sleeping thresholds and the sign of Cundall damping turn rounding into
+    # up to ~2e-4 of the displacement: 1 and 2 threads serially part by
+    # 4e-7 to 1.6e-6 of 9.8e-3 m from run to run (and once by 7e-9), ranks by
+    # 8.8e-7.  A fixed licence, not one run's thread difference, which is
+    # itself a sample of that spread; the decisions are checked exactly above.
+    assert r["dx"] <= 5e-4 * r["disp"]
     assert np.abs(s[:, 1] - ss[:, 1]).max() <= 1e-4 * np.abs(ss[:, 1]).max()
 
 
