@@ -84,7 +84,10 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
         DeepContact& deep = threadDeep_[omp_get_thread_num()];
-#pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
+        // Static chunks: a node goes to the same thread every run, so a given
+        // thread count gives the same bits (its contacts always land in the same
+        // thread buffer).  nowait: the region ends with the loop.
+#pragma omp for schedule(static, 64) nowait
         for (int32_t ie = 0; ie < ne; ++ie) {
             const int32_t e = st_.edgeItems[ie];
             const int32_t pa = S.edgePiece[e];

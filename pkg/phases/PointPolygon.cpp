@@ -80,7 +80,10 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         for (int l = 0; l < kTriLanes; ++l)  // a unit triangle in every lane until one is loaded
             for (int d = 0; d < 3; ++d)
                 lanes.a[d][l] = 0, lanes.b[d][l] = d == 0, lanes.c[d][l] = d == 1, lanes.n[d][l] = d == 2;
-#pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
+        // Static chunks: a node goes to the same thread every run, so a given
+        // thread count gives the same bits (its contacts always land in the same
+        // thread buffer).  nowait: the region ends with the loop.
+#pragma omp for schedule(static, 64) nowait
         for (int32_t s = 0; s < ns; ++s) {
             const int32_t node = surfNodes[s];
             if (dom && !dom->owns(node)) continue;  // under MPI: the point's owner computes the contact

@@ -416,7 +416,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
         Candidate* const cand = cl.c;
         bool keep[kCandidates];
-#pragma omp for schedule(dynamic, 16) nowait  // (the region ends with the loop: its join is the barrier)
+        // Static chunks: a sphere goes to the same thread every run, so a given
+        // thread count gives the same bits.  nowait: the region ends with the loop.
+#pragma omp for schedule(static, 16) nowait
         for (int32_t i = 0; i < n; ++i) {
             const Vector3d C(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]);
             const Vector3d v(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]);
