@@ -5,6 +5,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -32,6 +33,14 @@ std::vector<T> flatten(const py::array_t<T, py::array::c_style | py::array::forc
         throw std::invalid_argument(std::string(what) + ": expected an array of shape (n, " + std::to_string(cols) +
                                     "), got ndim=" + std::to_string(a.ndim()));
     return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+// Copies a flat vector into a new (n, cols) array (mesh nodes, tets, edges).
+template <class T>
+py::array_t<T> toArray(const std::vector<T>& v, py::ssize_t cols) {
+    py::array_t<T> a({static_cast<py::ssize_t>(v.size()) / cols, cols});
+    std::copy(v.begin(), v.end(), a.mutable_data());
+    return a;
 }
 
 }  // namespace qdem::py_

@@ -26,12 +26,7 @@ TetMesh toMesh(const Nodes& nodes, const Tets& tets) {
     return m;
 }
 
-template <class T>
-py::array_t<T> toArray(const std::vector<T>& v, py::ssize_t cols) {
-    py::array_t<T> a({static_cast<py::ssize_t>(v.size()) / cols, cols});
-    std::copy(v.begin(), v.end(), a.mutable_data());
-    return a;
-}
+using qdem::py_::toArray;
 
 py::tuple meshTuple(const TetMesh& m) { return py::make_tuple(toArray(m.nodes, 3), toArray(m.tets, 4)); }
 

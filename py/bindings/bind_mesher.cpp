@@ -27,14 +27,7 @@ constexpr const char* kDoc =
     "surfaceSize, facetDistance, passes, thinnest, thinFaces), tets positively oriented.\n"
     "Raises ValueError naming the problem for invalid input.";
 
-#ifdef QDEM_HAVE_CGAL
-template <class T>
-py::array_t<T> toArray(const std::vector<T>& v, py::ssize_t cols) {
-    py::array_t<T> a({static_cast<py::ssize_t>(v.size()) / cols, cols});
-    std::copy(v.begin(), v.end(), a.mutable_data());
-    return a;
-}
-#endif
+using qdem::py_::toArray;
 
 }  // namespace
 

@@ -30,14 +30,7 @@ constexpr const char* kFeatureDoc =
     "Boundary edges (E,2), a < b, where the outward normals of the two boundary triangles turn by more\n"
     "than featureAngle degrees.";
 
-#ifdef QDEM_HAVE_CGAL
-template <class T>
-py::array_t<T> toArray(const std::vector<T>& v, py::ssize_t cols) {
-    py::array_t<T> a({static_cast<py::ssize_t>(v.size()) / cols, cols});
-    std::copy(v.begin(), v.end(), a.mutable_data());
-    return a;
-}
-#endif
+using qdem::py_::toArray;
 
 }  // namespace
 
