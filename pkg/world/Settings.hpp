@@ -114,8 +114,8 @@ inline SettingRange oneOf(std::vector<std::string> names) {
       "the surface triangles, the second the feature edges with their lists, and the second to last build the "    \
       "nodes' lists a part each, while the nodes not yet done keep their former lists, which are still valid "     \
       "(the rebuild starts early enough; if motion outruns it, the rest is built at once).  Same contacts; no "    \
-      "step pays the whole rebuild (at 4, the dearest step of a rebuild is ~1.1x an ordinary one, against ~1.3x " \
-      "at 1; doc/performance.md).  1 under MPI.")                                                                  \
+      "step pays the whole rebuild (at 4, the 27-cube scene's dearest rebuild step is ~1.1x an ordinary one: "  \
+      "doc/performance.md).  1 under MPI.")                                                                  \
     X(double, sleepVelocity, "sleepVelocity", 0.0, atLeast(0),                                                       \
       "Pieces at rest sleep: one whose nodes all stay slower than this [m/s] for sleepTime, with no faster piece "  \
       "near it, is left out of the step (zero velocity, no element or contact work; its push on obstacles kept) "   \

@@ -165,6 +165,28 @@ def spheres(d):
             s["spheres_listed"], s["sphere_contacts"]))
 
 
+def glue(d):
+    """The Python glue of a step inside YADE (bench_glue.py's JSON, the rows
+    of the last glue it timed): per obstacle count, QdemEngine's and PyRunner's
+    time per step beside the core's own step, median (min-max) of the runs,
+    and the marginal cost of an obstacle against the one-wall scene."""
+    current = d["table"][-1]["glue"]  # the last glue given (a comparison names the old one first)
+    rows = sorted((r for r in d["table"] if r["glue"] == current), key=lambda r: r["obstacles"])
+    print("The glue of one QDEM step inside YADE (%s), %d steps a run, a %d-tet block with walls or facets; "
+          "microseconds per step of CPU time, median (min–max) over the runs (quiet runs if any, else all, "
+          "marked busy); load: the 1-minute load average during the runs.\n"
+          % (d["date"], d["steps"], d["runs"][0]["tets"]))
+    print("| obstacles | glue µs per step | core's own step, µs | each obstacle beyond the first, µs | load |")
+    print("| --- | --- | --- | --- | --- |")
+    pick = [r["glue_us"] if r["quietRuns"] else r["glue_us_all"] for r in rows]
+    for r, g in zip(rows, pick):
+        extra = ("%.1f" % ((g["median"] - pick[0]["median"]) / (r["obstacles"] - rows[0]["obstacles"]))
+                 if r["obstacles"] > rows[0]["obstacles"] else "—")
+        print("| %d | %.0f (%.0f–%.0f)%s | %.0f | %s | %.1f–%.1f |" % (
+            r["obstacles"], g["median"], g["min"], g["max"], "" if r["quietRuns"] else " busy",
+            r["core_us"]["median"], extra, r["load1"]["min"], r["load1"]["max"]))
+
+
 def ratio(r):
     """'median (min-max)' of paired per-round ratios, or a dash."""
     return "%.2f (%.2f–%.2f)" % (r["median"], r["min"], r["max"]) if r else "—"
@@ -223,7 +245,7 @@ def main():
         roofline(d, *sys.argv[3:5])
     else:
         {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops,
-         "spheres": spheres}[kind](d)
+         "spheres": spheres, "glue": glue}[kind](d)
 
 
 if __name__ == "__main__":
