@@ -3,6 +3,7 @@ meshio (gmsh .msh, .vtu, medit .mesh, ...) and closed triangle surfaces
 (OFF/STL/OBJ) meshed with CGAL Mesh_3."""
 import numbers
 import os
+import struct
 
 import numpy as np
 
@@ -436,6 +437,72 @@ def _refuseRepeatedTets(path, tets, regions):
                      % (path, int((count - 1).sum()), k, " ".join("%d" % v for v in tets[k]), len(twin), groups))
 
 
+def _msh4VolumeGroups(path):
+    """{volume entity tag: [physical group tags]} from an MSH 4 file's
+    $Entities section (ASCII or binary), or {} for any other file.  meshio
+    labels a volume's tetrahedra with the first of its groups only."""
+    with open(path, "rb") as f:
+        if f.readline().strip() != b"$MeshFormat":
+            return {}
+        head = f.readline().split()
+        if len(head) < 3 or not head[0].startswith(b"4"):
+            return {}
+        binary, sizeT = head[1] == b"1", int(head[2])
+        if binary:
+            f.read(4)  # the endianness word (int 1)
+        for line in f:
+            if line.strip() == b"$Entities":
+                break
+            if line.strip() in (b"$Nodes", b"$Elements"):
+                return {}
+        else:
+            return {}
+        groups = {}
+        if not binary:
+            counts = [int(v) for v in f.readline().split()[:4]]
+            lines = [f.readline().split() for _ in range(sum(counts))]
+            for fields in lines[sum(counts[:3]):]:  # volumes: tag, box (6), nPhysical, tags, ...
+                n = int(fields[7])
+                groups[int(fields[0])] = [int(v) for v in fields[8:8 + n]]
+            return groups
+        st = {8: "Q", 4: "I"}.get(sizeT)
+        if st is None:
+            return {}
+        size = lambda: struct.unpack("<" + st, f.read(sizeT))[0]  # noqa: E731
+        ints = lambda n: list(struct.unpack("<%di" % n, f.read(4 * n)))  # noqa: E731
+        counts = [size() for _ in range(4)]
+        for dim in range(4):
+            for _ in range(counts[dim]):
+                tag = ints(1)[0]
+                f.read(8 * (3 if dim == 0 else 6))  # the point, or the bounding box
+                phys = ints(size())
+                if dim > 0:
+                    ints(size())  # bounding entities
+                if dim == 3:
+                    groups[tag] = phys
+        return groups
+
+
+def _refuseVolumesInTwoGroups(path):
+    """An MSH 4 volume in more than one physical group: its tetrahedra can
+    carry one region label only (meshio keeps the first group and drops the
+    volume from the others, silently): say so."""
+    try:
+        groups = _msh4VolumeGroups(path)
+    except (OSError, ValueError, IndexError, struct.error):
+        return  # not a readable MSH 4 $Entities section: meshio has read the file, its labels stand
+    shared = {v: g for v, g in sorted(groups.items()) if len(g) > 1}
+    if shared:
+        raise ValueError("loadMesh: %s puts volume%s %s in more than one physical group (%s); a tetrahedron has "
+                         "one region label, and the file's other groups would lose %s silently. Put each volume "
+                         "in one physical group only (make a group for each material region; "
+                         "qdem.splitMesh(mesh, by='region') then gives one Mesh per group)"
+                         % (path, "s" if len(shared) > 1 else "", ", ".join("%d" % v for v in shared),
+                            "; ".join("volume %d in groups %s" % (v, ", ".join("%d" % t for t in g))
+                                      for v, g in shared.items()),
+                            "it" if len(shared) == 1 else "them"))
+
+
 def loadMesh(path, fixOrientation=False, scale=1.0):
     """Read a tetrahedral mesh with meshio (gmsh .msh, .vtu, medit .mesh, ...).
     Linear tetrahedra (meshio's 'tetra') make the piece; lower-dimensional
@@ -475,6 +542,8 @@ def loadMesh(path, fixOrientation=False, scale=1.0):
                             if any(c.type == "tetra" for c in m.cells) else ""))
     blocks = [c.data for c in m.cells if c.type == "tetra"]
     regions = _fileRegions(m)
+    if regions is not None and m.cell_data.get("gmsh:physical") is not None:
+        _refuseVolumesInTwoGroups(path)
     if not blocks:
         raise ValueError("loadMesh: %s contains no tetrahedra (cell types: %s); a surface or 2-D mesh has no "
                          "volume: mesh the solid into linear tetrahedra (gmsh -3, or qdem.meshSurface for a "

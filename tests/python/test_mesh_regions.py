@@ -187,3 +187,34 @@ def test_a_volume_in_two_physical_groups_is_named(tmp_path):
                  file_format="gmsh22", binary=False)
     with pytest.raises(ValueError, match=r"lists 48 tetrahedra more than once .*regions 1, 2.*one physical group"):
         qdem.loadMesh(path)
+
+
+@pytest.mark.parametrize("binary", [0, 1])
+def test_an_msh4_volume_in_two_physical_groups_is_named(tmp_path, binary):
+    """MSH 4 writes each element once, and meshio labels it with its volume's
+    first physical group: the second group silently lost the volume (before:
+    regions 1 and 2 over 690 + 701 tets, volume 1 in region 1 only)."""
+    gmsh = pytest.importorskip("gmsh")
+    path = str(tmp_path / "groups.msh")
+    with cad._quietFds():
+        gmsh.initialize([], False)
+        try:
+            gmsh.option.setNumber("General.Terminal", 0)
+            occ = gmsh.model.occ
+            out, _ = occ.fragment([(3, occ.addBox(0, 0, 0, 1, 1, 1))], [(3, occ.addBox(1, 0, 0, 1, 1, 1))])
+            occ.synchronize()
+            a, b = sorted(t for d, t in out if d == 3)
+            gmsh.model.addPhysicalGroup(3, [a], 1)
+            gmsh.model.addPhysicalGroup(3, [a, b], 2)  # the whole body, and its left half again
+            gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+            gmsh.model.mesh.generate(3)
+            gmsh.option.setNumber("Mesh.Binary", binary)
+            gmsh.write(path)
+        finally:
+            gmsh.finalize()
+    with pytest.raises(ValueError, match=r"puts volume %d in more than one physical group \(volume %d in groups 1, 2\)"
+                       r".*one physical group only" % (a, a)):
+        qdem.loadMesh(path, scale=0.1)
+    # One group per volume loads.
+    good = _twoBlocksMsh(tmp_path / "two.msh")
+    assert sorted(set(qdem.loadMesh(good).regions)) == [7, 9]
