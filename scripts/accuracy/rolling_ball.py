@@ -43,8 +43,9 @@ meet the floor (node contact dashpots, friction of the nodes that land):
 the same roll with viscosity 0 measures that part alone.
 
 Writes bench/logs/rolling_ball.json and doc/img/rolling_ball.png.
-Run: PYTHONPATH=build/python yade -n -x scripts/accuracy/rolling_ball.py [--short]
-(or with /usr/bin/python3.11); about 15 min on one thread (--short: 1 min)."""
+Run: PYTHONPATH=build/python yade -n -x scripts/accuracy/rolling_ball.py [--short | --plot]
+(or with /usr/bin/python3.11); about 15 min on one thread (--short: one
+0.5 s roll, nothing written; --plot: the figure from the kept JSON)."""
 import json
 import math
 import os
@@ -61,6 +62,7 @@ from acclib import G, Stepper, floor, lame, oneThread  # noqa: E402
 
 R, E, NU, RHO, ETA = 0.15, 0.5e6, 0.3, 1000.0, 200.0
 NODE_RADIUS, RESTITUTION = 0.008, 0.3
+SETTLE = 0.3  # s of settling at rest with local damping before the launch
 LOG = os.path.join(HERE, "../../bench/logs/rolling_ball.json")
 PNG = os.path.join(HERE, "../../doc/img/rolling_ball.png")
 
@@ -84,6 +86,12 @@ def qdemViscosities(eta=ETA, young=E, nu=NU):
     return 2 * b * mu, b * (lam + 2 * mu / 3)
 
 
+def facetSize(piece):
+    """Mean edge length [m] of the piece's surface triangles."""
+    x, t = piece.pos, piece.surface()["triangles"]
+    return float(np.mean([np.linalg.norm(x[t[:, i]] - x[t[:, (i + 1) % 3]], axis=1).mean() for i in range(3)]))
+
+
 def settledBall(h, eta=ETA, implicit=True):
     """A ballMesh ball of element size h settled at rest on the floor.
     Returns (world, piece, dt, stepper)."""
@@ -99,7 +107,7 @@ def settledBall(h, eta=ETA, implicit=True):
     dt = 0.8 * (sd["combinedImplicit"] if implicit and eta > 0 else sd["combined"])
     s = Stepper(w, dt)
     w.core.localDamping = 0.3
-    s(int(0.3 / dt))
+    s(int(SETTLE / dt))
     w.core.localDamping = 0.0
     s(int(0.05 / dt))
     return w, p, dt, s
@@ -139,7 +147,8 @@ def roll(h, V0=0.3, T=1.0, eta=ETA, sample=0.02):
         for c in CHANNELS:
             dis[c].append(float(e[c] - e0[c]))
     m = p.totalMass
-    return dict(h=h, V0=V0, T=T, eta=eta, nTets=int(w.core.nTets), nNodes=int(len(p.pos)), mass=float(m), dt=dt,
+    return dict(h=h, V0=V0, T=T, eta=eta, nTets=int(w.core.nTets), nNodes=int(len(p.pos)), facet=facetSize(p),
+                mass=float(m), dt=dt,
                 wall=s.wall - wall0, t=ts, V=vs, omega=ws, kinetic=ks, dissipated=dis,
                 ledgerDrift=float(max(tot) - min(tot)))
 
@@ -165,12 +174,12 @@ def analyse(r):
 def cases(short):
     if short:
         return [dict(h=0.1, V0=0.3, T=0.5)]
-    return [dict(h=0.1, V0=0.3, T=1.0), dict(h=0.075, V0=0.3, T=1.0), dict(h=0.05, V0=0.3, T=1.0),
-            dict(h=0.075, V0=0.1, T=1.0), dict(h=0.075, V0=0.3, T=1.0, eta=0.0)]
+    return ([dict(h=h, V0=0.3, T=1.0) for h in (0.1, 0.075, 0.03, 0.02, 0.015)] +
+            [dict(h=0.03, V0=0.1, T=1.0), dict(h=0.03, V0=0.3, T=1.0, eta=0.0), dict(h=0.015, V0=0.3, T=1.0, eta=0.0)])
 
 
 def label(r):
-    return "h = %.3g m, V0 = %.2g m/s, eta = %g Pa s" % (r["h"], r["V0"], r["eta"])
+    return "h = %.3g m (facets %.3g m), V0 = %.2g m/s, eta = %g Pa s" % (r["h"], r["facet"], r["V0"], r["eta"])
 
 
 def plot(results, path):
@@ -199,7 +208,8 @@ def plot(results, path):
     ax2.set_xticks(x)
     ax2.set_xticklabels(["h %.3g\nV0 %.2g\neta %g" % (r["h"], r["V0"], r["eta"]) for r in results], fontsize=8)
     ax2.set_ylabel("dissipated power / B&P (eta = 200)")
-    ax2.legend(fontsize=8)
+    ax2.set_ylim(0, 1.75)
+    ax2.legend(fontsize=8, loc="upper right")
     ax2.set_title("rolling dissipation by channel")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -207,6 +217,10 @@ def plot(results, path):
 
 def main(argv):
     short = "--short" in argv
+    if "--plot" in argv:  # the figure again from the kept JSON, without running
+        with open(LOG) as f:
+            plot(json.load(f)["runs"], PNG)
+        return
     oneThread()
     b = beta()
     eta1, eta2 = qdemViscosities()
