@@ -32,7 +32,8 @@ A rolling ball (I = 2/5 m R^2, kinetic energy 7/10 m V^2) loses dE/dt = -M V/R:
 
     dV/dt = -(5/7) beta g V / R,        V = V0 exp(-t/tau), tau = 7 R / (5 beta g),
 
-10.3 s x 2 for the speed for the ball above (beta = 1.04 ms), whatever V0.
+tau = 20.6 s for the ball above (beta = 1.04 ms), whatever V0 (its kinetic
+energy e-folds in tau/2 = 10.3 s).
 
 Measured: the dissipated power P per ledger channel (bulk viscosity,
 contact dashpots, friction) over the roll, as a rolling-resistance lever arm
@@ -47,12 +48,11 @@ Run: PYTHONPATH=build/python yade -n -x scripts/accuracy/rolling_ball.py [--shor
 (or with /usr/bin/python3.11); about 15 min on one thread (--short: one
 0.5 s roll, nothing written; --plot: the figure from the kept JSON)."""
 import json
-import math
 import os
 import sys
 
-# yade -x runs the script with __file__ naming yade itself: sys.argv[0] is the script
-HERE = os.path.dirname(os.path.abspath(sys.argv[0] if sys.argv[0].endswith(".py") else __file__))
+# yade -x runs the script with __file__ naming yade itself: then sys.argv[0] is the script
+HERE = os.path.dirname(os.path.abspath(__file__ if __file__.endswith("rolling_ball.py") else sys.argv[0]))
 sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
