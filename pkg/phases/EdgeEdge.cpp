@@ -79,7 +79,11 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     constexpr int KE = PieceContactState::kEdgeList, kER = PieceContactState::kEdgeRec;
     constexpr int32_t kAheadFar = 4, kAheadNear = 2;
 
-#pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
+    // The energies are reduced from zero and added after: a reduction into a
+    // running total (point-polygon's) adds the threads' parts in the order
+    // they end, and the ledger's last bits could change from run to run.
+    double dampHere = 0, slipHere = 0;
+#pragma omp parallel reduction(+ : dampHere, slipHere, count) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -267,8 +271,8 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     // Edges crossed (overlap past the reach): how far behind
                     // the other edge, against the reach (the per-step check).
                     noteDepth(deep, overlap - reach, reach, vRel.dot(n), a0, pa, pb, true);
-                    eDamp += r.dampPower * dt;
-                    eSlip += r.slipWork;
+                    dampHere += r.dampPower * dt;
+                    slipHere += r.slipWork;
                     ++count;
                     maxOv = std::max(maxOv, overlap);
             };
@@ -303,6 +307,8 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
             }
         }
     }
+    eDamp += dampHere;
+    eSlip += slipHere;
 }
 
 template void PieceContactPhase::edgeEdge<true>(double, double&, double&, long&, double&);
