@@ -1,5 +1,7 @@
 #include "SurfaceMesher.hpp"
 
+#include "ShortFeatures.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -593,6 +595,30 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
         Polyhedron poly = makePolyhedron(soup);
         if (!(soup.volume > 0))
             throw InputError("meshClosedSurface: the surface encloses no volume");
+        // Sharp features shorter than a surface triangle: smoothed away
+        // (ShortFeatures.hpp); kept as they are if that would make the
+        // surface intersect itself.
+        ShortFeatureReport shortFeatures;
+        {
+            std::vector<std::array<double, 3>> pts(soup.points.size());
+            for (std::size_t i = 0; i < pts.size(); ++i)
+                pts[i] = {soup.points[i].x(), soup.points[i].y(), soup.points[i].z()};
+            shortFeatures = smoothShortFeatures(pts, soup.tris, kFeatureAngleDeg, skin);
+            if (shortFeatures.smoothed > 0) {
+                Validated smoothed = soup;
+                for (std::size_t i = 0; i < pts.size(); ++i) smoothed.points[i] = Point(pts[i][0], pts[i][1], pts[i][2]);
+                try {
+                    poly = makePolyhedron(smoothed);
+                    smoothed.volume = soup.volume;  // the volume kept is the user's surface's
+                    smoothed.area = soup.area;
+                    soup = std::move(smoothed);
+                } catch (const InputError&) {
+                    poly = makePolyhedron(soup);
+                    shortFeatures.kept += shortFeatures.smoothed;
+                    shortFeatures.smoothed = 0, shortFeatures.longestMoved = 0;
+                }
+            }
+        }
         const ThinParts thin = findThinParts(poly, std::max(cellSize, skin));
         // A regular tet of circumradius R has volume 8 R^3 / (9 sqrt 3); four
         // times that density is about twice what Mesh_3 really produces.
@@ -652,7 +678,7 @@ TetMesh meshClosedSurface(const std::vector<double>& vertices, const std::vector
             }
             done = SurfaceMeshReport{soup.volume, meshVolume(mesh), skin, fd, pass,
                                      thinSize->empty() ? std::numeric_limits<double>::infinity() : thin.thinnest,
-                                     thinSize->size()};
+                                     thinSize->size(), shortFeatures.smoothed, shortFeatures.longestMoved};
             const double lost = 1.0 - done.meshVolume / soup.volume;
             if (!adapt || lost <= 1.0 - kVolumeKept || pass == kVolumePasses || mesh.nTets() == 0) break;
             // The volume a surface triangle cuts off grows as its size squared

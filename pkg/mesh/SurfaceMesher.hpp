@@ -18,6 +18,8 @@ struct SurfaceMeshReport {
     int passes = 0;            // meshings (more than 1: the surface was refined to keep the volume)
     double thinnest = 0;       // thickness of the thinnest part thinner than the cells (inf: none)
     std::size_t thinFaces = 0; // input faces on such parts
+    std::size_t shortFeatures = 0;    // sharp-edge sets shorter than the surface size, smoothed away
+    double shortFeatureMove = 0;      // the largest distance that smoothing moved an input vertex
 };
 
 // Fills the volume bounded by a closed, manifold, non-self-intersecting
@@ -36,7 +38,9 @@ struct SurfaceMeshReport {
 //                  give identical meshes
 //
 // Sharp edges (dihedral angle sharper than 60 degrees) and corners of the
-// input are kept.  Parts thinner than twice the cell size (measured through
+// input are kept, except sets of sharp edges shorter than the surface size
+// (stray creases of a scan or an isosurface), which are smoothed away
+// first (ShortFeatures.hpp).  Parts thinner than twice the cell size (measured through
 // the body along the surface normals) get cells of half their thickness.
 // With surfaceSize and facetDistance both <= 0 (the defaults), the surface is
 // refined and meshed again (at most 4 meshings) until the mesh keeps 99 % of

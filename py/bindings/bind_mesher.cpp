@@ -20,11 +20,13 @@ constexpr const char* kDoc =
     "Fill a closed, manifold, non-self-intersecting triangle surface with tetrahedra (CGAL Mesh_3).\n"
     "vertices (V,3) float64, triangles (F,3) int32 (any orientation); cellSize bounds the tet\n"
     "circumradius and the surface triangle size; facetDistance bounds the distance to the input\n"
-    "surface (<= 0: cellSize/10); surfaceSize bounds surface triangles alone (<= 0: cellSize).  Sharp edges (< 60 deg) are kept.  Equal inputs and seed give\n"
+    "surface (<= 0: cellSize/10); surfaceSize bounds surface triangles alone (<= 0: cellSize).  Sharp edges (< 60 deg) are kept,\n"
+    "except sets of them shorter than the surface size, smoothed away first.  Equal inputs and seed give\n"
     "identical meshes.  Parts thinner than the cells get cells of half their thickness; with the default\n"
     "surfaceSize and facetDistance the surface is refined until the mesh keeps 99 % of the volume.\n"
     "Returns (nodes (N,3) float64, tets (T,4) int32, report dict: surfaceVolume, meshVolume,\n"
-    "surfaceSize, facetDistance, passes, thinnest, thinFaces), tets positively oriented.\n"
+    "surfaceSize, facetDistance, passes, thinnest, thinFaces, shortFeatures, shortFeatureMove), tets\n"
+    "positively oriented.\n"
     "Raises ValueError naming the problem for invalid input.";
 
 using qdem::py_::toArray;
@@ -56,6 +58,8 @@ void bindMesher(py::module_& m) {
             report["passes"] = r.passes;
             report["thinnest"] = r.thinnest;
             report["thinFaces"] = r.thinFaces;
+            report["shortFeatures"] = r.shortFeatures;
+            report["shortFeatureMove"] = r.shortFeatureMove;
             return py::make_tuple(toArray(mesh.nodes, 3), toArray(mesh.tets, 4), report);
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("cellSize"), py::arg("facetDistance") = -1.0,

@@ -706,13 +706,19 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
 
     Parts of the body thinner than the cells (an ear, a fin, measured through
     the body along the surface normals) get cells of half their thickness.
-    With the default ``surfaceSize`` and ``facetDistance`` the surface is
+    Sharp edges (dihedral sharper than 60 degrees) are kept, except sets of
+    them shorter than the surface size, stray creases of a scan or an
+    isosurface that would need elements of their length: those are smoothed
+    away first (``meshReport['shortFeatures']`` counts them,
+    ``meshReport['shortFeatureMove']`` is the largest distance an input
+    vertex moved).  With the default ``surfaceSize`` and ``facetDistance`` the surface is
     refined until the mesh keeps at least 99 % of the volume the surface
     encloses; with either given, a mesh keeping less is returned with a
     RuntimeWarning.  The returned Mesh carries ``surfaceVolume`` (enclosed by
     the surface), ``volumeKept`` (mesh volume / surfaceVolume) and
     ``meshReport`` (a dict: the surfaceSize and facetDistance of the last
-    meshing, the number of meshings, the thinnest part found).  Equal inputs
+    meshing, the number of meshings, the thinnest part found, the short
+    features smoothed).  Equal inputs
     and ``seed`` give identical meshes.  doc/meshes.md gives the guarantees
     and their cost."""
     if not getattr(_core, "haveCgal", False):

@@ -57,19 +57,22 @@ def main(out):
                      "seconds": round(dt, 2), "stepFactor": round(ts.stepFactor(m), 2),
                      "volumeKept": round(m.volumeKept, 5), "passes": r["passes"],
                      "surfaceSize": r["surfaceSize"], "facetDistance": r["facetDistance"],
-                     "thinnest": None if not np.isfinite(r["thinnest"]) else r["thinnest"]})
+                     "thinnest": None if not np.isfinite(r["thinnest"]) else r["thinnest"],
+                     "shortFeatures": r["shortFeatures"], "shortFeatureMove": r["shortFeatureMove"],
+                     "load1": os.getloadavg()[0]})
         print(json.dumps(rows[-1]), flush=True)
     for kind in ("king", "pawn"):
         t0 = time.perf_counter()
         m = shogi.mesh(kind)
         rows.append({"case": "shogi.mesh(%r) (797-node search)" % kind, "tets": int(m.nTets),
                      "seconds": round(time.perf_counter() - t0, 2), "stepFactor": round(ts.stepFactor(m), 2),
-                     "volumeKept": round(m.volumeKept, 5)})
+                     "volumeKept": round(m.volumeKept, 5), "load1": os.getloadavg()[0]})
         print(json.dumps(rows[-1]), flush=True)
     with open(out, "w") as f:
         json.dump({"what": "qdem.meshSurface quality: stepFactor = median / smallest of the tets' smallest "
                            "heights; volumeKept = mesh volume / volume the surface encloses",
-                   "threads": 1, "rows": rows}, f, indent=1)
+                   "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "threads": 1, "rows": rows},
+                  f, indent=1)
 
 
 if __name__ == "__main__":

@@ -187,6 +187,22 @@ def glue(d):
             r["core_us"]["median"], extra, r["load1"]["min"], r["load1"]["max"]))
 
 
+def meshSurface(d):
+    """The meshSurface quality table (doc/meshes.md) from
+    bench_mesh_surface.py's JSON."""
+    print("`qdem.meshSurface` on generated surfaces, one thread (%s); step factor: the median element's "
+          "smallest height over the smallest; time on the shared machine (load average beside it).\n"
+          % d.get("date", "date not recorded"))
+    print("| surface | cellSize | tets | meshings | short creases smoothed | step factor | volume kept | "
+          "time [s] | load |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in d["rows"]:
+        print("| %s | %s | %d | %s | %s | %.2f | %.2f %% | %.1f | %s |" % (
+            r["case"], "%.3g" % r["cellSize"] if "cellSize" in r else "search", r["tets"], r.get("passes", "-"),
+            r.get("shortFeatures", "-"), r["stepFactor"], 100 * r["volumeKept"], r["seconds"],
+            "%.1f" % r["load1"] if "load1" in r else "-"))
+
+
 def ratio(r):
     """'median (min-max)' of paired per-round ratios, or a dash."""
     return "%.2f (%.2f–%.2f)" % (r["median"], r["min"], r["max"]) if r else "—"
@@ -245,7 +261,7 @@ def main():
         roofline(d, *sys.argv[3:5])
     else:
         {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops,
-         "spheres": spheres, "glue": glue}[kind](d)
+         "spheres": spheres, "glue": glue, "meshSurface": meshSurface}[kind](d)
 
 
 if __name__ == "__main__":

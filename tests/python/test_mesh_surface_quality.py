@@ -60,7 +60,12 @@ def test_default_keeps_99_percent_of_the_volume_and_says_so():
     assert m.meshReport["passes"] >= 2 and m.meshReport["surfaceSize"] < 0.04
     assert m.surfaceVolume == pytest.approx(ts.volume(ball), rel=1e-12)
     for surface, h in ((_cube(0.2), 0.04), (shogi.surface("gold"), 0.0025)):
-        assert qdem.meshSurface(surface, h).volumeKept >= 0.99
+        m = qdem.meshSurface(surface, h)
+        assert m.volumeKept >= 0.99
+        # real edges are longer than a surface triangle: none smoothed, corners kept
+        assert m.meshReport["shortFeatures"] == 0 and m.meshReport["shortFeatureMove"] == 0
+        for corner in surface[0]:
+            assert np.min(np.linalg.norm(m.nodes - corner, axis=1)) < 1e-9
     # the user's own sizes are kept, and a mesh that keeps less says so
     with pytest.warns(RuntimeWarning, match=r"keeps 9\d\.\d % of the volume .*mass is \d\.\d % low"):
         coarse = qdem.meshSurface(ball, 0.04, surfaceSize=0.04)
@@ -82,3 +87,9 @@ def test_a_plate_thinner_than_the_cells_is_meshed_with_cells_to_its_thickness():
     c = m.nodes[m.tets].mean(1)
     inPlate = (c[:, 2] > 0.25) & (np.abs(c[:, 0]) < 0.2)
     assert m.volumes()[inPlate].sum() == pytest.approx(0.04 * 0.4 * 0.2, rel=0.1)
+    # The isosurface's coarse fillet holds stray creases (one 0.55 mm long):
+    # protected as features, their tets cut the step 155x below the median
+    # element.  Shorter than a surface triangle, they are smoothed away.
+    assert m.meshReport["shortFeatures"] >= 1
+    assert 0 < m.meshReport["shortFeatureMove"] < 0.5 * m.meshReport["surfaceSize"]
+    assert ts.stepFactor(m) < 15                       # measured 8.7 (155 with the creases kept)
