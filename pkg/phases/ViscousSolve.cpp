@@ -204,7 +204,6 @@ bool ViscousSolve::start(double dt, const double* f, double* s) {
         });
         s[2] = 0;
     }
-    if (cholesky()) s[0] = precondition(true);
     return warm;
 }
 
@@ -266,6 +265,8 @@ const double* ViscousSolve::solve(double dt, const double* f) {
     double s[4];
     startedWarm = start(dt, f, s);
     double rz = s[0], rMr = s[1], xMx = s[2];
+    // (start() left Jacobi's Z; not needed when the warm start is close enough)
+    if (cholesky() && rMr > tol2 * xMx) rz = precondition(true);
     iterations = 0;
     // Stop when ||r||_{M^-1} <= tol ||D||_M: the velocity change's error is
     // then at most tol times the change (doc/formulation.md 2.1).  From a
