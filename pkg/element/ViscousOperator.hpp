@@ -50,4 +50,30 @@ inline void viscousDiagonal(const Mat3& F, const Mat3& B, double V0, const Eleme
     }
 }
 
+// One element's C on its 12 DOFs in the reference shape (F = I), the
+// matrix the co-rotated preconditioner factors (CorotatedCholesky.hpp):
+// K[3a+i][3b+j] = V0 beta (lambda g_a,i g_b,j + mu (delta_ij g_a.g_b + g_b,i g_a,j)).
+// From v^T C v = V0 beta (lambda tr(dE/dt)^2 + 2 mu dE/dt:dE/dt) with
+// dE/dt = sym(sum_(a,i) v_ai phi_i g_a^T): the general entry is
+//     C_(ai)(bj) = V0 beta (lambda (phi_i.g_a)(phi_j.g_b)
+//                  + mu ((phi_i.phi_j)(g_a.g_b) + (phi_i.g_b)(phi_j.g_a))),
+// whose diagonal is viscousDiagonal's; F = I makes phi_i = e_i.  For F = R
+// (the shape rotated rigidly) phi_i = R^T e_i and C = R K R^T node-blockwise.
+inline void viscousReferenceMatrix(const Mat3& B, double V0, const ElementParams& p, double K[12][12]) {
+    Vec3 g[4];
+    g[1] = B.row(0).transpose();
+    g[2] = B.row(1).transpose();
+    g[3] = B.row(2).transpose();
+    g[0] = -(g[1] + g[2] + g[3]);
+    const double bl = V0 * p.beta * p.lambda, bm = V0 * p.beta * p.mu;
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+            const double gg = g[a].dot(g[b]);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j)
+                    K[3 * a + i][3 * b + j] =
+                        bl * g[a][i] * g[b][j] + bm * ((i == j ? gg : 0.0) + g[b][i] * g[a][j]);
+        }
+}
+
 }  // namespace qdem

@@ -337,6 +337,7 @@ void IntegrationPhase::report(PhaseReport& r) const {
     r.counts.push_back({"viscousIterations", viscous_.iterations});
     r.counts.push_back({"viscousWarmStart", viscous_.startedWarm ? 1 : 0});  // the last solve started warm
     r.counts.push_back({"viscousIterationsTotal", viscous_.totalIterations});  // since the world was built
+    r.counts.push_back({"viscousFactorizations", viscous_.factorizations()});  // Cholesky preconditioner, since built
 }
 
 void IntegrationPhase::stateColumns(StateColumns& c) {

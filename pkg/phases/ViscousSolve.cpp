@@ -1,5 +1,5 @@
-// Semi-implicit Kelvin-Voigt viscosity: Jacobi-preconditioned conjugate
-// gradients on (M + dt C(x)) D = dt f (ViscousSolve.hpp; derivation and
+// Semi-implicit Kelvin-Voigt viscosity: preconditioned conjugate gradients
+// (Jacobi, or the co-rotated Cholesky factor of CorotatedCholesky.hpp) on (M + dt C(x)) D = dt f (ViscousSolve.hpp; derivation and
 // stopping rule in doc/formulation.md section 2.1).
 #include "ViscousSolve.hpp"
 
@@ -207,6 +207,26 @@ bool ViscousSolve::start(double dt, const double* f, double* s) {
     return warm;
 }
 
+double ViscousSolve::precondition(bool setP) {
+    const auto [M, blk, X, R, Z, P, CP, Q, D] = vectors();
+    precond_.apply(R, Z);  // (R is 0 on blocked DOFs)
+    double s[4];
+    // Zeroed on the blocked DOFs: Pi A^-1 Pi, symmetric positive definite on
+    // the free DOFs, as the conjugate gradients need.
+    nodeLoop(Sum::Global, 1, s, [&](int32_t n, double* acc) {
+        for (int d = 0; d < 3; ++d) {
+            const int32_t k = 3 * n + d;
+            if ((blk[n] >> d) & 1u) {
+                Z[k] = 0;
+                continue;
+            }
+            acc[0] += R[k] * Z[k];
+            if (setP) P[k] = Z[k];
+        }
+    });
+    return s[0];
+}
+
 void ViscousSolve::keep(double dt) {
     // Nodes not solved for (asleep, or other ranks') start from 0 when they
     // are next: a piece that wakes has no last change.
@@ -234,10 +254,19 @@ const double* ViscousSolve::solve(double dt, const double* f) {
     const double tol2 = w_.settings.viscousTolerance * w_.settings.viscousTolerance;
 
     // Jacobi preconditioner: the diagonal of M + dt C on the current shape.
-    diagonal(D);
+    // With the Cholesky one, Jacobi's is left to the pieces it does not cover,
+    // those without viscosity: there C = 0 and the diagonal is M.
+    if (cholesky()) {
+        precond_.prepare(dt);
+        nodeLoop(Sum::Local, 0, nullptr, [&](int32_t n, double*) { D[3 * n] = D[3 * n + 1] = D[3 * n + 2] = 0; });
+    } else {
+        diagonal(D);
+    }
     double s[4];
     startedWarm = start(dt, f, s);
     double rz = s[0], rMr = s[1], xMx = s[2];
+    // (start() left Jacobi's Z; not needed when the warm start is close enough)
+    if (cholesky() && rMr > tol2 * xMx) rz = precondition(true);
     iterations = 0;
     // Stop when ||r||_{M^-1} <= tol ||D||_M: the velocity change's error is
     // then at most tol times the change (doc/formulation.md 2.1).  From a
@@ -278,6 +307,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
         ++iterations;
         rMr = s[1], xMx = s[2];
         if (rMr <= tol2 * xMx) break;
+        if (cholesky()) s[0] = precondition(false);
         const double beta = s[0] / rz;
         rz = s[0];
         nodeLoop(Sum::Global, 0, s, [&](int32_t n, double*) {

@@ -11,7 +11,9 @@
 // step's D (scaled by the ratio of the steps): the acceleration changes
 // little from one step to the next, so the start is close; when it is not
 // (the first step, a piece woke, the guess's residual larger than D = 0's)
-// they start from D = 0.  Jacobi-preconditioned conjugate gradients over the
+// they start from D = 0.  Preconditioned conjugate gradients (Jacobi, or
+// per piece the co-rotated Cholesky factor of its reference shape,
+// CorotatedCholesky.hpp: settings.viscousPreconditioner) over the
 // free DOFs of the awake nodes (blocked DOFs keep their velocity: D = 0
 // there) return q = C D; the integrator then applies the force f - q, so
 // the viscous forces applied are element forces, each summing to zero:
@@ -30,6 +32,7 @@
 #include "../world/Settings.hpp"
 #include "../world/ThreadBlocks.hpp"
 #include "../world/ThreadLayout.hpp"
+#include "CorotatedCholesky.hpp"
 
 namespace qdem {
 
@@ -40,6 +43,7 @@ public:
     // What it reads of the world (the integration phase declares it for it).
     struct Data {
         const Column<double>& pos;        // the current shape C(x) is built on
+        const Column<double>& refPos;      // the reference shape (the Cholesky preconditioner's)
         const Column<double>& mass;
         const Column<uint8_t>& blocked;   // prescribed DOFs keep their velocity
         const Column<int32_t>& tetNodes;
@@ -52,7 +56,11 @@ public:
         const SleepPhase& sleeping;       // the awake tets and nodes
         DomainRef domain;                 // under MPI: ghosts, partial sums, reductions
     };
-    explicit ViscousSolve(const Data& data) : w_(data) {}
+    explicit ViscousSolve(const Data& data)
+        : w_(data),
+          precond_({.pos = data.pos, .refPos = data.refPos, .mass = data.mass, .tetNodes = data.tetNodes,
+                    .tetB = data.tetB, .tetVol0 = data.tetVol0, .pieces = data.pieces, .materials = data.materials,
+                    .settings = data.settings, .sleeping = data.sleeping, .domain = data.domain}) {}
     // Implicit viscosity asked for, viscosity on, and an awake piece viscous
     // (the same answer on every MPI rank).
     bool active() const;
@@ -76,6 +84,9 @@ public:
     const std::vector<double>& warmStart() const { return warm_; }
     long warmIter = -1;  // -1: none
     double warmDt = 0;
+
+    // Factorizations of the Cholesky preconditioner since the world was built.
+    long factorizations() const { return precond_.factorizations; }
 
     int iterations = 0;    // of the last solve
     bool startedWarm = false;  // the last solve started from the last step's change
@@ -107,6 +118,11 @@ private:
     // X = the warm start, or 0 when there is none; R, Z, P, Q and the sums
     // (r.z, r.M^-1 r, x.M x) to match.  Returns whether it started warm.
     bool start(double dt, const double* f, double* sums);
+    // With the Cholesky preconditioner: Z = its z on the pieces it covers
+    // (Jacobi's elsewhere, already in Z), 0 on blocked DOFs; returns r.z
+    // (global); with setP also P = Z.
+    double precondition(bool setP);
+    bool cholesky() const { return w_.settings.viscousPreconditioner == ViscousPreconditioner::Cholesky; }
     // After the solve: the warm start of the next step.
     void keep(double dt);
     // Sums of a*b (and more) over the free DOFs of the awake nodes, per thread
@@ -118,6 +134,7 @@ private:
     void nodeLoop(Sum scope, int nSums, double* sums, Fn&& fn);
 
     Data w_;
+    CorotatedCholesky precond_;  // settings.viscousPreconditioner = Cholesky
     ThreadLayout layout_;
     std::vector<ThreadBlocks> blocks_;  // the layout's shares as tet blocks (the operator's element pass)
     std::vector<double> x_, r_, z_, p_, y_, cp_, q_, diag_, delta_, partial_;

@@ -28,6 +28,8 @@ enum class BroadPhase : int {
 
 // How the Kelvin-Voigt viscous force is integrated (ViscousSolve.hpp).
 enum class ViscousIntegration : int { Explicit = 0, Implicit = 1 };
+// The implicit viscous solve's preconditioner (CorotatedCholesky.hpp).
+enum class ViscousPreconditioner : int { Jacobi = 0, Cholesky = 1 };
 
 // What values a setting may take: any (bool), a closed or half-open range,
 // or named choices (enums; the index is the enum's value).
@@ -78,6 +80,13 @@ inline SettingRange oneOf(std::vector<std::string> names) {
       "carries into the next step's start, so runs differing only in rounding (thread counts, MPI ranks) drift "    \
       "apart within that tolerance; False starts from zero: results that depend on the state alone and agree to "  \
       "rounding.  doc/formulation.md 2.1.")                                                                          \
+    X(ViscousPreconditioner, viscousPreconditioner, "viscousPreconditioner", ViscousPreconditioner::Cholesky,       \
+      oneOf({"jacobi", "cholesky"}),                                                                                 \
+      "viscousIntegration='implicit': the conjugate gradients' preconditioner.  'cholesky' (default): per piece, "  \
+      "M + dt C of the reference shape factored once (refactored when dt changes by more than 1 % or the "          \
+      "material, masses or mesh change) and applied rotated with the piece's best-fit rotation: 1-3 iterations a "  \
+      "step where Jacobi takes tens.  'jacobi': the diagonal of M + dt C (no factor to store).  They give the "      \
+      "same answer within viscousTolerance, not the same bits.  doc/formulation.md 2.1.")                          \
     X(double, localDamping, "damping", 0.0, withinOpenTop(0, 1),                                                     \
       "Cundall's non-viscous local damping of QDEM nodes, as NewtonIntegrator.damping (which QDEM does not "         \
       "inherit): for quasi-static problems; 0 keeps the dynamics exact.")                                            \

@@ -383,7 +383,7 @@ private:
                                         .settings = settings, .sleeping = sleepPhase_, .elements = elementPhase_,
                                         .contacts = contactForces_, .domain = {domain_}, .pos = pos, .vel = vel,
                                         .force = force, .energy = energy, .iter = iter, .time = time,
-                                        .viscous = {.pos = pos, .mass = mass, .blocked = blocked,
+                                        .viscous = {.pos = pos, .refPos = refPos, .mass = mass, .blocked = blocked,
                                                     .tetNodes = tetNodes, .tetB = tetB, .tetVol0 = tetVol0,
                                                     .pieces = pieces, .materials = materials,
                                                     .settings = settings, .iter = iter,

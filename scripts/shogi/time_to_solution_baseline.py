@@ -5,6 +5,7 @@ solution of the whole line is judged against.
 
     PYTHONPATH=build/python OMP_WAIT_POLICY=passive /usr/bin/python3.11 \
         scripts/shogi/time_to_solution_baseline.py [--friction 0.1] [--steps 300] [--rounds 3] [--threads 2] \
+        [--preconditioner cholesky|jacobi] \
         [--gap 3e-4] [--after 1000] [--dir out/shogi/forty_real_front] \
         [--log bench/logs/time_to_solution_baseline.json]
 
@@ -189,6 +190,8 @@ def main():
     ap.add_argument("--after", type=int, default=1000, help="steps past the rook's hit before the checkpoint")
     ap.add_argument("--gap", type=float, default=3e-4, help="the king's start: this far from the rook [m]")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--preconditioner", choices=["cholesky", "jacobi"], default="cholesky",
+                    help="the implicit viscous solve's (viscousPreconditioner)")
     ap.add_argument("--dir", default="out/shogi/forty_real_front")
     ap.add_argument("--log", default="bench/logs/time_to_solution_baseline.json")
     a = ap.parse_args()
@@ -203,6 +206,7 @@ def main():
     dt = float(extra["dt"])
     state = w.core.saveState()
     _core.setThreads(a.threads)
+    w.core.viscousPreconditioner = {"jacobi": 0, "cholesky": 1}[a.preconditioner]
     runs = []
     for r in range(a.rounds):
         w.core.loadState(state)
@@ -238,7 +242,8 @@ def main():
             "cg_iterations_per_step", "pieces_awake")
     out = {"benchmark": "time_to_solution_baseline", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "scene": "forty", "scale": 1.0, "material": "Table 1 (E 5e8 Pa, nu 0.4, rho 700, viscosity 2.5e5 Pa s)",
-           "frictionPiece": a.friction, "viscous": "implicit (warm-started Jacobi-PCG)", "threads": a.threads,
+           "frictionPiece": a.friction, "threads": a.threads,
+           "viscous": "implicit (warm-started PCG, %s preconditioner)" % a.preconditioner,
            "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "(libgomp default)"),
            "particle_radius_m": qdem.QdemMat().radius / table1Scale(),
            "table1_scale": table1Scale(), "tets": w.core.nTets, "pieces": w.core.nPieces, "dt": dt,

@@ -140,3 +140,31 @@ TEST(ViscousOperator, DiagonalIsTheAssembledOnes) {
     for (int a = 0; a < 4; ++a)
         for (int i = 0; i < 3; ++i) EXPECT_NEAR(d[a][i], C(3 * a + i, 3 * a + i), 1e-12 * maxAbs(C.diagonal()));
 }
+
+// The co-rotated preconditioner's premise (CorotatedCholesky.hpp): for the
+// reference shape turned rigidly by R, C(x) = R K R^T node-blockwise, K the
+// reference matrix viscousReferenceMatrix gives (F = I: C(x) = K itself).
+TEST(ViscousOperator, RigidlyTurnedReferenceIsTheRotatedReferenceMatrix) {
+    Tet t = strainedTet();  // its B and V0; the shape set here
+    const Mat3 Dm = loadRowMajor(t.B).inverse();
+    const Mat3 R = Eigen::AngleAxisd(2.3, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+    const ElementParams p{2e6, 1e6, 1e-3};
+    double Kr[12][12];
+    viscousReferenceMatrix(loadRowMajor(t.B), t.V0, p, Kr);
+    Mat12 K, Rb = Mat12::Zero();
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) K(i, j) = Kr[i][j];
+    for (int a = 0; a < 4; ++a) Rb.block<3, 3>(3 * a, 3 * a) = R;
+    for (const Mat3& turn : {Mat3(Mat3::Identity()), R}) {
+        const Mat3 Ds = turn * Dm;
+        for (int i = 0; i < 3; ++i) t.X[i] = 0.1 * i;
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 3; ++i) t.X[3 * (k + 1) + i] = t.X[i] + Ds(i, k);
+        const Mat12 C = assembleC(t, p);
+        const Mat12 expected = turn.isIdentity() ? K : Mat12(Rb * K * Rb.transpose());
+        EXPECT_LT(maxAbs(Mat12(C - expected)), 1e-12 * maxAbs(C));
+    }
+    // and a strained shape is not: what the preconditioner misses is the strain
+    const Mat12 Cs = assembleC(strainedTet(), p);
+    EXPECT_GT(maxAbs(Mat12(Cs - Rb * K * Rb.transpose())), 1e-2 * maxAbs(Cs));
+}

@@ -8,6 +8,8 @@ the explicit viscous one.
 Every rank records the conjugate gradients' iteration count of every step.
 Argument 'warm': viscousWarmStart on (each solve starts from the last step's
 change); otherwise off (from zero: results depend on the state alone).
+Argument 'jacobi': the Jacobi preconditioner; otherwise the co-rotated
+Cholesky one (its split pieces gathered: the serial preconditioner).
 Rank 0 prints 'RESULT {json}'."""
 import json
 import os
@@ -24,6 +26,8 @@ STEPS = int(os.environ.get("QDEM_MPI_STEPS", 300))
 CHUNK = 25
 VISCOSITY = 4000.0  # [Pa s]: the explicit viscous limit ~1/40 of the elastic one
 WARM = "warm" in sys.argv[1:]
+# The preconditioner: 'jacobi' or 'cholesky' (the default) among the arguments.
+PRECONDITIONER = 0 if "jacobi" in sys.argv[1:] else 1
 comm = MPI.COMM_WORLD
 
 
@@ -31,6 +35,7 @@ def build():
     w = scenes.contactFree(viscosity=VISCOSITY)
     w.core.viscousIntegration = 1
     w.core.viscousWarmStart = WARM
+    w.core.viscousPreconditioner = PRECONDITIONER
     return w
 
 
@@ -87,5 +92,5 @@ if comm.rank == 0:
            "serialSeries2Threads": sseries2, "warm": WARM, "moved": moved,
            "momentum": (np.array(dist.core.mass)[:, None] * v).sum(axis=0).tolist(),
            "serialMomentum": (np.array(ser.core.mass)[:, None] * vs).sum(axis=0).tolist(),
-           "serialMomentum2Threads": (np.array(ser2.core.mass)[:, None] * v2).sum(axis=0).tolist()}
+           "preconditioner": PRECONDITIONER, "serialMomentum2Threads": (np.array(ser2.core.mass)[:, None] * v2).sum(axis=0).tolist()}
     print("RESULT " + json.dumps(out), flush=True)

@@ -122,8 +122,9 @@ def test_failed_save_is_raised_on_every_rank(tmp_path):
     assert "RANK 0 FINISHED iter 40" in out and "RANK 1 FINISHED iter 40" in out, out[-4000:]
 
 
-@pytest.mark.parametrize("P,warm", [(2, False), (3, False), (2, True), (3, True)])
-def test_implicit_viscosity_on_ranks_as_serially(P, warm):
+@pytest.mark.parametrize("P,warm,pre", [(2, False, "cholesky"), (3, False, "cholesky"), (2, True, "cholesky"),
+                                         (3, True, "cholesky"), (2, False, "jacobi"), (3, True, "jacobi")])
+def test_implicit_viscosity_on_ranks_as_serially(P, warm, pre):
     # The distributed conjugate gradients (doc/parallel.md): C p by one pass
     # over the owned tets with the ghosts' partial sums sent back, dot
     # products summed in rank order, the serial stopping rule.  From zero
@@ -132,7 +133,9 @@ def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     # next start and rounding differences grow (within the tolerance): equal
     # to serial within what separates 1 and 2 threads serially.
     requireMpi()
-    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py", *(["warm"] if warm else [])), timeout=400)
+    # The Cholesky preconditioner's pieces split over ranks are gathered
+    # (CorotatedCholesky.hpp): the serial preconditioner, the same counts.
+    rc, out = mpirun(P, python("tests/mpi/check_implicit_viscosity.py", pre, *(["warm"] if warm else [])), timeout=400)
     assert rc == 0, out[-4000:]
     r = result(out)
     lim = r["limits"]
@@ -143,16 +146,20 @@ def test_implicit_viscosity_on_ranks_as_serially(P, warm):
     # step's change, fewer.
     its = r["iterations"]
     assert len(its) == P and all(i == its[0] for i in its)
-    assert its[0][0] >= 10
+    if pre == "jacobi":
+        assert its[0][0] >= 10
+    else:
+        assert 1 <= its[0][0] and max(its[0]) <= 4  # (Jacobi: >= 10)
     assert its[0] == r["serialIterations"] or warm
-    if warm:
+    if warm and pre == "jacobi":
         assert np.mean(its[0]) < 0.5 * its[0][0]  # (the warm starts paid)
+    if warm:
         # A rebalance forced half-way moved nodes; their last changes moved
         # with them: the next solve is as warm as the others (11 iterations
         # instead of 3 when the rows are not migrated).
         half = r["steps"] // 2
         assert r["moved"][0] > 0
-        assert its[0][half] <= 2 * np.median(its[0][1:]), (its[0][half - 3:half + 3], np.median(its[0][1:]))
+        assert its[0][half] <= max(2 * np.median(its[0][1:]), 2), (its[0][half - 3:half + 3], np.median(its[0][1:]))
     # Trajectories as serial, within what separates 1 and 2 threads serially
     # (the order of the partial sums is the only difference).
     d = r["maxDisplacement"]
