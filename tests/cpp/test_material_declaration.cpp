@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
 #include <set>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "core/Errors.hpp"
 #include "element/MaterialLaw.hpp"
