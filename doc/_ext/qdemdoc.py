@@ -7,7 +7,8 @@ are generated from the package, so that they are never written twice.
 ``.. qdem-settings:: <class>``
     the settings table of a class built from documented attributes
     (``QdemEngine``, ``VtkRecorder``, ``QdemMat``): name, default, unit,
-    allowed values, meaning.  The engine's world settings come from their one
+    allowed values, meaning.  QdemMat's come from ``QDEM_MATERIAL_FIELDS``
+    in ``pkg/material/Material.hpp`` (their unit is a column of that list).  The engine's world settings come from their one
     declaration, ``QDEM_SETTINGS`` in ``pkg/world/Settings.hpp``, through
     ``qdem._core.settings``; the build fails (a warning under ``-W``) when
     the compiled table differs from the header, i.e. when the package the
@@ -160,7 +161,9 @@ class SettingsDirective(SphinxDirective):
         for name in AttrObject.attrNames.__func__(cls):
             a = next(vars(k)[name] for k in cls.__mro__ if name in vars(k))
             default = "``%r``" % (a.default,)
-            rows.append((name, default, _unit(a.doc), _allowed(a), a.doc))
+            decl = getattr(a, "decl", None) or {}
+            unit = (decl["unit"] or "-") if "unit" in decl else _unit(a.doc)
+            rows.append((name, default, unit, _allowed(a), decl.get("doc", a.doc) if "unit" in decl else a.doc))
         return _parse(self, _table("Settings of ``%s``" % path, rows))
 
 

@@ -8,8 +8,9 @@
 //   kRecoversFromInversion                     whether J <= 0 is pushed back.
 // withLaw() turns the Material's tag into that type once per call (once per
 // tet segment in the step), so hot loops are templated, never virtual.
-// Adding a law: one file in laws/, one enum value (Material.hpp), one case
-// here, one name in py/qdem/material.py.
+// Adding a law: its file in laws/ (a class named as its tag), one line of
+// QDEM_MATERIAL_LAWS (pkg/material/Material.hpp) and its #include here; the
+// dispatch below, the names, the Python QdemMat and the tests follow the list.
 #pragma once
 #include "../core/Errors.hpp"
 #include "../material/Material.hpp"
@@ -22,9 +23,12 @@ namespace qdem {
 template <class Fn>
 decltype(auto) withLaw(const Material& m, Fn&& f) {
     switch (m.law) {
-        case MaterialLaw::SaintVenantKirchhoff: return f(SaintVenantKirchhoff(m.lambda(), m.mu()));
-        case MaterialLaw::StableNeoHookean: break;
+#define QDEM_LAW_CASE(Tag, name, doc) \
+    case MaterialLaw::Tag: return f(Tag(m.lambda(), m.mu()));
+        QDEM_MATERIAL_LAWS(QDEM_LAW_CASE)
+#undef QDEM_LAW_CASE
     }
+    // Material::validate refuses any other tag; the default law, should one get here.
     return f(StableNeoHookean(m.lambda(), m.mu()));
 }
 

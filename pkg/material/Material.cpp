@@ -2,37 +2,63 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
 
 namespace qdem {
 
+namespace {
+// "1e+06", "0.4": six significant digits, as the rest of the messages.
+std::string shown(double v) { return cat(v); }
+}  // namespace
+
+std::string MaterialRange::rule() const {
+    auto num = [](double x) { return shown(x); };
+    if (std::isfinite(lo) && std::isfinite(hi))
+        return cat("must be a number in ", loOpen ? "(" : "[", num(lo), ", ", num(hi), hiOpen ? ")" : "]");
+    if (std::isfinite(lo)) return cat("must be a number ", loOpen ? "> " : ">= ", num(lo));
+    if (std::isfinite(hi)) return cat("must be a number ", hiOpen ? "< " : "<= ", num(hi));
+    return "must be a finite number";
+}
+
+std::string invalidMaterialValue(const char* name, const std::string& value, const std::string& rule) {
+    return cat("QdemMat: ", name, "=", value, " is invalid: ", rule);
+}
+
 void Material::validate() const {
-    auto bad = [](const char* name, double v, const char* rule) {
-        throw InputError(cat("QdemMat: ", name, "=", v, " is invalid: ", rule));
-    };
-    if (!std::isfinite(young) || young <= 0) bad("young", young, "must be > 0");
-    if (!std::isfinite(poisson) || poisson >= 0.5 || poisson <= -1)
-        bad("poisson", poisson, "must lie in (-1, 0.5)");
-    if (!std::isfinite(density) || density <= 0) bad("density", density, "must be > 0");
-    if (!std::isfinite(viscosity) || viscosity < 0) bad("viscosity", viscosity, "must be >= 0");
-    if (!std::isfinite(frictionPiece) || frictionPiece < 0) bad("frictionPiece", frictionPiece, "must be >= 0");
-    if (!std::isfinite(frictionWall) || frictionWall < 0) bad("frictionWall", frictionWall, "must be >= 0");
-    if (!std::isfinite(radius) || radius <= 0) bad("radius", radius, "must be > 0");
-    if (!std::isfinite(restitution) || restitution <= 0 || restitution > 1)
-        bad("restitution", restitution, "must lie in (0, 1]");
-    if (law != MaterialLaw::StableNeoHookean && law != MaterialLaw::SaintVenantKirchhoff)
-        throw InputError(cat("QdemMat: law=", static_cast<int>(law),
-                             " is invalid: must be 0 (stableNeoHookean) or 1 (saintVenantKirchhoff)"));
+    for (const MaterialField& f : kMaterialFields)
+        if (!f.range.allows(this->*f.member))
+            throw InputError(invalidMaterialValue(f.name, shown(this->*f.member), f.range.rule()));
+    for (MaterialLaw l : kMaterialLaws)
+        if (law == l) return;
+    throw InputError(invalidMaterialValue("law", shown(static_cast<int>(law)), lawRule()));
 }
 
 const char* lawName(MaterialLaw law) {
     switch (law) {
-        case MaterialLaw::StableNeoHookean: return "stableNeoHookean";
-        case MaterialLaw::SaintVenantKirchhoff: return "saintVenantKirchhoff";
+#define QDEM_LAW_NAME(Tag, name, doc) \
+    case MaterialLaw::Tag: return name;
+        QDEM_MATERIAL_LAWS(QDEM_LAW_NAME)
+#undef QDEM_LAW_NAME
     }
     return "unknown";
+}
+
+bool lawFromName(const std::string& name, MaterialLaw& law) {
+    for (MaterialLaw l : kMaterialLaws)
+        if (name == lawName(l)) {
+            law = l;
+            return true;
+        }
+    return false;
+}
+
+std::string lawRule() {
+    std::string s = "must be one of";
+    for (MaterialLaw l : kMaterialLaws) s += cat(l == kMaterialLaws[0] ? " '" : ", '", lawName(l), "'");
+    return s;
 }
 
 double dampingRatioFromRestitution(double e) {

@@ -18,6 +18,7 @@ using qdem::py_::flatten;
 
 void bindSettings(py::module_& m, py::class_<World>& world);
 void bindParallel(py::module_& m, py::class_<World>& world);
+void bindMaterial(py::module_& m, py::class_<World>& world);
 
 namespace {
 
@@ -86,18 +87,8 @@ void bindWorld(py::module_& m) {
     py::class_<World> world(m, "World", "All QDEM pieces of a scene and their step pipeline.");
     bindSettings(m, world);
     bindParallel(m, world);
+    bindMaterial(m, world);
     world.def(py::init<>())
-        .def(
-            "addMaterial",
-            [](World& w, double young, double poisson, double density, double viscosity, double frictionPiece,
-               double frictionWall, double radius, double restitution, int law) {
-                Material mat{young, poisson, density, viscosity, frictionPiece, frictionWall, radius, restitution};
-                mat.law = static_cast<MaterialLaw>(law);
-                return w.addMaterial(mat);
-            },
-            py::arg("young"), py::arg("poisson"), py::arg("density"), py::arg("viscosity"),
-            py::arg("frictionPiece"), py::arg("frictionWall"), py::arg("radius"), py::arg("restitution"),
-            py::arg("law") = 0)
         .def(
             "addPiece",
             [](World& w, const Nodes& nodes, const Tets& tets, int material, const std::vector<double>& added) {

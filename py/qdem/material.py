@@ -1,15 +1,51 @@
-"""QdemMat: the material of deformable QDEM pieces (defaults: seed paper, Table 1)."""
-from .attrs import Attr, AttrObject, number, positive, nonNegative
+"""QdemMat: the material of deformable QDEM pieces (defaults: seed paper, Table 1).
 
-_poisson = number(-1.0, 0.5, loOpen=True, hiOpen=True)
-_restitution = number(0.0, 1.0, loOpen=True)
+Its parameters and laws are declared once, in C++ (``QDEM_MATERIAL_FIELDS`` and
+``QDEM_MATERIAL_LAWS`` in pkg/material/Material.hpp, exposed as
+``qdem._core.materialFields`` and ``materialLaws``): the attributes, their
+defaults, docstrings and checks below are built from that list, and every
+value is checked by the core's own rule (``_core.checkMaterialValue``)."""
+from . import _core
+from .attrs import Attr, AttrObject
 
-# Elastic laws of the elements (pkg/element/laws/, doc/formulation.md "Material laws").
-LAWS = {"stableNeoHookean": 0, "saintVenantKirchhoff": 1}
+# Elastic laws of the elements, Python name -> core value (pkg/element/laws/,
+# doc/formulation.md "Material laws"); the first is the default.
+LAWS = {d["name"]: d["value"] for d in _core.materialLaws}
 
 
-def _law(v):
-    return None if isinstance(v, str) and v in LAWS else "must be one of %s" % ", ".join(repr(k) for k in LAWS)
+class MaterialParameter(Attr):
+    """A QdemMat attribute that is a parameter of the compiled material, built
+    from its declaration (``decl``: a row of ``qdem._core.materialFields``, or
+    the law) and checked by the core when set: a refused value raises the
+    core's ValueError, naming the parameter, the value and what it must be."""
+
+    def __init__(self, decl, default, doc):
+        self.decl = decl
+        super().__init__(default, doc)
+
+    def __set__(self, obj, value):
+        obj.__dict__[self.name] = _core.checkMaterialValue(self.name, value)
+
+
+def _fieldDoc(d):
+    unit = " Unit: %s." % d["unit"] if d["unit"] else ""
+    return "%s%s Allowed: %s." % (d["doc"], unit, d["rule"][len("must be "):])
+
+
+def _lawDoc():
+    laws = " ".join("'%s'%s: %s" % (d["name"], " (default)" if i == 0 else "", d["doc"])
+                    for i, d in enumerate(_core.materialLaws))
+    return ("Elastic law of the tetrahedra; all equal Hooke's law with young and poisson at small strain "
+            "(doc/formulation.md compares them). " + laws)
+
+
+def materialParameters(namespace):
+    """Adds a MaterialParameter to a class body (``materialParameters(locals())``)
+    for each declared material parameter, in declaration order, then ``law``."""
+    for d in _core.materialFields:
+        namespace[d["name"]] = MaterialParameter(d, d["default"], _fieldDoc(d))
+    law = {"name": "law", "kind": "choice", "choices": [d["name"] for d in _core.materialLaws], "unit": ""}
+    namespace["law"] = MaterialParameter(law, law["choices"][0], _lawDoc())
 
 
 class QdemMat(AttrObject):
@@ -19,28 +55,7 @@ class QdemMat(AttrObject):
         mat = QdemMat(young=5e8, poisson=0.4, density=700, viscosity=2.5e5)
     """
 
-    young = Attr(5.0e8, "Young's modulus E [Pa].", positive)
-    poisson = Attr(0.4, "Poisson's ratio, in (-1, 0.5).", _poisson)
-    density = Attr(700.0, "Mass density [kg/m^3].", positive)
-    viscosity = Attr(2.5e5, "Shear viscosity eta [Pa s] of the Kelvin-Voigt dashpot; the viscous "
-                            "stress is (eta/mu) times the elastic stress of the strain rate "
-                            "(doc/formulation.md). 0 = purely elastic.", nonNegative)
-    frictionPiece = Attr(0.1, "Coulomb kinetic friction coefficient against other QDEM pieces.", nonNegative)
-    frictionWall = Attr(0.5, "Coulomb kinetic friction coefficient against YADE walls, boxes and facets "
-                        "(the smaller of it and tan(frictionAngle) of the body's material acts, as in YADE).",
-                        nonNegative)
-    radius = Attr(0.04, "Radius of the surface particles [m]: contacts start when a node comes within "
-                        "this distance of a wall (2x of another piece's surface). Sets the contact "
-                        "stiffness kn = 2 E r (rigid wall).", positive)
-    restitution = Attr(0.5, "Normal restitution coefficient of one particle contact, in (0, 1]; "
-                            "sets the contact dashpot.", _restitution)
-    law = Attr("stableNeoHookean", "Elastic law of the tetrahedra; both equal Hooke's law with young and "
-                                   "poisson at small strain. 'stableNeoHookean' (default; Smith, de Goes and "
-                                   "Kim 2018): resists compression without softening and pushes an inverted "
-                                   "element back. 'saintVenantKirchhoff': the seed paper's law; its "
-                                   "compression response peaks at stretch 1/sqrt(3) and an element crushed "
-                                   "past it can stay inverted (QdemEngine then stops with an error). "
-                                   "doc/formulation.md compares them.", _law)
+    materialParameters(locals())
     label = Attr("", "Free text label, as YADE materials have.")
 
     def __setattr__(self, name, value):
@@ -54,7 +69,5 @@ class QdemMat(AttrObject):
         object.__setattr__(self, name, value)
 
     def coreArgs(self):
-        """Arguments of the compiled World.addMaterial, in order."""
-        return (float(self.young), float(self.poisson), float(self.density), float(self.viscosity),
-                float(self.frictionPiece), float(self.frictionWall), float(self.radius),
-                float(self.restitution), LAWS[self.law])
+        """Keyword arguments of the compiled World.addMaterial: every material parameter and the law."""
+        return {k: getattr(self, k) for k in type(self).attrNames() if k != "label"}

@@ -104,7 +104,7 @@ class World:
         """Index of a QdemMat in the compiled world, adding it on first use."""
         key = id(mat)
         if key not in self._materialIndex:
-            self._materialIndex[key] = (mat, self.core.addMaterial(*mat.coreArgs()))
+            self._materialIndex[key] = (mat, self.core.addMaterial(**mat.coreArgs()))
             mat._inUse = True  # later edits are refused (QdemMat.__setattr__)
         return self._materialIndex[key][1]
 

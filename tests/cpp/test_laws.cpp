@@ -28,7 +28,8 @@ Material material(MaterialLaw law, double nu) {
     return m;
 }
 
-const MaterialLaw kLaws[] = {MaterialLaw::StableNeoHookean, MaterialLaw::SaintVenantKirchhoff};
+// Every declared law (QDEM_MATERIAL_LAWS): a new law is tested without an edit here.
+const auto& kLaws = kMaterialLaws;
 
 // Deformation gradients to test at: stretched, sheared, compressed past
 // SVK's limit point, flattened almost to zero volume, and inverted.
