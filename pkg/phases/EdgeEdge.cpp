@@ -9,6 +9,7 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
+#include "ContactLoad.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -82,6 +83,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
 #pragma omp parallel reduction(+ : eDamp, eSlip, count) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
+        double* load = st_.threadLoad[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
         DeepContact& deep = threadDeep_[omp_get_thread_num()];
 #pragma omp for schedule(dynamic, 64) nowait  // (the region ends with the loop: its join is the barrier)
@@ -260,6 +262,13 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force + fw[1]);
                     addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force + fw[2]);
                     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force + fw[3]);
+                    {
+                        const bool tangential = Friction && law.mu > 0 && !regularized;
+                        addContactLoad(load, S.surfIndexOfNode[a0], 1 - sp.s, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[a1], sp.s, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b0], 1 - sp.t, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b1], sp.t, cp, tangential);
+                    }
                     if (pe) pe[3 * pa + 2] += r.elastic;
                     // Edges crossed (overlap past the reach): how far behind
                     // the other edge, against the reach (the per-step check).
