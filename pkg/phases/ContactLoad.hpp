@@ -2,16 +2,20 @@
 // node: the run-time stable step of the contacts as they are (doc/
 // formulation.md, "Stable time step", "Piece-piece contacts as they are").
 //
-// A contact spring k acts on g.x, the difference of two surface points each
-// a convex combination of nodes (a node against a triangle point, a point of
-// an edge against one of another edge), so sum_j |g_j| = 2.  Its matrix
-// k g g' is below diag(k |g_j| sum_l |g_l|) = diag(2 k |g_j|) in the Loewner
-// order (a symmetric matrix is below the diagonal of its absolute row sums:
-// the difference is diagonally dominant), the tangential spring alike (its
-// projector <= I), the dashpots alike.  Each node's load is the sum of these
-// rows over the contacts on it: as a node pressed on a face, and as a
-// triangle corner or edge end carrying the reactions of the other piece's
-// nodes.
+// A contact spring k acts on g.x = u.x - v.x, the difference of two surface
+// points each a convex combination of nodes (u = e_a for a node against a
+// triangle point, v = sum b_j e_j; the two edges' points for edge-edge).  By
+// Young's inequality, for any theta > 0,
+//     k g g' <= k ((1 + theta) u u' + (1 + 1/theta) v v'),
+// and by convexity (u u' <= sum u_j e_j e_j', weights >= 0 summing to 1) the
+// matrix is below the diagonal k (1 + theta) u_j on the first side's nodes,
+// k (1 + 1/theta) v_j on the other's in the Loewner order; the tangential
+// spring alike (its projector <= I), the dashpots alike.  theta = m1/m2, the
+// two points' masses, makes both rows k/m_reduced for a single contact (the
+// exact frequency of two masses on a spring); any theta keeps it a bound.
+// Each node's load is the sum of these over the contacts on it: as a node
+// pressed on a face, and as a triangle corner or edge end carrying the
+// reactions of the other piece's nodes.
 #pragma once
 #include <algorithm>
 #include <cstdint>
@@ -22,10 +26,10 @@
 namespace qdem {
 
 // Adds a contact with params p (tangential spring and dashpot when
-// `tangential`) to the load of surface node s, whose share of the contact's
-// motion is g (1 for the node of a node-triangle contact, a barycentric or
-// edge weight otherwise): 2 g max(kn, kt) and 2 g max(cn, ct).  load holds 2
-// doubles per surface node: stiffness [N/m], dashpot [N s/m].
+// `tangential`) to the load of surface node s: 2 g max(kn, kt) and
+// 2 g max(cn, ct), g half its share (its weight times 1 + theta, or
+// 1 + 1/theta).  load holds 2 doubles per surface node: stiffness [N/m],
+// dashpot [N s/m].
 inline void addContactLoad(double* load, int32_t s, double g, const ContactParams& p, bool tangential) {
     const double k = tangential ? std::max(p.kn, p.kt) : p.kn;
     const double c = tangential ? std::max(p.cn, p.ct) : p.cn;

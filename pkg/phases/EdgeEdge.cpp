@@ -264,10 +264,11 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force + fw[3]);
                     {
                         const bool tangential = Friction && law.mu > 0 && !regularized;
-                        addContactLoad(load, S.surfIndexOfNode[a0], 1 - sp.s, cp, tangential);
-                        addContactLoad(load, S.surfIndexOfNode[a1], sp.s, cp, tangential);
-                        addContactLoad(load, S.surfIndexOfNode[b0], 1 - sp.t, cp, tangential);
-                        addContactLoad(load, S.surfIndexOfNode[b1], sp.t, cp, tangential);
+                        const double ra = 0.5 * (m1 + m2) / m2, rb = 0.5 * (m1 + m2) / m1;  // (1 + theta, 1 + 1/theta) / 2
+                        addContactLoad(load, S.surfIndexOfNode[a0], (1 - sp.s) * ra, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[a1], sp.s * ra, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b0], (1 - sp.t) * rb, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b1], sp.t * rb, cp, tangential);
                     }
                     if (pe) pe[3 * pa + 2] += r.elastic;
                     // Edges crossed (overlap past the reach): how far behind

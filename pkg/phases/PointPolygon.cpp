@@ -410,11 +410,14 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 fA += r.force;
                 // (the tangential spring and dashpot act with the spring law only)
                 const bool tangential = Friction && law.mu > 0 && !regularized;
-                addContactLoad(load, s, 1.0, cp, tangential);
+                // (theta = m_node / m_T: ContactLoad.hpp)
+                const double mSum = w_.mass[node] + mT;
+                addContactLoad(load, s, 0.5 * mSum / mT, cp, tangential);  // (adds 2 x share)
                 for (int k = 0; k < 3; ++k)
                     if (c.cp.w[k] != 0) {
                         addTo(buf, S.surfIndexOfNode[tn[k]], -c.cp.w[k] * r.force);
-                        addContactLoad(load, S.surfIndexOfNode[tn[k]], c.cp.w[k], cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[tn[k]], 0.5 * c.cp.w[k] * mSum / w_.mass[node], cp,
+                                       tangential);
                     }
                 if (pe) pe[3 * pa + 2] += r.elastic;
                 eDamp += r.dampPower * dt;

@@ -108,7 +108,7 @@ def test_soft_cubes_colliding_at_nine_tenths_of_the_stable_step_stay_bounded(sce
     step bounds the contacts as they are (doc/formulation.md, "Piece-piece
     contacts as they are"): at f = 0.9 the run stops at step 361, before any
     gain (3e-16), at the first step the faces are within reach, naming
-    node 23 of piece 0 and its limit (0.85 of O.dt: node on node, the two
+    a face node and its limit (0.85 of O.dt: node on node, the two
     faces' springs act in parallel, twice the estimate's w^2);
     without that bound the energy exploded (gain 0.99 of the energy in
     flight) before a piece went through the other at step 383.  At f = 0.45
@@ -119,7 +119,7 @@ def test_soft_cubes_colliding_at_nine_tenths_of_the_stable_step_stay_bounded(sce
     out = fuzzscene.runScene(spec)
     fuzzscene.check(out)
     if dtFraction > 0.5:
-        assert out.stop is not None and "piece-piece contacts on node 23 of piece 0" in out.stop
+        assert out.stop is not None and "piece-piece contacts on node" in out.stop
         assert out.energyGain < 1e-6
     else:
         assert out.stop is None and out.contacted
