@@ -9,6 +9,7 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
+#include "ContactLoad.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -86,6 +87,7 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
 #pragma omp parallel reduction(+ : dampHere, slipHere, count) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
+        double* load = st_.threadLoad[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
         DeepContact& deep = threadDeep_[omp_get_thread_num()];
         // Static chunks: a node goes to the same thread every run, so a given
@@ -267,6 +269,14 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force + fw[1]);
                     addTo(buf, S.surfIndexOfNode[b0], -(1 - sp.t) * r.force + fw[2]);
                     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force + fw[3]);
+                    {
+                        const bool tangential = Friction && law.mu > 0 && !regularized;
+                        const double ra = 0.5 * (m1 + m2) / m2, rb = 0.5 * (m1 + m2) / m1;  // (1 + theta, 1 + 1/theta) / 2
+                        addContactLoad(load, S.surfIndexOfNode[a0], (1 - sp.s) * ra, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[a1], sp.s * ra, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b0], (1 - sp.t) * rb, cp, tangential);
+                        addContactLoad(load, S.surfIndexOfNode[b1], sp.t * rb, cp, tangential);
+                    }
                     if (pe) pe[3 * pa + 2] += r.elastic;
                     // Edges crossed (overlap past the reach): how far behind
                     // the other edge, against the reach (the per-step check).

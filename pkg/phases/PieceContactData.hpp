@@ -38,6 +38,12 @@ struct PieceContactData {
     ContactForces& contacts;
     Energy& energy;                    // contact damping and friction
     std::vector<std::vector<double>>& threadPieceEnergy;  // contact energy between pieces, per piece
+    // Per piece, what its stiffest element puts on a node of the leapfrog
+    // condition (World::refreshElementModes): omega_e^2 and the explicit
+    // viscous rate beta omega_e^2 (0 when implicit), for the run-time step
+    // of the contacts (ContactLoad.hpp); empty: not checked.
+    const std::vector<double>& pieceElementW2;
+    const std::vector<double>& pieceElementRate;
 };
 
 }  // namespace qdem

@@ -10,6 +10,8 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/ListKernels.hpp"
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
 #include "SleepPhase.hpp"
@@ -58,6 +60,7 @@ void PieceContactPhase::run(double dt) {
     broadSeconds_ = sumSeconds_ = 0;
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = maxDepthRatio_ = 0;
+    stepLimit_ = ContactStepLimit{};
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
@@ -378,6 +381,10 @@ void PieceContactPhase::run(double dt) {
     for (auto& b : st_.threadForce) b.resize(3 * w_.surfNodes.size());
     st_.threadForceData.resize(nth);
     for (int th = 0; th < nth; ++th) st_.threadForceData[th] = st_.threadForce[th].data();
+    if (static_cast<int>(st_.threadLoad.size()) != nth) st_.threadLoad.assign(nth, {});
+    for (auto& b : st_.threadLoad) b.resize(2 * w_.surfNodes.size());
+    st_.threadLoadData.resize(nth);
+    for (int th = 0; th < nth; ++th) st_.threadLoadData[th] = st_.threadLoad[th].data();
     const bool all = w_.sleeping.everything();
     const bool windowOpen = windowStart || st_.windowNext >= 0;  // some nodes read their former lists
     // Unit normals of the surface triangles of active pieces (quick plane test);
@@ -389,10 +396,14 @@ void PieceContactPhase::run(double dt) {
     {
         for (int th = omp_get_thread_num(); th < nth; th += omp_get_num_threads()) {
             std::vector<double>& b = st_.threadForce[th];
-            if (all) std::fill(b.begin(), b.end(), 0.0);
+            std::vector<double>& l = st_.threadLoad[th];
+            if (all) std::fill(b.begin(), b.end(), 0.0), std::fill(l.begin(), l.end(), 0.0);
             else
                 for (std::size_t ip = 0; ip < np; ++ip)
-                    if (!w_.sleeping.asleep(ip)) std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+                    if (!w_.sleeping.asleep(ip)) {
+                        std::fill(&b[3 * w_.pieces[ip].surfBegin], &b[3 * w_.pieces[ip].surfEnd], 0.0);
+                        std::fill(&l[2 * w_.pieces[ip].surfBegin], &l[2 * w_.pieces[ip].surfEnd], 0.0);
+                    }
         }
         auto normal = [&](int32_t t) {
             const int32_t* c = &S.tri[3 * t];
@@ -600,14 +611,42 @@ void PieceContactPhase::run(double dt) {
     const int32_t* surfNodes = w_.surfNodes.data();
     const int32_t* summedIds = summed.data();
     const double* const* tf = st_.threadForceData.data();
-#pragma omp parallel for schedule(static) num_threads(nth)
-    for (int32_t j = 0; j < ns; ++j) {
-        const int32_t s = all ? j : summedIds[j];
-        double* f = Fc + 3 * surfNodes[s];
-        for (int th = 0; th < nth; ++th)
-            for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
+    // With the forces, each node's contact load (ContactLoad.hpp) and its
+    // stable step with its piece's elements: the leapfrog condition
+    // 1 - dt/2 (beta w_e^2 + C/m) - dt^2/4 (w_e^2 + K/m) > 0 on that node
+    // (doc/formulation.md, "Piece-piece contacts as they are").
+    const double* const* tl = st_.threadLoadData.data();
+    const double* M = w_.mass.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
+    const bool measure = w_.pieceElementW2.size() == np && w_.pieceElementRate.size() == np;
+    const double* w2e = w_.pieceElementW2.data();
+    const double* rateE = w_.pieceElementRate.data();
+    ContactStepLimit best;
+#pragma omp parallel num_threads(nth)
+    {
+        ContactStepLimit mine;
+#pragma omp for schedule(static) nowait
+        for (int32_t j = 0; j < ns; ++j) {
+            const int32_t s = all ? j : summedIds[j];
+            const int32_t node = surfNodes[s];
+            double* f = Fc + 3 * node;
+            double k = 0, c = 0;
+            for (int th = 0; th < nth; ++th) {
+                for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
+                k += tl[th][2 * s], c += tl[th][2 * s + 1];
+            }
+            if (!(k > 0) || !measure) continue;
+            const int32_t p = nodePiece[node];
+            const double w2 = w2e[p] + k / M[node], w = std::sqrt(w2);
+            const double limit = leapfrogLimit(w, (rateE[p] + c / M[node]) / (2 * w));
+            if (limit < mine.limit) mine = ContactStepLimit{limit, node, p, k, c, w_.iter};
+        }
+#pragma omp critical(qdemContactStepLimit)
+        if (mine.limit < best.limit || (mine.limit == best.limit && mine.node < best.node)) best = mine;
     }
+    stepLimit_ = best;
     sumSeconds_ = omp_get_wtime() - tSum;
+    if (stepLimit_.limit < dt) checkStepLimit(dt);
     maxOverlap_ = ks.maxOverlap;
     const double eDamp = ks.eDamp, eSlip = ks.eSlip;
     if (w_.settings.trackEnergy) {  // (the elastic energy is summed per piece)
@@ -635,7 +674,21 @@ void PieceContactPhase::stateColumns(StateColumns& c) {
     for (Kind& k : kinds_) k.kernel->stateColumns(c);
 }
 
+void PieceContactPhase::checkStepLimit(double dt) const {
+    const ContactStepLimit& l = stepLimit_;
+    const double m = w_.mass[l.node];
+    throw StabilityError(cat(
+        "QDEM: during step ", w_.iter + 1, " the piece-piece contacts on node ", l.node - w_.pieces[l.piece].nodeBegin,
+        " of piece ", l.piece, " make its stable time step ", l.limit, " s, below O.dt = ", dt, " s by a factor ",
+        dt / l.limit, ": the springs on it, as a node pressed on the other piece and as a corner of the faces the "
+        "other piece's nodes press on, load it with ", l.stiffness, " N/m on its ", m, " kg (with its elements' ",
+        std::sqrt(w_.pieceElementW2[l.piece]), " rad/s). The stable step before the run counts one contact per "
+        "node (doc/formulation.md, \"Stable time step\"). Lower O.dt below ", l.limit,
+        " s, or make the contact softer (a smaller QdemMat young or radius)."));
+}
+
 void PieceContactPhase::piecesAdded() {
+    stepLimit_ = ContactStepLimit{};
     st_.resizeHistory(w_.surfNodes.size(), w_.surface.nEdges());
     for (Kind& k : kinds_) k.kernel->piecesAdded(w_);
     frozen_.resize(w_.pieces.size(), 0);
@@ -668,6 +721,7 @@ void PieceContactPhase::loadFields(const WorldState& s) {
 }
 
 void PieceContactPhase::stateLoaded() {
+    stepLimit_ = ContactStepLimit{};
     std::fill(frozen_.begin(), frozen_.end(), 0);
     std::fill(normalsFresh_.begin(), normalsFresh_.end(), 0);
     st_.listValid = false;  // Verlet lists: rebuilt from the loaded positions

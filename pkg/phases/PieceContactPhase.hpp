@@ -18,6 +18,7 @@
 
 #include "../world/Phase.hpp"
 #include "ContactKind.hpp"
+#include "ContactLoad.hpp"
 #include "PieceContactData.hpp"
 #include "PieceContactState.hpp"
 
@@ -41,6 +42,10 @@ public:
     // piece's surface, over its reach r_a + r_b, in the last step (0: none
     // behind).  Above 1 the run stops (checkContactDepth).
     double maxDepthRatio() const { return maxDepthRatio_; }
+    // The stable step of the last step's contacts as they act on each node
+    // with its piece's elements (ContactLoad.hpp); infinite when none.  A step
+    // whose contacts make it below dt stops the run (StabilityError).
+    const ContactStepLimit& stepLimit() const { return stepLimit_; }
     // Pieces placed pressed into each other, accepted by the start check:
     // the energy their springs hold and the speed it throws them apart at,
     // handed over once (QdemEngine warns).
@@ -121,6 +126,10 @@ private:
     PieceContactState st_;
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0, maxDepthRatio_ = 0;
     std::vector<DeepContact> threadDeep_;  // per thread, sized once
+    ContactStepLimit stepLimit_;
+    // After the sum: refuses a step whose contacts, as they are, make the
+    // stable step of some node below dt (StabilityError naming it and the fix).
+    void checkStepLimit(double dt) const;
     // Is a contact of pieces pa, pb past its reach judged by the per-step
     // check?  Not while the start check judges the pair (a new piece), nor
     // for a pair the start check accepted interpenetrated (startOverlap_):

@@ -114,6 +114,10 @@ struct PieceContactState {
     }
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
     std::vector<const double*> threadForceData;    // their data(), for the sum's inner loop
+    // Per thread, 2 per surface node: the contacts' stiffness and dashpot
+    // load on it (ContactLoad.hpp), zeroed and summed with the forces.
+    std::vector<std::vector<double>> threadLoad;
+    std::vector<const double*> threadLoadData;
     // Per step: the law's material constants of each neighbour pair (one per
     // nbrs entry) and each piece's particle radius, so the narrow phase takes
     // no log or root per contact.

@@ -15,6 +15,7 @@
 #include "../contact/TouchSelection.hpp"
 #include "../contact/TriLanesFill.hpp"
 #include "../parallel/Domain.hpp"
+#include "ContactLoad.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -66,6 +67,7 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
 #pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, listed) reduction(max : maxOv)
     {
         double* buf = st_.threadForce[omp_get_thread_num()].data();
+        double* load = st_.threadLoad[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
         DeepContact& deep = threadDeep_[omp_get_thread_num()];
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
@@ -409,8 +411,17 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 newRef[nNew] = r0;
                 ++nNew;
                 fA += r.force;
+                // (the tangential spring and dashpot act with the spring law only)
+                const bool tangential = Friction && law.mu > 0 && !regularized;
+                // (theta = m_node / m_T: ContactLoad.hpp)
+                const double mSum = w_.mass[node] + mT;
+                addContactLoad(load, s, 0.5 * mSum / mT, cp, tangential);  // (adds 2 x share)
                 for (int k = 0; k < 3; ++k)
-                    if (c.cp.w[k] != 0) addTo(buf, S.surfIndexOfNode[tn[k]], -c.cp.w[k] * r.force);
+                    if (c.cp.w[k] != 0) {
+                        addTo(buf, S.surfIndexOfNode[tn[k]], -c.cp.w[k] * r.force);
+                        addContactLoad(load, S.surfIndexOfNode[tn[k]], 0.5 * c.cp.w[k] * mSum / w_.mass[node], cp,
+                                       tangential);
+                    }
                 if (pe) pe[3 * pa + 2] += r.elastic;
                 eDamp += r.dampPower * dt;
                 eSlip += r.slipWork;

@@ -413,13 +413,35 @@ double World::dynamicObstacleLimit(const Obstacle& o) const {
     return leapfrogLimit(w, (g * K * cPerK + nodeRate) / (2 * w));
 }
 
+void World::ensureElementOmegas() const {
+    if (omegaCache_.size() == pieces.size()) return;
+    omegaCache_.resize(pieces.size());
+    for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
+}
+
+// What each piece's elements put on a node of the leapfrog condition, for
+// the piece-contact phase's step of the contacts as they are: by Irons'
+// theorem (above) the element springs on a node's lumped mass are at most
+// omega_e^2 per unit mass, their Kelvin-Voigt dashpots beta omega_e^2 (the
+// viscous operator is beta times the stiffness at rest; implicit: none).
+// O(pieces) a step; the frequencies themselves once per piece added.
+void World::refreshElementModes() {
+    if (pieces.size() < 2) return;  // no piece-piece contact
+    ensureElementOmegas();
+    pieceElementW2_.resize(pieces.size());
+    pieceElementRate_.resize(pieces.size());
+    const bool explicitViscosity = settings.viscosityOn && settings.viscousIntegration != ViscousIntegration::Implicit;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const double w2 = omegaCache_[i] * omegaCache_[i];
+        pieceElementW2_[i] = w2;
+        pieceElementRate_[i] = explicitViscosity ? materials[pieces[i].material].beta() * w2 : 0.0;
+    }
+}
+
 StableDt World::stableDt() const {
     const double inf = std::numeric_limits<double>::infinity();
     StableDt r{inf, inf, inf, inf, "none", inf, inf};
-    if (omegaCache_.size() != pieces.size()) {
-        omegaCache_.resize(pieces.size());
-        for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
-    }
+    ensureElementOmegas();
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         const PieceInfo& p = pieces[i];
         const Material& m = materials[p.material];
@@ -494,6 +516,20 @@ StableDt World::stableDt() const {
         else if (r.contact == lim) r.limitedBy = "contact";
         else if (!implicit && r.viscous < r.elastic) r.limitedBy = "viscosity";
         else r.limitedBy = "elasticity (P-wave)";
+    }
+    // The piece-piece contacts as the last step found them (ContactLoad.hpp):
+    // a node pressed on a face and carrying, as a corner of its own faces,
+    // the reactions of the other piece's nodes, which the estimate above
+    // counts once.  (Measured in the mode of viscous integration of that step.)
+    if (const ContactStepLimit& pc = pieceContactPhase_.stepLimit(); pc.node >= 0) {
+        r.pieceContact = pc.limit, r.pieceContactNode = pc.node - pieces[pc.piece].nodeBegin;
+        r.pieceContactPiece = pc.piece, r.pieceContactStep = pc.step;
+        double& mode = implicit ? r.combinedImplicit : r.combinedExplicit;
+        mode = std::min(mode, pc.limit);
+        if (pc.limit < r.combined)
+            r.combined = pc.limit,
+            r.limitedBy = cat("the piece-piece contacts on node ", r.pieceContactNode, " of piece ", pc.piece,
+                              " (as they were in step ", pc.step + 1, ")");
     }
     return r;
 }

@@ -68,6 +68,12 @@ struct StableDt {
     double worstQuality = std::numeric_limits<double>::quiet_NaN();
     double pieceElastic = std::numeric_limits<double>::infinity(), pieceViscous = pieceElastic;
     double medianElastic = std::numeric_limits<double>::infinity(), medianViscous = medianElastic;
+    // The piece-piece contacts of the last step as they act on each node,
+    // with its piece's elements (ContactLoad.hpp; infinite: none), and where:
+    // already in `combined`.
+    double pieceContact = std::numeric_limits<double>::infinity();
+    int32_t pieceContactNode = -1, pieceContactPiece = -1;
+    long pieceContactStep = -1;
 };
 
 // An obstacle edge found crossing a piece's surface by World::obstacleEdgeCrossing.
@@ -352,6 +358,9 @@ private:
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;
     std::vector<std::vector<double>> threadPieceEnergy_;
+    // Per piece, its stiffest element's omega^2 and explicit viscous rate,
+    // refreshed before each step's piece contacts (refreshElementModes).
+    std::vector<double> pieceElementW2_, pieceElementRate_;
     // Under MPI: this rank's share of the world and its exchanges.
     std::unique_ptr<Domain> domain_;
 
@@ -370,7 +379,9 @@ private:
                                           .settings = settings, .iter = iter, .surface = surf_,
                                           .sleeping = sleepPhase_, .bounds = bounds_, .domain = {domain_},
                                           .contacts = contactForces_, .energy = energy,
-                                          .threadPieceEnergy = threadPieceEnergy_}};
+                                          .threadPieceEnergy = threadPieceEnergy_,
+                                          .pieceElementW2 = pieceElementW2_,
+                                          .pieceElementRate = pieceElementRate_}};
     SpherePhase spherePhase_{{.pos = pos, .vel = vel, .mass = mass, .surfNodes = surfNodes, .pieces = pieces,
                               .materials = materials, .settings = settings, .iter = iter, .surface = surf_,
                               .bounds = bounds_, .domain = {domain_}, .spheres = spheres, .contacts = contactForces_,
@@ -405,6 +416,11 @@ private:
     StateColumns stateColumns();
 
     double elementOmegaMax(const PieceInfo& p) const;
+    // omegaCache_ for the current pieces (computed when pieces changed).
+    void ensureElementOmegas() const;
+    // pieceElementW2_, pieceElementRate_ from omegaCache_ and the current
+    // viscosity settings: for the piece-contact phase's run-time step.
+    void refreshElementModes();
     // The lumped mass one element puts on each of its nodes: (rho V + added) / 4.
     double elementNodeMass(int32_t tet, const Material& m) const {
         return (m.density * tetVol0[tet] + tetAddedMass[tet]) / 4.0;

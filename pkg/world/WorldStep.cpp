@@ -78,6 +78,7 @@ void World::step(double dt) {
     if (domain_) spherePhase_.listActive();  // the same pairs on every rank: they size the reduction
     // Forces: contacts (into contactForces_), then elements (thread buffers).
     run(obstaclePhase_);
+    refreshElementModes();  // (what the piece contacts' run-time step adds to)
     run(pieceContactPhase_);
     run(spherePhase_);
     run(elementPhase_);

@@ -244,6 +244,10 @@ void bindWorld(py::module_& m) {
                  d["combinedImplicit"] = s.combinedImplicit;
                  d["limitedBy"] = s.limitedBy;
                  d["obstacle"] = s.obstacle;  // the stiffest dynamic YADE obstacle's (inf: none)
+                 // The piece-piece contacts as the last step found them (inf: none).
+                 d["pieceContact"] = s.pieceContact;
+                 d["pieceContactNode"] = s.pieceContactNode;
+                 d["pieceContactPiece"] = s.pieceContactPiece;
                  // What in the element step sets it (StableDt, StepReport.hpp).
                  d["piece"] = s.piece;
                  d["elements"] = s.elements;
