@@ -124,6 +124,11 @@ inline int historySlot(const int32_t* key, const int32_t* kpiece, const bool* us
     int slot = -1;
     for (int k = 0; k < K; ++k)
         if (key[k] == kk && kpiece[k] == pb && !usedOld[k]) slot = k;
+    // Then the touch on the same triangle at another feature (its closest
+    // point moved from the face onto an edge or a corner, or back): the
+    // same touch, whichever other touches of the piece ended.
+    for (int k = 0; k < K && slot < 0; ++k)
+        if (key[k] >= 0 && kpiece[k] == pb && !usedOld[k] && historyTri(key[k]) == historyTri(kk)) slot = k;
     if (slot < 0)
         for (int k = 0; k < K && slot < 0; ++k)
             if (key[k] >= 0 && kpiece[k] == pb && !usedOld[k]) {
@@ -135,6 +140,66 @@ inline int historySlot(const int32_t* key, const int32_t* kpiece, const bool* us
                 if (!matchedLater) slot = k;
             }
     return slot;
+}
+
+// The set of touches of a point changes only without creating or destroying
+// stored energy (doc/contacts.md §3, "Touches that split and merge").  A touch
+// that splits off (more touches with a piece than on the previous step) is
+// born at zero force: bornDeepRef with threshold 0 (touchedPiece says the
+// point touched the piece before).  A touch that ends while still pressing
+// (two touches merging: the feature-angle rule, or its closest point moving
+// onto an edge or corner that a face of another touch beats) hands its
+// stored depth to the surviving touch of that piece whose normal is nearest
+// its own, handed[j] += (overlap - reference)^2 (candidate j's index): the
+// survivor lowers its reference so that its ½ kn δ² holds both (the
+// caller's handOverRef).  Both touches have the same kn (one point, one
+// piece), so the energy is handed over exactly.
+inline bool touchedPiece(const int32_t* key, const int32_t* kpiece, int K, int32_t pb) {
+    for (int k = 0; k < K; ++k)
+        if (key[k] >= 0 && kpiece[k] == pb) return true;
+    return false;
+}
+
+// usedOld: the old slots continued by this step's touches (historySlot for
+// every kept touch, in order); reachOf(pb): the contact reach with piece pb.
+// Returns whether anything was handed (handed[] zeroed by the caller).
+template <class ReachOf>
+inline bool handOver(const Vector3d& A, const Candidate* cand, int nc, const bool* keep, const int32_t* triPiece,
+                     const int32_t* pieceTriStart, const int32_t* key, const int32_t* kpiece, const double* ref,
+                     const bool* usedOld, int K, double eps, ReachOf&& reachOf, double* handed) {
+    bool any = false;
+    for (int k = 0; k < K; ++k) {
+        if (key[k] < 0 || usedOld[k]) continue;
+        const int32_t pb = kpiece[k];
+        const int32_t t = pieceTriStart[pb] + historyTri(key[k]);
+        int g = 0;
+        while (g < nc && cand[g].tri != t) ++g;
+        if (g == nc) continue;  // out of reach: it ended at zero force
+        const Candidate& cg = cand[g];
+        const double reach = reachOf(pb);
+        const double depth = (cg.behind ? reach + cg.dist : reach - cg.dist) - ref[k];
+        if (depth <= 0) continue;
+        const Vector3d ng = (cg.behind ? -1.0 : 1.0) * (A - cg.cp.point) / std::max(cg.dist, eps);
+        int best = -1;
+        double bestDot = -INFINITY;
+        for (int j = 0; j < nc; ++j) {
+            if (!keep[j] || triPiece[cand[j].tri] != pb) continue;
+            const double d = ng.dot((cand[j].behind ? -1.0 : 1.0) * (A - cand[j].cp.point) / std::max(cand[j].dist, eps));
+            if (d > bestDot) bestDot = d, best = j;
+        }
+        if (best < 0) continue;  // no touch with the piece left
+        handed[best] += depth * depth;
+        any = true;
+    }
+    return any;
+}
+
+// The reference of a survivor at overlap ov (reference r0) that takes the
+// squared depths handed to it: its depth becomes sqrt(δ² + handed), the
+// reference never below zero (a contact never pulls).
+inline double handOverRef(double ov, double r0, double handed) {
+    const double d = std::max(ov - r0, 0.0);
+    return std::max(0.0, ov - std::sqrt(d * d + handed));
 }
 
 }  // namespace qdem::contact_detail

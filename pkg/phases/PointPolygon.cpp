@@ -365,6 +365,29 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
             Vector3d newShear[K];
             double newRef[K];
             bool usedOld[K] = {false, false, false, false, false, false};
+            // History slots of the touches, in order, then what touches that
+            // ended while pressing hand over (TouchSelection.hpp).
+            int slotOf[kCandidates];
+            int nTouch = 0;
+            for (uint32_t m = touches; m && nTouch < K; m &= m - 1, ++nTouch) {
+                const int i = std::countr_zero(m);
+                const int32_t pb = triPiece[cand[i].tri];
+                slotOf[i] = historySlot(key, kpiece, usedOld, K,
+                                        historyKey(cand[i].tri - S.pieceTriStart[pb], cand[i].cp.feature), pb, cand,
+                                        keep, nc, triPiece, S.pieceTriStart.data());
+                if (slotOf[i] >= 0) usedOld[slotOf[i]] = true;
+            }
+            double handed[kCandidates];
+            bool anyHanded = false;
+            if (watched && key[0] >= 0) {
+                bool ended = false;
+                for (int k = 0; k < K; ++k) ended = ended || (key[k] >= 0 && !usedOld[k]);
+                if (ended) {
+                    for (int i = 0; i < nc; ++i) handed[i] = 0.0;
+                    anyHanded = handOver(A, cand, nc, keep, triPiece, S.pieceTriStart.data(), key, kpiece, ref, usedOld,
+                                         K, eps, [&](int32_t pb) { return lawOf(pb).reach; }, handed);
+                }
+            }
             int nNew = 0;
             Vector3d fA = Vector3d::Zero();
             for (uint32_t m = touches; m && nNew < K; m &= m - 1) {  // the kept candidates in order
@@ -385,19 +408,22 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 // a contact with the same piece that ended this step (a node
                 // sliding onto the next triangle keeps its spring).
                 const int32_t kk = historyKey(c.tri - S.pieceTriStart[pb], c.cp.feature);
-                const int slot =
-                    historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc, triPiece, S.pieceTriStart.data());
+                const int slot = slotOf[i];
                 Vector3d sh = Vector3d::Zero();
                 if (slot >= 0) {
-                    usedOld[slot] = true;
                     sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                 }
                 const double w = w_.surfWeight[s], sw = std::sqrt(w);  // the query node's area weight
                 const ContactParams cp{w * law.kn, sw * law.cn, w * law.kt, sw * law.ct, law.mu, w_.settings.frictionRegVelocity,
                                        w_.mass[node] * mT / (w_.mass[node] + mT)};
                 const Vector3d vRel = at(w_.vel, node) - vT;
-                const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, law.reach,
-                                              vRel.dot(n), dt);
+                // A touch that splits off one with the same piece starts from zero
+                // force (threshold 0, TouchSelection.hpp); one missed by the
+                // detection from its present overlap (threshold the reach).
+                const bool split = slot < 0 && touchedPiece(key, kpiece, K, pb);
+                double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
+                                        split ? 0.0 : law.reach, vRel.dot(n), dt);
+                if (anyHanded && handed[i] > 0) r0 = handOverRef(overlap, r0, handed[i]);
                 const ContactResult r =
                     lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
                 // How deep the node is behind pb's surface (overlap - reach:

@@ -509,6 +509,22 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 bool usedOld[K] = {false, false, false, false};
                 int32_t kpiece[K];
                 for (int k = 0; k < K; ++k) kpiece[k] = key[k] >= 0 ? pb : -1;
+                // History slots of the touches, in order, then what touches
+                // that ended while pressing hand over (TouchSelection.hpp).
+                int slotOf[kCandidates];
+                for (int k = 0, nT = 0; k < nc; ++k) {
+                    if (!keep[k] || nT == K) continue;
+                    const Candidate& c = cand[k];
+                    slotOf[k] = historySlot(key, kpiece, usedOld, K, historyKey(c.tri - t0, c.cp.feature), pb, cand,
+                                            keep, nc, surf.triPiece.data(), surf.pieceTriStart.data());
+                    if (slotOf[k] >= 0) usedOld[slotOf[k]] = true;
+                    ++nT;
+                }
+                const bool touched = touchedPiece(key, kpiece, K, pb);
+                double handed[kCandidates];
+                for (int k = 0; k < nc; ++k) handed[k] = 0.0;
+                handOver(C, cand, nc, keep, surf.triPiece.data(), surf.pieceTriStart.data(), key, kpiece, ref, usedOld,
+                         K, eps, [&](int32_t) { return reach; }, handed);
                 int nNew = 0;
                 for (int k = 0; k < nc; ++k) {
                     if (!keep[k] || nNew == K) continue;
@@ -526,11 +542,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     // (YADE's convention): the lever arm of friction.
                     const Vector3d arm = -std::max(R - 0.5 * ov, 0.0) * nrm;
                     const int32_t kk = historyKey(c.tri - t0, c.cp.feature);
-                    const int slot = historySlot(key, kpiece, usedOld, K, kk, pb, cand, keep, nc, surf.triPiece.data(),
-                                                 surf.pieceTriStart.data());
+                    const int slot = slotOf[k];
                     Vector3d sh = Vector3d::Zero();
                     if (slot >= 0) {
-                        usedOld[slot] = true;
                         sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
                     }
                     // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
@@ -544,8 +558,11 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     const Vector3d vRel = v + w.cross(spinOff) + spinVelocity(w, fromSpin, dt) - vT;
                     // A contact found deep on a sphere already watched was missed,
                     // not made: it stores no energy it was not given (ContactDetail.hpp).
-                    const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov, law.reach,
-                                                  vRel.dot(nrm), dt);
+                    // One that splits off a touch of the piece is born at zero force
+                    // (threshold 0: TouchSelection.hpp).
+                    double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov,
+                                            slot < 0 && touched ? 0.0 : law.reach, vRel.dot(nrm), dt);
+                    if (handed[k] > 0) r0 = handOverRef(ov, r0, handed[k]);
                     const ContactResult r =
                         lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh);
                     newKey[nNew] = kk;
