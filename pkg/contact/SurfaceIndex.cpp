@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "../world/World.hpp"
+#include "../mesh/PieceInfo.hpp"
 
 namespace qdem {
 

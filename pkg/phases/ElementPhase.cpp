@@ -9,7 +9,7 @@
 
 #include "../element/ElementKernel.hpp"
 #include "../element/MaterialLaw.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 #include "ElementPhase.hpp"
 
 namespace qdem {
