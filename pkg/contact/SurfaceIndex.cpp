@@ -5,6 +5,7 @@
 #include <map>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 
 #include "../mesh/PieceInfo.hpp"
 

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include <Eigen/Geometry>  // cross products, determinants
+
 #include "../element/ElementKernel.hpp"
 #include "../element/MaterialLaw.hpp"
 #include "../step/AwakeSet.hpp"
