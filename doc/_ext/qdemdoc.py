@@ -9,7 +9,7 @@ are generated from the package, so that they are never written twice.
     (``QdemEngine``, ``VtkRecorder``, ``QdemMat``): name, default, unit,
     allowed values, meaning.  QdemMat's come from ``QDEM_MATERIAL_FIELDS``
     in ``pkg/material/Material.hpp`` (their unit is a column of that list).  The engine's world settings come from their one
-    declaration, ``QDEM_SETTINGS`` in ``pkg/world/Settings.hpp``, through
+    declaration, ``QDEM_SETTINGS`` in ``pkg/step/Settings.hpp``, through
     ``qdem._core.settings``; the build fails (a warning under ``-W``) when
     the compiled table differs from the header, i.e. when the package the
     site is built from is stale.
@@ -130,12 +130,12 @@ def _table(title, rows):
 
 
 def settingsDrift(text=None):
-    """Names declared in pkg/world/Settings.hpp (or ``text``, a header's
+    """Names declared in pkg/step/Settings.hpp (or ``text``, a header's
     contents) against those compiled into qdem._core.settings: a difference
     means the package the site is built from is stale."""
     from qdem import _core
     if text is None:
-        text = open(os.path.join(ROOT, "pkg", "world", "Settings.hpp")).read()
+        text = open(os.path.join(ROOT, "pkg", "step", "Settings.hpp")).read()
     body = text[text.index("#define QDEM_SETTINGS(X)"):]
     declared = re.findall(r"X\(\s*\w+\s*,\s*(\w+)\s*,", body)
     compiled = [d["name"] for d in _core.settings]
@@ -154,7 +154,7 @@ class SettingsDirective(SphinxDirective):
         declared, compiled = settingsDrift()
         if declared != compiled:
             logger.warning("qdem-settings: the settings compiled into qdem._core (%s) differ from "
-                           "QDEM_SETTINGS in pkg/world/Settings.hpp (%s): rebuild the extension "
+                           "QDEM_SETTINGS in pkg/step/Settings.hpp (%s): rebuild the extension "
                            "(cmake --build build --target _core)" % (compiled, declared),
                            location=(self.env.docname, self.lineno))
         rows = []

@@ -5,8 +5,9 @@
 #include <map>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 
-#include "../world/World.hpp"
+#include "../mesh/PieceInfo.hpp"
 
 namespace qdem {
 

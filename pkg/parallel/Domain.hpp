@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "../world/ThreadLayout.hpp"
+#include "ThreadLayout.hpp"
 #include "Communicator.hpp"
 #include "Partition.hpp"
 

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "../world/Phase.hpp"
-#include "../world/Settings.hpp"
+#include "../step/Phase.hpp"
+#include "../step/Settings.hpp"
 #include "PieceContactData.hpp"
 
 namespace qdem {

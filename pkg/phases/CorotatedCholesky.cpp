@@ -14,7 +14,7 @@
 #include "../core/Format.hpp"
 #include "../element/ViscousOperator.hpp"
 #include "../parallel/Domain.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 
 namespace qdem {
 

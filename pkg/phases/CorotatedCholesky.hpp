@@ -26,12 +26,11 @@
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../parallel/DomainRef.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/AwakeSet.hpp"
+#include "../step/Settings.hpp"
 
 namespace qdem {
-
-class SleepPhase;
 
 class CorotatedCholesky {
 public:
@@ -45,7 +44,7 @@ public:
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;
-        const SleepPhase& sleeping;
+        const AwakeSet& sleeping;
         DomainRef domain;
     };
     explicit CorotatedCholesky(const Data& data) : w_(data) {}

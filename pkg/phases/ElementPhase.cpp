@@ -7,9 +7,11 @@
 #include <cmath>
 #include <type_traits>
 
+#include <Eigen/Geometry>  // cross products, determinants
+
 #include "../element/ElementKernel.hpp"
 #include "../element/MaterialLaw.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 #include "ElementPhase.hpp"
 
 namespace qdem {

@@ -8,16 +8,16 @@
 #include "../core/Column.hpp"
 #include "../element/TetBlock.hpp"
 #include "../material/Material.hpp"
-#include "../world/Energy.hpp"
-#include "../world/Phase.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
-#include "../world/ThreadBlocks.hpp"
-#include "../world/ThreadLayout.hpp"
+#include "../step/Energy.hpp"
+#include "../step/Phase.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
+#include "../parallel/ThreadBlocks.hpp"
+#include "../parallel/ThreadLayout.hpp"
+#include "../step/AwakeSet.hpp"
 
 namespace qdem {
 
-class SleepPhase;
 
 class ElementPhase final : public Phase {
 public:
@@ -32,7 +32,7 @@ public:
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;
-        const SleepPhase& sleeping;  // the awake tets
+        const AwakeSet& sleeping;  // the awake tets
         Energy& energy;              // viscous dissipation
         std::vector<std::vector<double>>& threadPieceEnergy;  // strain energy per thread and piece
     };

@@ -11,155 +11,158 @@
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/WorldState.hpp"
+#include "../step/WorldState.hpp"
 #include "ElementPhase.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 #include "IntegrationPhase.hpp"
 
 namespace qdem {
 
-void IntegrationPhase::run(double dt) {
+IntegrationPhase::NodeUpdate IntegrationPhase::nodeUpdate() {
+    NodeUpdate u;
     const auto N = static_cast<int32_t>(w_.mass.size());
     const ThreadLayout& layout = w_.elements.layout();
-    const int nth = layout.nThreads;
-    const bool energyOn = w_.settings.trackEnergy;
-    const bool withContacts = w_.contacts.active;
-    const double g[3] = {w_.gravity[0], w_.gravity[1], w_.gravity[2]};
-    double* X = w_.pos.data();
-    double* V = w_.vel.data();
-    double* Fout = w_.force.data();
-    const double* Fext = w_.extForce.data();
-    const double* Fc = w_.contacts.force.data();
-    const double* M = w_.mass.data();
+    u.nth = layout.nThreads;
+    u.withContacts = w_.contacts.active;
+    for (int d = 0; d < 3; ++d) u.g[d] = w_.gravity[d];
+    u.X = w_.pos.data();
+    u.V = w_.vel.data();
+    u.Fout = w_.force.data();
+    u.Fext = w_.extForce.data();
+    u.Fc = w_.contacts.force.data();
+    u.M = w_.mass.data();
     // Under MPI: what other ranks computed on this rank's nodes (Domain.hpp).
-    const double* Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
-    const uint8_t* blk = w_.blocked.data();
-    const int32_t* nodePiece = w_.nodePiece.data();
-    double ek = 0, eg = 0, ed = 0;
-    const double damp = w_.settings.localDamping;
+    u.Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
+    u.blk = w_.blocked.data();
+    u.nodePiece = w_.nodePiece.data();
+    u.damp = w_.settings.localDamping;
     // Sleeping pieces are skipped: then only the awake nodes are visited.
-    const bool all = w_.sleeping.everything();
-    const int32_t* ids = w_.sleeping.awakeNodes().data();
-    const auto count = all ? N : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
-    const bool sleepOn = w_.settings.sleepVelocity > 0;
-    if (sleepOn) {
-        threadSpeed2_.resize(nth);
+    u.all = w_.sleeping.everything();
+    u.ids = w_.sleeping.awakeNodes().data();
+    u.count = u.all ? N : static_cast<int32_t>(w_.sleeping.awakeNodes().size());
+    u.sleepOn = w_.settings.sleepVelocity > 0;
+    if (u.sleepOn) {
+        threadSpeed2_.resize(u.nth);
         for (auto& t : threadSpeed2_) t.assign(w_.pieces.size(), 0.0);
     }
     // The element phase's thread buffers as flat arrays (no vector of
     // vectors to walk per node and thread).
-    bufPtr_.resize(nth);
-    bufLo_.resize(nth);
-    bufHi_.resize(nth);
-    for (int t = 0; t < nth; ++t) {
+    bufPtr_.resize(u.nth);
+    bufLo_.resize(u.nth);
+    bufHi_.resize(u.nth);
+    for (int t = 0; t < u.nth; ++t) {
         bufPtr_[t] = layout.buffers[t].data();
         bufLo_[t] = layout.nodeLo[t];
         bufHi_[t] = layout.nodeHi[t];
     }
-    const double* const* buf = bufPtr_.data();
-    const int stride = layout.stride;
-    const int32_t* bufLo = bufLo_.data();
-    const int32_t* bufHi = bufHi_.data();
-    // The explicit force on node n: element buffers, contacts, gravity, external.
-    // (Captures by value here and below: a captured reference is read through
-    // the closure, and every store through a double pointer in the loop would
-    // reload it.)
-    const auto explicitForce = [=](int32_t n, double* f) {
-        for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
-        for (int t = 0; t < nth; ++t)
-            if (n >= bufLo[t] && n <= bufHi[t]) {
-                const double* b = buf[t] + stride * (n - bufLo[t]);
-                f[0] += b[0];
-                f[1] += b[1];
-                f[2] += b[2];
-            }
-        if (withContacts)
-            for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
-        if (Fg)
-            for (int d = 0; d < 3; ++d) f[d] += Fg[3 * n + d];
-    };
-    // Implicit viscosity (ViscousSolve.hpp): the explicit forces first, then
-    // the viscous correction q, applied as the force f - q.
-    const bool implicit = viscous_.active();
-    const double* Fq = nullptr;
+    u.buf = bufPtr_.data();
+    u.stride = layout.stride;
+    u.bufLo = bufLo_.data();
+    u.bufHi = bufHi_.data();
+    return u;
+}
+
+const double* IntegrationPhase::viscousCorrection(const NodeUpdate u, bool implicit, double dt) {
     viscous_.iterations = 0;
     viscous_.startedWarm = false;
     viscous_.seconds = 0;
-    if (implicit) {
-#pragma omp parallel for num_threads(nth) schedule(static)
-        for (int32_t i = 0; i < count; ++i) explicitForce(all ? i : ids[i], Fout + 3 * (all ? i : ids[i]));
-        Fq = viscous_.solve(dt, Fout);
-    }
-    double* dV = implicit && energyOn ? viscous_.velocityChange() : nullptr;
-    // The update, compiled per combination of the implicit solve, local
-    // damping, energy tracking and sleep tracking: the common run (explicit,
-    // none of the three) carries no test of them per node and DOF.
-    const auto advance = [=, this](auto implicitTag, auto dampTag, auto energyTag, auto sleepTag) {
-        constexpr bool Implicit = decltype(implicitTag)::value;
-        constexpr bool Damp = decltype(dampTag)::value;
-        constexpr bool EnergyOn = decltype(energyTag)::value;
-        constexpr bool SleepOn = decltype(sleepTag)::value;
-        double ekT = 0, egT = 0, edT = 0, ebT = 0, sumT = 0;
-#pragma omp parallel num_threads(nth) reduction(+ : ekT, egT, edT, ebT, sumT)
-        {
-            double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
+    if (!implicit) return nullptr;
+#pragma omp parallel for num_threads(u.nth) schedule(static)
+    for (int32_t i = 0; i < u.count; ++i) u.explicitForce(u.all ? i : u.ids[i], u.Fout + 3 * (u.all ? i : u.ids[i]));
+    return viscous_.solve(dt, u.Fout);
+}
+
+template <bool Implicit, bool Damp, bool EnergyOn, bool SleepOn>
+std::array<double, 5> IntegrationPhase::advance(const NodeUpdate u, double dt, const double* Fq, double* dV) {
+    double ekT = 0, egT = 0, edT = 0, ebT = 0, sumT = 0;
+#pragma omp parallel num_threads(u.nth) reduction(+ : ekT, egT, edT, ebT, sumT)
+    {
+        double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
-            for (int32_t i = 0; i < count; ++i) {
-                const int32_t n = all ? i : ids[i];
-                double f[3];
-                if constexpr (Implicit)
-                    for (int d = 0; d < 3; ++d) f[d] = Fout[3 * n + d] - Fq[3 * n + d];
-                else
-                    explicitForce(n, f);
-                const double invM = 1.0 / M[n];
-                for (int d = 0; d < 3; ++d) {
-                    Fout[3 * n + d] = f[d];
-                    const double vOld = V[3 * n + d];
-                    const bool free = !((blk[n] >> d) & 1u);
-                    if constexpr (Damp)
-                        if (free) {  // YADE's rule: against the mid-step velocity
-                            const double vm = vOld + 0.5 * dt * f[d] * invM;
-                            const double fd = damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
-                            f[d] -= fd;
-                            if constexpr (EnergyOn) edT += fd * vm * dt;
-                        }
-                    // (f * 0 on a blocked DOF: a non-finite force there is reported, as in advancePlain)
-                    const double a = f[d] * (free ? invM : 0.0);
-                    if constexpr (EnergyOn) {
-                        const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
-                        ekT += 0.5 * M[n] * vMid * vMid;
-                        egT -= M[n] * g[d] * vOld * dt;
-                        // Booked as gravity is: -(work of the external force),
-                        // and on a blocked DOF -(work of the constraint),
-                        // whose force -f keeps the velocity (ledger closed for
-                        // loaded and driven pieces: doc/formulation.md §2).
-                        ebT -= Fext[3 * n + d] * vOld * dt;
-                        if (!free) ebT += f[d] * vOld * dt;
+        for (int32_t i = 0; i < u.count; ++i) {
+            const int32_t n = u.all ? i : u.ids[i];
+            double f[3];
+            if constexpr (Implicit)
+                for (int d = 0; d < 3; ++d) f[d] = u.Fout[3 * n + d] - Fq[3 * n + d];
+            else
+                u.explicitForce(n, f);
+            const double invM = 1.0 / u.M[n];
+            for (int d = 0; d < 3; ++d) {
+                u.Fout[3 * n + d] = f[d];
+                const double vOld = u.V[3 * n + d];
+                const bool free = !((u.blk[n] >> d) & 1u);
+                if constexpr (Damp)
+                    if (free) {  // YADE's rule: against the mid-step velocity
+                        const double vm = vOld + 0.5 * dt * f[d] * invM;
+                        const double fd = u.damp * std::fabs(f[d]) * (vm > 0 ? 1.0 : (vm < 0 ? -1.0 : 0.0));
+                        f[d] -= fd;
+                        if constexpr (EnergyOn) edT += fd * vm * dt;
                     }
-                    V[3 * n + d] = vOld + dt * a;
-                    if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
-                    else X[3 * n + d] += dt * V[3 * n + d];
+                // (f * 0 on a blocked DOF: a non-finite force there is reported, as in advancePlain)
+                const double a = f[d] * (free ? invM : 0.0);
+                if constexpr (EnergyOn) {
+                    const double vMid = vOld + 0.5 * dt * a;  // velocity at the integer time level
+                    ekT += 0.5 * u.M[n] * vMid * vMid;
+                    egT -= u.M[n] * u.g[d] * vOld * dt;
+                    // Booked as gravity is: -(work of the external force),
+                    // and on a blocked DOF -(work of the constraint),
+                    // whose force -f keeps the velocity (ledger closed for
+                    // loaded and driven pieces: doc/formulation.md §2).
+                    ebT -= u.Fext[3 * n + d] * vOld * dt;
+                    if (!free) ebT += f[d] * vOld * dt;
                 }
-                // Every step, so that no run ends on a NaN it did not report:
-                // the sum of the new positions and velocities is finite iff
-                // each of them is (no scene's coordinates sum near 1e308).
-                // Six additions; per-value isfinite tests cost the update 20 %.
-                sumT += (V[3 * n] + V[3 * n + 1] + V[3 * n + 2]) + (X[3 * n] + X[3 * n + 1] + X[3 * n + 2]);
-                if constexpr (SleepOn) {
-                    const double v2 = V[3 * n] * V[3 * n] + V[3 * n + 1] * V[3 * n + 1] + V[3 * n + 2] * V[3 * n + 2];
-                    double& m = speed2[nodePiece[n]];
-                    m = std::max(m, v2);
-                }
+                u.V[3 * n + d] = vOld + dt * a;
+                if (Implicit && dV) dV[3 * n + d] = dt * a;  // (the move waits for the energy term, on x_n)
+                else u.X[3 * n + d] += dt * u.V[3 * n + d];
+            }
+            // Every step, so that no run ends on a NaN it did not report:
+            // the sum of the new positions and velocities is finite iff
+            // each of them is (no scene's coordinates sum near 1e308).
+            // Six additions; per-value isfinite tests cost the update 20 %.
+            sumT += (u.V[3 * n] + u.V[3 * n + 1] + u.V[3 * n + 2]) + (u.X[3 * n] + u.X[3 * n + 1] + u.X[3 * n + 2]);
+            if constexpr (SleepOn) {
+                const double v2 =
+                    u.V[3 * n] * u.V[3 * n] + u.V[3 * n + 1] * u.V[3 * n + 1] + u.V[3 * n + 2] * u.V[3 * n + 2];
+                double& m = speed2[u.nodePiece[n]];
+                m = std::max(m, v2);
             }
         }
-        return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
+    }
+    return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
+}
+
+std::array<double, 5> IntegrationPhase::advanceAny(const NodeUpdate u, double dt, const double* Fq, double* dV,
+                                                   bool energyOn) {
+    // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
+    const auto withFlag = [](bool on, auto&& next) {
+        return on ? next(std::true_type{}) : next(std::false_type{});
     };
+    return withFlag(Fq != nullptr, [&](auto im) {
+        return withFlag(u.damp > 0, [&](auto dm) {
+            return withFlag(energyOn, [&](auto en) {
+                return withFlag(u.sleepOn, [&](auto sl) {
+                    return advance<decltype(im)::value, decltype(dm)::value, decltype(en)::value,
+                                   decltype(sl)::value>(u, dt, Fq, dV);
+                });
+            });
+        });
+    });
+}
+
+void IntegrationPhase::run(double dt) {
+    const NodeUpdate u = nodeUpdate();
+    const bool energyOn = w_.settings.trackEnergy;
+    // Implicit viscosity (ViscousSolve.hpp): the explicit forces first, then
+    // the viscous correction q, applied as the force f - q.
+    const bool implicit = viscous_.active();
+    const double* Fq = viscousCorrection(u, implicit, dt);
+    double* dV = implicit && energyOn ? viscous_.velocityChange() : nullptr;
     // The common step (explicit, no damping or sleep tracking, every node
     // awake; the energy ledger on or off) has a loop of its own, vectorised
     // over DOFs.
-    if (!implicit && !(damp > 0) && !sleepOn && all) {
+    if (!implicit && !(u.damp > 0) && !u.sleepOn && u.all) {
         const std::array<double, 4> r = energyOn ? advancePlain<true>(dt) : advancePlain<false>(dt);
-        if (r[3] == 0) reportNotFinite(ids, all, count, Fout);
+        if (r[3] == 0) reportNotFinite(u.ids, u.all, u.count, u.Fout);
         if (energyOn) {
             w_.energy.kinetic = r[0];
             w_.energy.gravity += r[1];
@@ -167,33 +170,24 @@ void IntegrationPhase::run(double dt) {
         }
         return;
     }
-    // (implicit, damping, energy, sleep) from run-time flags to compile-time ones
-    const auto withFlag = [](bool on, auto&& next) {
-        return on ? next(std::true_type{}) : next(std::false_type{});
-    };
-    const std::array<double, 5> e = withFlag(Fq != nullptr, [&](auto im) {
-        return withFlag(damp > 0, [&](auto dm) {
-            return withFlag(energyOn, [&](auto en) {
-                return withFlag(sleepOn, [&](auto sl) { return advance(im, dm, en, sl); });
-            });
-        });
-    });
-    ek = e[0], eg = e[1], ed = e[2];
-    const double eb = e[4];
-    if (e[3] == 0) reportNotFinite(ids, all, count, Fout);
+    // The update, compiled per combination of the implicit solve, local
+    // damping, energy tracking and sleep tracking: the common run (explicit,
+    // none of the three) carries no test of them per node and DOF.
+    const std::array<double, 5> e = advanceAny(u, dt, Fq, dV, energyOn);
+    if (e[3] == 0) reportNotFinite(u.ids, u.all, u.count, u.Fout);
     if (dV) {
-        w_.energy.viscous += viscous_.dissipation(dt, V);
-#pragma omp parallel for num_threads(nth) schedule(static)
-        for (int32_t i = 0; i < count; ++i) {
-            const int32_t n = all ? i : ids[i];
-            for (int d = 0; d < 3; ++d) X[3 * n + d] += dt * V[3 * n + d];
+        w_.energy.viscous += viscous_.dissipation(dt, u.V);
+#pragma omp parallel for num_threads(u.nth) schedule(static)
+        for (int32_t i = 0; i < u.count; ++i) {
+            const int32_t n = u.all ? i : u.ids[i];
+            for (int d = 0; d < 3; ++d) u.X[3 * n + d] += dt * u.V[3 * n + d];
         }
     }
     if (energyOn) {
-        w_.energy.kinetic = ek;
-        w_.energy.gravity += eg;
-        w_.energy.localDamping += ed;
-        w_.energy.boundaryWork += eb;
+        w_.energy.kinetic = e[0];
+        w_.energy.gravity += e[1];
+        w_.energy.localDamping += e[2];
+        w_.energy.boundaryWork += e[4];
     }
 }
 

@@ -9,17 +9,17 @@
 
 #include "../core/Column.hpp"
 #include "../parallel/DomainRef.hpp"
-#include "../world/ContactForces.hpp"
-#include "../world/Energy.hpp"
-#include "../world/Phase.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
+#include "../step/ContactForces.hpp"
+#include "../step/Energy.hpp"
+#include "../step/Phase.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
+#include "../step/AwakeSet.hpp"
 #include "ViscousSolve.hpp"
 
 namespace qdem {
 
 class ElementPhase;
-class SleepPhase;
 
 class IntegrationPhase final : public Phase {
 public:
@@ -32,7 +32,7 @@ public:
         const std::vector<PieceInfo>& pieces;
         const Eigen::Vector3d& gravity;
         const Settings& settings;
-        const SleepPhase& sleeping;        // the awake nodes
+        const AwakeSet& sleeping;          // the awake nodes
         const ElementPhase& elements;      // its thread buffers of element forces
         const ContactForces& contacts;
         DomainRef domain;                  // forces other ranks computed on this rank's nodes
@@ -63,14 +63,71 @@ public:
     double maxSpeed2(std::size_t piece) const;
 
 private:
-    // Throws StabilityError naming the first visited node whose new state or
-    // force is not finite and what made it so (called when the update found one).
+    // One step's node update: where the forces come from and which nodes
+    // move, as raw pointers and flags copied into the loops (read through a
+    // reference or `this`, a pointer would be reloaded after every double
+    // store).
+    struct NodeUpdate {
+        double* X;
+        double* V;
+        double* Fout;
+        const double* Fext;
+        const double* Fc;        // contact forces, read when withContacts
+        const double* M;
+        const double* Fg;        // forces from other ranks (MPI), or nullptr
+        const uint8_t* blk;
+        const int32_t* nodePiece;
+        double g[3];
+        const double* const* buf;  // per thread: its element force buffer
+        const int32_t* bufLo;      // and the node range it covers
+        const int32_t* bufHi;
+        int stride, nth;
+        bool withContacts;
+        bool all;                  // every node awake: ids not read
+        const int32_t* ids;        // the awake nodes
+        int32_t count;
+        double damp;
+        bool sleepOn;              // track the pieces' largest speeds
+        // The explicit force on node n: external, gravity, element buffers,
+        // contacts and other ranks' forces, summed in this order.
+        void explicitForce(int32_t n, double* f) const {
+            for (int d = 0; d < 3; ++d) f[d] = Fext[3 * n + d] + M[n] * g[d];
+            for (int t = 0; t < nth; ++t)
+                if (n >= bufLo[t] && n <= bufHi[t]) {
+                    const double* b = buf[t] + stride * (n - bufLo[t]);
+                    f[0] += b[0];
+                    f[1] += b[1];
+                    f[2] += b[2];
+                }
+            if (withContacts)
+                for (int d = 0; d < 3; ++d) f[d] += Fc[3 * n + d];
+            if (Fg)
+                for (int d = 0; d < 3; ++d) f[d] += Fg[3 * n + d];
+        }
+    };
+    // The pointers and flags of this step (and the per-thread speed and flat
+    // buffer arrays sized for it).
+    NodeUpdate nodeUpdate();
+    // With the implicit viscous solve: the explicit forces into force, then
+    // the viscous correction q (nullptr without it).
+    const double* viscousCorrection(NodeUpdate u, bool implicit, double dt);
+    // The leapfrog update of the awake nodes, compiled per combination of the
+    // implicit solve, local damping, energy and sleep tracking: kinetic
+    // energy, gravity's work, damping's, 1 if every new state is finite (else
+    // 0), the boundary's work.  dV: the velocity changes kept for the
+    // viscous energy term (positions then move after it).
+    template <bool Implicit, bool Damp, bool EnergyOn, bool SleepOn>
+    std::array<double, 5> advance(NodeUpdate u, double dt, const double* Fq, double* dV);
+    // advance for the run-time flags.
+    std::array<double, 5> advanceAny(NodeUpdate u, double dt, const double* Fq, double* dV, bool energyOn);
     // The update of the common step (explicit, no damping or sleep
     // tracking, every node awake): kinetic energy, gravity's and the
     // boundary's work of the step (with EnergyOn), and 1 if every new state
     // is finite, else 0.
     template <bool EnergyOn>
     std::array<double, 4> advancePlain(double dt);
+    // Throws StabilityError naming the first visited node whose new state or
+    // force is not finite and what made it so (called when the update found one).
     [[noreturn]] void reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const;
 
     Data w_;

@@ -12,7 +12,7 @@
 #include "../contact/ContactModel.hpp"
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {

@@ -13,16 +13,16 @@
 #include "../contact/Obstacle.hpp"
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
-#include "../world/ContactForces.hpp"
-#include "../world/Energy.hpp"
-#include "../world/Phase.hpp"
-#include "../world/PieceBounds.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
+#include "../step/ContactForces.hpp"
+#include "../step/Energy.hpp"
+#include "../step/Phase.hpp"
+#include "../step/PieceBounds.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
+#include "../step/AwakeSet.hpp"
 
 namespace qdem {
 
-class SleepPhase;
 
 class ObstaclePhase final : public Phase {
 public:
@@ -37,7 +37,7 @@ public:
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;
-        const SleepPhase& sleeping;      // awake surface nodes, sleeping pieces' frozen reactions
+        const AwakeSet& sleeping;        // awake surface nodes, sleeping pieces' frozen reactions
         const PieceBounds& bounds;       // which obstacles a piece can reach
         std::vector<Obstacle>& obstacles;  // their reactions
         ContactForces& contacts;

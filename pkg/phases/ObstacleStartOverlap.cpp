@@ -20,7 +20,7 @@
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
-#include "../world/WorldState.hpp"
+#include "../step/WorldState.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {

@@ -8,15 +8,14 @@
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../parallel/DomainRef.hpp"
-#include "../world/ContactForces.hpp"
-#include "../world/Energy.hpp"
-#include "../world/PieceBounds.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
+#include "../step/AwakeSet.hpp"
+#include "../step/ContactForces.hpp"
+#include "../step/Energy.hpp"
+#include "../step/PieceBounds.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
 
 namespace qdem {
-
-class SleepPhase;
 
 struct PieceContactData {
     const Column<double>& pos;
@@ -32,7 +31,7 @@ struct PieceContactData {
     const Settings& settings;
     const long& iter;                  // the step contacts are stamped with
     SurfaceIndex& surface;             // triangles, edges; feature edges re-classified when the angle changes
-    SleepPhase& sleeping;              // the awake set; told when the Verlet lists are rebuilt
+    const AwakeSet& sleeping;          // which pieces sleep, the awake surface nodes
     const PieceBounds& bounds;         // which pieces can touch
     DomainRef domain;                  // under MPI: owned and current nodes, who computes a contact
     ContactForces& contacts;

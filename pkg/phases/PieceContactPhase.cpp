@@ -14,8 +14,7 @@
 #include "../core/Format.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../parallel/Domain.hpp"
-#include "SleepPhase.hpp"
-#include "../world/WorldState.hpp"
+#include "../step/WorldState.hpp"
 #include "PieceContactPhase.hpp"
 
 namespace qdem {
@@ -64,6 +63,7 @@ void PieceContactPhase::run(double dt) {
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
+    noteSleepChanges();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) {  // no contacts: no overlap to refuse either
         startChecked_.assign(np, 1);
@@ -187,7 +187,8 @@ void PieceContactPhase::run(double dt) {
         }
         // Sleeping pieces do not move now, but may have moved before they fell asleep.
         for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip)
-            if (st_.pieceActive[ip] && w_.sleeping.asleep(ip)) moved2 = std::max(moved2, w_.sleeping.moved2(ip));
+            if (st_.pieceActive[ip] && w_.sleeping.asleep(ip))
+                moved2 = std::max(moved2, listsSinceSleep_[ip] ? 0.0 : w_.sleeping.moved2(ip));
         if (window) {
             // The former lists, still read by the nodes not yet done: every
             // surface node (a sleeping one too: it may have moved since then).
@@ -537,7 +538,8 @@ void PieceContactPhase::run(double dt) {
         }
         if (rebuild) {
             st_.listActive.assign(st_.pieceActive.begin(), st_.pieceActive.end());
-            w_.sleeping.listsRebuilt();  // lists now from the current positions
+            // lists now from the current positions (AwakeSet::moved2 no longer counts)
+            std::fill(listsSinceSleep_.begin(), listsSinceSleep_.end(), 1);
             st_.listSkin = skin;
             st_.listTris = S.nTris();
             st_.listValid = true;
@@ -693,7 +695,18 @@ void PieceContactPhase::piecesAdded() {
     for (Kind& k : kinds_) k.kernel->piecesAdded(w_);
     frozen_.resize(w_.pieces.size(), 0);
     normalsFresh_.resize(w_.pieces.size(), 0);
+    sleepSeen_.resize(w_.pieces.size(), 0);
+    listsSinceSleep_.resize(w_.pieces.size(), 0);
     startChecked_.resize(w_.pieces.size(), 0);
+}
+
+void PieceContactPhase::noteSleepChanges() {
+    for (std::size_t p = 0; p < sleepSeen_.size(); ++p) {
+        const uint32_t c = w_.sleeping.changes(p);
+        if (c == sleepSeen_[p]) continue;
+        sleepSeen_[p] = c;
+        frozen_[p] = normalsFresh_[p] = listsSinceSleep_[p] = 0;
+    }
 }
 
 // The edge-edge partners' pieces, and the format of the history keys: states

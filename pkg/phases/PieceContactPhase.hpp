@@ -16,7 +16,7 @@
 
 #include <algorithm>
 
-#include "../world/Phase.hpp"
+#include "../step/Phase.hpp"
 #include "ContactKind.hpp"
 #include "ContactLoad.hpp"
 #include "PieceContactData.hpp"
@@ -60,12 +60,10 @@ public:
     // Read by the sleeping logic: neighbour pieces (CSR nbrStart/nbrs) and
     // the node positions of the last list rebuild.
     const PieceContactState& state() const { return st_; }
-    // Asleep with all its neighbours asleep: its contacts were skipped this step.
-    bool frozen(std::size_t piece) const { return frozen_[piece] != 0; }
-    // A piece fell asleep (awake = false) or woke up.
-    void sleepChanged(std::size_t piece, bool awake) {
-        normalsFresh_[piece] = 0;
-        if (awake) frozen_[piece] = 0;
+    // Asleep with all its neighbours asleep: its contacts were skipped this
+    // step (and it has not woken or fallen asleep again since).
+    bool frozen(std::size_t piece) const {
+        return frozen_[piece] != 0 && sleepSeen_[piece] == w_.sleeping.changes(piece);
     }
 
     // The narrow phases of the seed's two kinds (their rows' kernels call
@@ -161,6 +159,14 @@ private:
     long listedTriangles_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
     std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
+    // Per piece: the awake set's change count (AwakeSet::changes) last seen,
+    // and whether the Verlet lists were rebuilt since (its moved2 is then 0).
+    std::vector<uint32_t> sleepSeen_;
+    std::vector<uint8_t> listsSinceSleep_;
+    // Before anything reads them: a piece that fell asleep or woke since the
+    // last run has its normals and frozen flag cleared, and its displacement
+    // since the lists (AwakeSet::moved2) counts until they are rebuilt.
+    void noteSleepChanges();
     std::vector<PairConst> matPairLaw_;  // per step: the law's constants per pair of materials (a, b)
     std::vector<uint8_t> matPairDone_;   // and which of them this step has computed
 

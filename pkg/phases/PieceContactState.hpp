@@ -9,7 +9,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/CellGrid.hpp"
 #include "../contact/SurfaceIndex.hpp"
-#include "../world/Settings.hpp"
+#include "../step/Settings.hpp"
 
 namespace qdem {
 

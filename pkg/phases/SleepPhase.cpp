@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../world/WorldState.hpp"
+#include "../step/WorldState.hpp"
 #include "IntegrationPhase.hpp"
 #include "ObstaclePhase.hpp"
 #include "PieceContactPhase.hpp"
@@ -18,62 +18,62 @@
 namespace qdem {
 
 void SleepPhase::awakeSetChanged() {
-    ++version_;
+    ++w_.awake.version_;
     const std::size_t np = w_.pieces.size();
-    awakeTets_.clear();
-    awakeNodes_.clear();
-    awakeSurf_.clear();
+    w_.awake.awakeTets_.clear();
+    w_.awake.awakeNodes_.clear();
+    w_.awake.awakeSurf_.clear();
     std::vector<int32_t> held;  // (built only when the awake set changes)
-    nAsleep_ = 0;
+    w_.awake.nAsleep_ = 0;
     const Domain* d = w_.domain.built();
     for (std::size_t p = 0; p < np; ++p) {
-        if (asleep_[p]) {
-            ++nAsleep_;
-            if (p < held_.size() && held_[p])
+        if (w_.awake.asleep_[p]) {
+            ++w_.awake.nAsleep_;
+            if (p < w_.awake.held_.size() && w_.awake.held_[p])
                 for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
                     if (!d || d->owns(w_.surfNodes[s])) held.push_back(s);
             continue;
         }
         if (!d) {
-            awakeTets_.push_back({static_cast<int32_t>(p), w_.pieces[p].tetBegin, w_.pieces[p].tetEnd});
-            for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n) awakeNodes_.push_back(n);
-            for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) awakeSurf_.push_back(s);
+            w_.awake.awakeTets_.push_back({static_cast<int32_t>(p), w_.pieces[p].tetBegin, w_.pieces[p].tetEnd});
+            for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n) w_.awake.awakeNodes_.push_back(n);
+            for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) w_.awake.awakeSurf_.push_back(s);
             continue;
         }
         // Under MPI (Domain.hpp) a rank steps only what it owns: the tets it
         // computes, the nodes it integrates, the surface nodes whose obstacle
         // contacts it keeps.
-        d->ownedTetRuns(static_cast<int32_t>(p), awakeTets_);
+        d->ownedTetRuns(static_cast<int32_t>(p), w_.awake.awakeTets_);
         for (int32_t n = w_.pieces[p].nodeBegin; n < w_.pieces[p].nodeEnd; ++n)
-            if (d->owns(n)) awakeNodes_.push_back(n);
+            if (d->owns(n)) w_.awake.awakeNodes_.push_back(n);
         for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s)
-            if (d->owns(w_.surfNodes[s])) awakeSurf_.push_back(s);
+            if (d->owns(w_.surfNodes[s])) w_.awake.awakeSurf_.push_back(s);
     }
-    obstacleSurf_.assign(awakeSurf_.begin(), awakeSurf_.end());
-    obstacleSurf_.insert(obstacleSurf_.end(), held.begin(), held.end());
-    everything_ = nAsleep_ == 0 && !d;
+    w_.awake.obstacleSurf_.assign(w_.awake.awakeSurf_.begin(), w_.awake.awakeSurf_.end());
+    w_.awake.obstacleSurf_.insert(w_.awake.obstacleSurf_.end(), held.begin(), held.end());
+    w_.awake.everything_ = w_.awake.nAsleep_ == 0 && !d;
 }
 
 void SleepPhase::wakeOne(std::size_t p) {
-    asleep_[p] = 0;
-    w_.pieceContacts.sleepChanged(p, true);
+    w_.awake.asleep_[p] = 0;
+    ++w_.awake.changes_[p];
     slowFor_[p] = 0;
     pieceSpeed2_[p] = 0;
-    frozenReaction_[p].clear();
+    w_.awake.frozenReaction_[p].clear();
     ++wakeCount_;
 }
 
 void SleepPhase::wake(std::size_t p) {
-    if (p >= asleep_.size() || !asleep_[p] || held_[p]) return;
+    if (p >= w_.awake.asleep_.size() || !w_.awake.asleep_[p] || w_.awake.held_[p]) return;
     wakeOne(p);
     awakeSetChanged();
 }
 
 void SleepPhase::wakeAll() {
-    if (nAsleep_ == 0) return;
+    if (w_.awake.nAsleep_ == 0) return;
     bool changed = false;
-    for (std::size_t p = 0; p < asleep_.size(); ++p)
-        if (asleep_[p] && !held_[p]) {
+    for (std::size_t p = 0; p < w_.awake.asleep_.size(); ++p)
+        if (w_.awake.asleep_[p] && !w_.awake.held_[p]) {
             wakeOne(p);
             changed = true;
         }
@@ -82,12 +82,12 @@ void SleepPhase::wakeAll() {
 
 void SleepPhase::setDynamic(std::size_t p, bool dynamic) {
     if (dynamic) {
-        held_[p] = 0;
+        w_.awake.held_[p] = 0;
         wake(p);
         return;
     }
-    held_[p] = 1;
-    if (!asleep_[p]) {
+    w_.awake.held_[p] = 1;
+    if (!w_.awake.asleep_[p]) {
         putToSleep(p);
         awakeSetChanged();
     }
@@ -108,7 +108,7 @@ void SleepPhase::putToSleep(std::size_t p) {
         }
     if (w_.settings.trackEnergy) w_.energy.sleep += ek;
     // What it pushed on obstacles this step stays in their reactions.
-    std::vector<double>& fr = frozenReaction_[p];
+    std::vector<double>& fr = w_.awake.frozenReaction_[p];
     fr.clear();
     const std::vector<int>& pieceObstacles_ = w_.obstacleContacts.pieceObstacles();
     const std::vector<int>& pieceObstacleBegin_ = w_.obstacleContacts.pieceObstacleBegin();
@@ -130,9 +130,9 @@ void SleepPhase::putToSleep(std::size_t p) {
             for (int d = 0; d < 3; ++d) d2 += std::pow(w_.pos[3 * n + d] - pc.listPos[3 * s + d], 2);
             m2 = std::max(m2, d2);
         }
-    sleepMoved2_[p] = m2;
-    asleep_[p] = 1;
-    w_.pieceContacts.sleepChanged(p, false);
+    w_.awake.moved2_[p] = m2;
+    w_.awake.asleep_[p] = 1;
+    ++w_.awake.changes_[p];
     ++sleepCount_;
 }
 
@@ -146,10 +146,11 @@ void SleepPhase::run(double dt) {
     // Largest node speed of each awake piece, from the integration (under
     // MPI the largest over the ranks: every rank then decides alike, as the
     // pieces' boxes, neighbours and obstacles are the global ones too).
-    for (std::size_t p = 0; p < np; ++p) pieceSpeed2_[p] = asleep_[p] ? pieceSpeed2_[p] : w_.integration.maxSpeed2(p);
+    for (std::size_t p = 0; p < np; ++p)
+        pieceSpeed2_[p] = w_.awake.asleep_[p] ? pieceSpeed2_[p] : w_.integration.maxSpeed2(p);
     if (Domain* dom = w_.domain.built()) dom->comm().allreduceMax(pieceSpeed2_.data(), static_cast<int>(np));
     for (std::size_t p = 0; p < np; ++p) {
-        if (asleep_[p]) continue;
+        if (w_.awake.asleep_[p]) continue;
         const double m = pieceSpeed2_[p];
         slowFor_[p] = m < v2 ? slowFor_[p] + dt : 0.0;
     }
@@ -159,7 +160,7 @@ void SleepPhase::run(double dt) {
         if (!nbrsValid) return false;
         for (int32_t q = pc.nbrStart[p]; q < pc.nbrStart[p + 1]; ++q) {
             const int32_t b = pc.nbrs[q];
-            if (!asleep_[b] && pieceSpeed2_[b] >= v2) return true;
+            if (!w_.awake.asleep_[b] && pieceSpeed2_[b] >= v2) return true;
         }
         return false;
     };
@@ -175,8 +176,8 @@ void SleepPhase::run(double dt) {
     };
     auto nearSphere = [&](std::size_t p) { return p < w_.spheres.pieceUsed.size() && w_.spheres.pieceUsed[p]; };
     auto candidate = [&](std::size_t p) {
-        return !asleep_[p] && pieceSpeed2_[p] < v2 && slowFor_[p] >= w_.settings.sleepTime && !fastNeighbour(p) &&
-               !movingObstacle(p) && !nearSphere(p);
+        return !w_.awake.asleep_[p] && pieceSpeed2_[p] < v2 && slowFor_[p] >= w_.settings.sleepTime &&
+               !fastNeighbour(p) && !movingObstacle(p) && !nearSphere(p);
     };
     // Slow is not at rest: a piece let go in the air, or at the top of a throw,
     // is slow for sleepVelocity / g seconds, and one driven slowly through its
@@ -220,8 +221,8 @@ void SleepPhase::run(double dt) {
     };
     bool changed = false;
     for (std::size_t p = 0; p < np; ++p) {
-        if (asleep_[p]) {
-            if (!held_[p] && (fastNeighbour(p) || movingObstacle(p) || nearSphere(p))) {
+        if (w_.awake.asleep_[p]) {
+            if (!w_.awake.held_[p] && (fastNeighbour(p) || movingObstacle(p) || nearSphere(p))) {
                 wakeOne(p);
                 changed = true;
             }
@@ -256,26 +257,27 @@ void SleepPhase::checkLoadedRest() {
 
 void SleepPhase::piecesAdded() {
     const std::size_t np = w_.pieces.size();
-    asleep_.resize(np, 0);
+    w_.awake.asleep_.resize(np, 0);
     slowFor_.resize(np, 0);
     pieceSpeed2_.resize(np, 0);
-    sleepMoved2_.resize(np, 0);
-    held_.resize(np, 0);
-    frozenReaction_.resize(np);
+    w_.awake.moved2_.resize(np, 0);
+    w_.awake.changes_.resize(np, 0);
+    w_.awake.held_.resize(np, 0);
+    w_.awake.frozenReaction_.resize(np);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
 }
 
 void SleepPhase::stateColumns(StateColumns& c) {
-    c.add("asleep", asleep_);
+    c.add("asleep", w_.awake.asleep_);
     c.add("slowFor", slowFor_);
     c.add("pieceSpeed2", pieceSpeed2_);
-    c.add("sleepMoved2", sleepMoved2_);
+    c.add("sleepMoved2", w_.awake.moved2_);
 }
 
 void SleepPhase::saveFields(WorldState& s) const {
     std::vector<int64_t> start{0};  // frozen obstacle reactions, flattened
     std::vector<double> flat;
-    for (const auto& fr : frozenReaction_) {
+    for (const auto& fr : w_.awake.frozenReaction_) {
         flat.insert(flat.end(), fr.begin(), fr.end());
         start.push_back(static_cast<int64_t>(flat.size()));
     }
@@ -284,7 +286,7 @@ void SleepPhase::saveFields(WorldState& s) const {
     const std::vector<double> sig = obstacleSignature(w_.obstacles);
     s.put("obstacles", sig.data(), sig.size());
     s.put("gravity", w_.gravity.data(), 3);
-    s.put("held", held_.data(), held_.size());
+    s.put("held", w_.awake.held_.data(), w_.awake.held_.size());
 }
 
 void SleepPhase::checkFields(const WorldState& s) const {
@@ -292,17 +294,17 @@ void SleepPhase::checkFields(const WorldState& s) const {
     const std::vector<double> flat = s.getAll<double>("frozenReaction");
     if (fs.size() != w_.pieces.size() + 1 || fs.back() != static_cast<int64_t>(flat.size()))
         throw InputError("world state: field 'frozenStart' does not match the pieces");
-    if (s.fields.count("held") > 0) s.check<uint8_t>("held", held_.size());
+    if (s.fields.count("held") > 0) s.check<uint8_t>("held", w_.awake.held_.size());
 }
 
 void SleepPhase::loadFields(const WorldState& s) {
     const std::vector<int64_t> fs = s.getAll<int64_t>("frozenStart");
     const std::vector<double> flat = s.getAll<double>("frozenReaction");
     for (std::size_t p = 0; p < w_.pieces.size(); ++p)
-        frozenReaction_[p].assign(flat.begin() + fs[p], flat.begin() + fs[p + 1]);
+        w_.awake.frozenReaction_[p].assign(flat.begin() + fs[p], flat.begin() + fs[p + 1]);
     // (files from before Piece.dynamic have no "held")
-    if (s.fields.count("held") > 0) s.get("held", held_.data(), held_.size());
-    else std::fill(held_.begin(), held_.end(), 0);
+    if (s.fields.count("held") > 0) s.get("held", w_.awake.held_.data(), w_.awake.held_.size());
+    else std::fill(w_.awake.held_.begin(), w_.awake.held_.end(), 0);
     // Sleeping pieces rest in the obstacles and gravity the state was saved
     // with (frozen reactions are by obstacle index): if this world gets others
     // (or the file predates these fields) they are woken at the next step.

@@ -21,7 +21,7 @@
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
-#include "../world/WorldState.hpp"
+#include "../step/WorldState.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {

@@ -11,12 +11,12 @@
 #include "../core/Column.hpp"
 #include "../parallel/DomainRef.hpp"
 #include "../material/Material.hpp"
-#include "../world/ContactForces.hpp"
-#include "../world/Energy.hpp"
-#include "../world/Phase.hpp"
-#include "../world/PieceBounds.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
+#include "../step/ContactForces.hpp"
+#include "../step/Energy.hpp"
+#include "../step/Phase.hpp"
+#include "../step/PieceBounds.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
 
 namespace qdem {
 

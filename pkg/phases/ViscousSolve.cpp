@@ -13,7 +13,7 @@
 #include "../element/ElementKernel.hpp"
 #include "../element/ViscousOperator.hpp"
 #include "../parallel/Domain.hpp"
-#include "SleepPhase.hpp"
+#include "../step/AwakeSet.hpp"
 
 namespace qdem {
 

@@ -28,15 +28,15 @@
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../parallel/DomainRef.hpp"
-#include "../world/PieceInfo.hpp"
-#include "../world/Settings.hpp"
-#include "../world/ThreadBlocks.hpp"
-#include "../world/ThreadLayout.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "../step/Settings.hpp"
+#include "../parallel/ThreadBlocks.hpp"
+#include "../parallel/ThreadLayout.hpp"
+#include "../step/AwakeSet.hpp"
 #include "CorotatedCholesky.hpp"
 
 namespace qdem {
 
-class SleepPhase;
 
 class ViscousSolve {
 public:
@@ -53,7 +53,7 @@ public:
         const std::vector<Material>& materials;
         const Settings& settings;
         const long& iter;                 // named in its errors
-        const SleepPhase& sleeping;       // the awake tets and nodes
+        const AwakeSet& sleeping;         // the awake tets and nodes
         DomainRef domain;                 // under MPI: ghosts, partial sums, reductions
     };
     explicit ViscousSolve(const Data& data)

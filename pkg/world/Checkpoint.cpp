@@ -5,6 +5,7 @@
 
 #include "../core/Format.hpp"
 #include "../parallel/Domain.hpp"
+#include "Phases.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -32,7 +33,7 @@ WorldState World::saveState() const {
                                static_cast<int64_t>(pieces.size()), static_cast<int64_t>(surfNodes.size())};
     s.put("counts", counts, 4);
     const double clock[1] = {time};
-    const int64_t steps[3] = {iter, sleepPhase_.sleepCount(), sleepPhase_.wakeCount()};
+    const int64_t steps[3] = {iter, phases_->sleep.sleepCount(), phases_->sleep.wakeCount()};
     s.put("time", clock, 1);
     s.put("iter", steps, 3);
     const Energy& et = energyTotal();  // under MPI: the sums over the ranks
@@ -93,7 +94,7 @@ void World::loadState(const WorldState& s) {
     s.get("energy", e, 10);
     time = clock[0];
     iter = steps[0];
-    sleepPhase_.setCounts(steps[1], steps[2]);
+    phases_->sleep.setCounts(steps[1], steps[2]);
     energy = Energy{e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9]};
     for (Phase* p : phases()) p->loadFields(s);
     if (domain_) {

@@ -12,6 +12,7 @@
 #include "../contact/Geometry.hpp"
 #include "../contact/WindingNumber.hpp"
 #include "../element/MaterialLaw.hpp"
+#include "Phases.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -61,7 +62,7 @@ void World::checkDeepOverlap() {
     requireGathered("checkDeepOverlap");
     std::string error;
     try {
-        pieceContactPhase_.checkDeepOverlap(iter, time);
+        phases_->pieceContact.checkDeepOverlap(iter, time);
     } catch (const StabilityError& e) {
         error = e.what();
     }

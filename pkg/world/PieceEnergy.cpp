@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "Phases.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -23,9 +24,9 @@ void World::finishPieceEnergy() {
     for (std::size_t p = 0; p < pieces.size(); ++p) {
         for (int c = 0; c < 3; ++c) {
             // (obstacle contacts: also a held piece's, ObstaclePhase.cpp)
-            const bool computed = c == 0   ? !sleepPhase_.asleep(p)
-                                  : c == 1 ? !sleepPhase_.asleep(p) || !sleepPhase_.dynamic(p)
-                                           : !pieceContactPhase_.frozen(p);
+            const bool computed = c == 0   ? !awake_.asleep(p)
+                                  : c == 1 ? !awake_.asleep(p) || !awake_.dynamic(p)
+                                           : !phases_->pieceContact.frozen(p);
             if (!computed) continue;
             double sum = 0;
             for (const auto& t : threadPieceEnergy_) sum += t[3 * p + c];

@@ -21,6 +21,7 @@
 #include "../core/Format.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../element/MaterialLaw.hpp"
+#include "Phases.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -521,7 +522,7 @@ StableDt World::stableDt() const {
     // a node pressed on a face and carrying, as a corner of its own faces,
     // the reactions of the other piece's nodes, which the estimate above
     // counts once.  (Measured in the mode of viscous integration of that step.)
-    if (const ContactStepLimit& pc = pieceContactPhase_.stepLimit(); pc.node >= 0) {
+    if (const ContactStepLimit& pc = phases_->pieceContact.stepLimit(); pc.node >= 0) {
         r.pieceContact = pc.limit, r.pieceContactNode = pc.node - pieces[pc.piece].nodeBegin;
         r.pieceContactPiece = pc.piece, r.pieceContactStep = pc.step;
         double& mode = implicit ? r.combinedImplicit : r.combinedExplicit;

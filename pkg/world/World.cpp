@@ -1,5 +1,6 @@
 // Set-up of the world: materials, pieces, obstacles.
 #include "World.hpp"
+#include "Phases.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +20,7 @@ int World::addMaterial(const Material& m) {
     return static_cast<int>(materials.size()) - 1;
 }
 
-int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) {
+void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) const {
     if (material < 0 || material >= static_cast<int>(materials.size()))
         throw InputError(cat("addPiece: unknown material index ", material));
     checkMesh(mesh);
@@ -57,7 +58,10 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
                                      "point range; give the mesh in metres and the density in kg/m^3"));
         }
     }
+}
 
+int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) {
+    checkNewPiece(mesh, material, tetAddedMass_);
     PieceInfo p;
     p.material = material;
     const auto n0 = static_cast<int32_t>(nNodes());
@@ -72,7 +76,25 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
 
     // Surface first: it throws on a non-manifold mesh before anything changes.
     Surface s = extractSurface(mesh);
+    appendNodesAndTets(mesh, materials[material], pieceId, p);
+    if (!tetAddedMass_.empty()) addElementMass(mesh, tetAddedMass_, s, p);
+    appendSurface(std::move(s), p);
 
+    pieces.push_back(std::move(p));
+    surf_.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
+    surf_.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
+    omegaCache_.clear();
+    if (domain_) domain_->invalidate();  // split again at the next step
+    for (Phase* ph : phases()) ph->piecesAdded();
+    pieceEnergy_.resize(3 * pieces.size(), 0.0);
+    return pieceId;
+}
+
+// The piece's nodes and tets at the end of the world's arrays: reference
+// positions, inverse edge matrices, volumes and the lumped masses rho V / 4.
+void World::appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pieceId, PieceInfo& p) {
+    const int32_t n0 = p.nodeBegin, t0 = p.tetBegin;
+    const int32_t nn = p.nodeEnd - p.nodeBegin, nt = p.tetEnd - p.tetBegin;
     const std::size_t N = n0 + nn, T = t0 + nt;
     pos.resize(3 * N);
     vel.resize(3 * N, 0.0);
@@ -109,28 +131,38 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
         p.volume += V;
     }
     p.mass = mat.density * p.volume;
-    if (!tetAddedMass_.empty()) {
-        // Selective mass scaling: each element's added mass lumped as its own,
-        // a quarter to each node, after the physical masses (kept apart to
-        // report the largest share at a node).
-        std::vector<double> added(nn, 0.0);
-        for (int32_t e = 0; e < nt; ++e) {
-            const double a = tetAddedMass_[e];
-            tetAddedMass[t0 + e] = a;
-            if (a > 0) ++p.addedElements;
-            for (int k = 0; k < 4; ++k) added[mesh.tets[4 * e + k]] += a / 4.0;
-            p.addedMass += a;
-        }
-        for (int32_t i = 0; i < nn; ++i) {
-            if (!(added[i] > 0)) continue;
-            const double share = added[i] / mass[n0 + i];
-            if (share > p.addedMaxNodeShare) p.addedMaxNodeShare = share, p.addedMaxNode = n0 + i;
-            mass[n0 + i] += added[i];
-        }
-        for (const int32_t v : s.nodes) p.addedSurfaceMass += added[v];
-        p.mass += p.addedMass;
-    }
+}
 
+// Selective mass scaling: each element's added mass lumped as its own,
+// a quarter to each node, after the physical masses (kept apart to
+// report the largest share at a node).
+void World::addElementMass(const TetMesh& mesh, const std::vector<double>& tetAddedMass_, const Surface& s,
+                           PieceInfo& p) {
+    const int32_t n0 = p.nodeBegin, t0 = p.tetBegin;
+    const int32_t nn = p.nodeEnd - p.nodeBegin, nt = p.tetEnd - p.tetBegin;
+    std::vector<double> added(nn, 0.0);
+    for (int32_t e = 0; e < nt; ++e) {
+        const double a = tetAddedMass_[e];
+        tetAddedMass[t0 + e] = a;
+        if (a > 0) ++p.addedElements;
+        for (int k = 0; k < 4; ++k) added[mesh.tets[4 * e + k]] += a / 4.0;
+        p.addedMass += a;
+    }
+    for (int32_t i = 0; i < nn; ++i) {
+        if (!(added[i] > 0)) continue;
+        const double share = added[i] / mass[n0 + i];
+        if (share > p.addedMaxNodeShare) p.addedMaxNodeShare = share, p.addedMaxNode = n0 + i;
+        mass[n0 + i] += added[i];
+    }
+    for (const int32_t v : s.nodes) p.addedSurfaceMass += added[v];
+    p.mass += p.addedMass;
+}
+
+// The piece's surface in global ids, its nodes' contact weights (area
+// shares over the mean) and the extremes the stable step reads.
+void World::appendSurface(Surface s, PieceInfo& p) {
+    const int32_t n0 = p.nodeBegin, t0 = p.tetBegin;
+    const int32_t nn = p.nodeEnd - p.nodeBegin;
     // Surface in global ids.
     for (auto& v : s.triangles) v += n0;
     for (auto& v : s.edges) v += n0;
@@ -174,15 +206,6 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
     p.minSurfaceWeight = wmin;
     p.meanSurfaceShare = meanShare;
     p.surface = std::move(s);
-
-    pieces.push_back(std::move(p));
-    surf_.build(pieces, tetNodes.data(), nTets(), surfNodes.data(), surfNodes.size(), nNodes());
-    surf_.classifyEdges(refPos.data(), settings.edgeFeatureAngle);
-    omegaCache_.clear();
-    if (domain_) domain_->invalidate();  // split again at the next step
-    for (Phase* ph : phases()) ph->piecesAdded();
-    pieceEnergy_.resize(3 * pieces.size(), 0.0);
-    return pieceId;
 }
 
 void World::setObstacles(const std::vector<Obstacle>& obs) {
@@ -197,10 +220,10 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
                                  ", ", o.armOffset));
     }
     const std::vector<double> sig = obstacleSignature(obs);
-    const bool same = sleepPhase_.obstaclesSet(sig, obstacleSignature(obstacles));  // false: all woken
+    const bool same = phases_->sleep.obstaclesSet(sig, obstacleSignature(obstacles));  // false: all woken
     obstacles = obs;
     for (auto& o : obstacles) o.updateDerived();
-    if (!same) obstaclePhase_.obstaclesChanged();
+    if (!same) phases_->obstacle.obstaclesChanged();
     omegaCache_.clear();
 }
 
@@ -258,12 +281,12 @@ const std::vector<double>& World::pieceBoxes() {
 void World::setGravity(const Eigen::Vector3d& g) {
     const Eigen::Vector3d old = gravity;
     gravity = g;
-    sleepPhase_.gravitySet(old, g);
+    phases_->sleep.gravitySet(old, g);
 }
 
 void World::setDynamic(std::size_t p, bool dynamic) {
     if (p >= pieces.size()) throw InputError(cat("setDynamic: no piece ", p));
-    sleepPhase_.setDynamic(p, dynamic);
+    phases_->sleep.setDynamic(p, dynamic);
 }
 
 }  // namespace qdem
@@ -273,14 +296,11 @@ void World::setDynamic(std::size_t p, bool dynamic) {
 
 namespace qdem {
 
-World::World() = default;
-World::~World() = default;
-
 void World::setCommunicator(std::shared_ptr<Communicator> comm) {
     boxesIter_ = -1;
     if (comm && comm->size() > 1) domain_ = std::make_unique<Domain>(*this, std::move(comm));
     else domain_.reset();
-    sleepPhase_.awakeSetChanged();
+    phases_->sleep.awakeSetChanged();
 }
 
 // Before each step under MPI: every rank's YADE copy checked alike (walls,
@@ -302,7 +322,7 @@ void World::prepareDomain(double dt) {
     }
     domain_->checkYadeAlike(dt);
     domain_->build(partitionOptions);
-    sleepPhase_.awakeSetChanged();
+    phases_->sleep.awakeSetChanged();
     energyTotal_ = energy;
     // Until now every rank summed the whole world's energies: from here on
     // each sums its share, so what was summed counts once (on rank 0).
@@ -313,7 +333,7 @@ void World::rebalance() {
     if (!domain_ || !domain_->built()) return;
     domain_->agreeOnCall(Domain::Call::Rebalance);
     domain_->rebalance(partitionOptions);
-    sleepPhase_.awakeSetChanged();
+    phases_->sleep.awakeSetChanged();
     gatheredIter_ = iter;  // rebalance gathered every node
 }
 

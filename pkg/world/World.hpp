@@ -3,7 +3,8 @@
 //
 // One step (World::step, WorldStep.cpp) runs the phases of pkg/phases in
 // order: obstacles, piece contacts, spheres, elements, integration, sleep
-// (doc/architecture.md).  Each phase runs only when the scene needs it (no viscous term for a piece
+// (doc/architecture.md), held in a WorldPhases (Phases.hpp) that only the
+// world's own sources see.  Each phase runs only when the scene needs it (no viscous term for a piece
 // with viscosity 0, no friction work at friction 0, no obstacle loop without
 // obstacles, no energy sums unless tracked).
 #pragma once
@@ -23,24 +24,22 @@
 #include "../mesh/TetMesh.hpp"
 #include "../parallel/Communicator.hpp"
 #include "../parallel/Partition.hpp"
-#include "ContactForces.hpp"
-#include "Energy.hpp"
-#include "PieceBounds.hpp"
-#include "PieceInfo.hpp"
+#include "../step/AwakeSet.hpp"
+#include "../step/ContactForces.hpp"
+#include "../step/Energy.hpp"
+#include "../step/Phase.hpp"
+#include "../step/PieceBounds.hpp"
+#include "../mesh/PieceInfo.hpp"
 #include "StepReport.hpp"
-#include "../phases/ElementPhase.hpp"
-#include "../phases/IntegrationPhase.hpp"
-#include "../phases/ObstaclePhase.hpp"
-#include "../phases/PieceContactPhase.hpp"
-#include "../phases/SleepPhase.hpp"
-#include "../phases/SpherePhase.hpp"
-#include "Settings.hpp"
-#include "ThreadLayout.hpp"
-#include "WorldState.hpp"
+#include "../step/Settings.hpp"
+#include "../parallel/ThreadLayout.hpp"
+#include "../step/WorldState.hpp"
 
 namespace qdem {
 
 class Domain;
+struct PieceContactState;
+struct WorldPhases;
 
 // Stable time step and which limit sets it.
 struct StableDt {
@@ -131,9 +130,7 @@ public:
     // Contact history is carried over for (sphere id, piece) pairs kept.
     void setSpheres(int32_t n, const int32_t* id, const double* radius, const double* young, const double* ktRatio,
                     const double* friction, const double* restitution, const double* sphereMass, const int32_t* pairStart,
-                    const int32_t* pairPiece) {
-        spherePhase_.setSpheres(n, id, radius, young, ktRatio, friction, restitution, sphereMass, pairStart, pairPiece);
-    }
+                    const int32_t* pairPiece);
 
     // ---- stepping ---------------------------------------------------------
     void step(double dt);
@@ -192,11 +189,7 @@ public:
     // Pieces that started pressed into an obstacle by more than a quarter of their
     // node radius (ObstaclePhase::takeStartWarnings), handed over once.
     // And pieces placed pressed into each other (PieceContactPhase::takeStartWarnings).
-    std::vector<std::string> takeStartWarnings() {
-        std::vector<std::string> w = obstaclePhase_.takeStartWarnings();
-        for (std::string& m : pieceContactPhase_.takeStartWarnings()) w.push_back(std::move(m));
-        return w;
-    }
+    std::vector<std::string> takeStartWarnings();
 
     // ---- restarts (Checkpoint.cpp) ---------------------------------------
     // The dynamic state (positions, velocities, contact histories, sleeping
@@ -244,10 +237,7 @@ public:
 
     // ---- output -----------------------------------------------------------
     // Cauchy stress per tet (xx yy zz yz xz xy), elastic plus viscous.
-    void computeStress(double* out) const {
-        requireGathered("computeStress");
-        elementPhase_.stress(out);
-    }
+    void computeStress(double* out) const;
 
     // ---- data (struct of arrays; 3 doubles per node for vectors) ----------
     Column<double> pos, vel, refPos, force, extForce, mass;
@@ -290,20 +280,20 @@ public:
     // moves, a YADE sphere comes near, or wake()/wakeAll() is called (the
     // Python Piece does so when its arrays are handed out for writing).
     // settings.sleepVelocity 0 (the default) turns sleeping off.
-    bool asleep(std::size_t piece) const { return sleepPhase_.asleep(piece); }
-    long nAsleep() const { return sleepPhase_.nAsleep(); }
-    long sleepCount() const { return sleepPhase_.sleepCount(); }  // pieces put to sleep so far (diagnostics)
-    long wakeCount() const { return sleepPhase_.wakeCount(); }    // and woken
-    void wake(std::size_t piece) { sleepPhase_.wake(piece); }
-    void wakeAll() { sleepPhase_.wakeAll(); }
+    bool asleep(std::size_t piece) const { return awake_.asleep(piece); }
+    long nAsleep() const { return awake_.nAsleep(); }
+    long sleepCount() const;  // pieces put to sleep so far (diagnostics)
+    long wakeCount() const;   // and woken
+    void wake(std::size_t piece);
+    void wakeAll();
     // A piece that is not dynamic (YADE's Body.dynamic) is put to sleep where
     // it is and stays so: nothing wakes it until it is made dynamic again.
     // Awake pieces still touch it as a fixed body; its push on obstacles
     // stays what it was.  Works with sleeping off too.
-    bool dynamic(std::size_t piece) const { return sleepPhase_.dynamic(piece); }
+    bool dynamic(std::size_t piece) const { return awake_.dynamic(piece); }
     void setDynamic(std::size_t piece, bool dynamic);
-    // The awake set and the sleeping decisions (read by the phases).
-    const SleepPhase& sleeping() const { return sleepPhase_; }
+    // The awake set (AwakeSet.hpp: written by the sleep phase, read by the others).
+    const AwakeSet& awakeSet() const { return awake_; }
 
     std::size_t nNodes() const { return mass.size(); }
     std::size_t nTets() const { return tetVol0.size(); }
@@ -312,16 +302,12 @@ public:
     // [s] by name (obstacles, broadPhase, pointPolygon, edgeEdge, spheres,
     // elements, integrate, sleep) and counters (contacts: wall,
     // pointPolygon, edgeEdge, sphere; interiorFaceTests, interiorFaceNear).
-    PhaseReport report() const {
-        PhaseReport r;
-        for (const Phase* p : phases()) p->report(r);
-        return r;
-    }
-    long verletRebuilds() const { return pieceContactPhase_.state().listBuilds; }
-    long verletWindowSteps() const { return pieceContactPhase_.state().windowSteps; }
-    bool verletWindowOpen() const { return pieceContactPhase_.state().windowNext >= 0; }
-    // The piece-contact lists and histories (diagnostics, tests).
-    const PieceContactState& pieceContactState() const { return pieceContactPhase_.state(); }
+    PhaseReport report() const;
+    long verletRebuilds() const;
+    long verletWindowSteps() const;
+    bool verletWindowOpen() const;
+    // The piece-contact lists and histories (diagnostics, tests: PieceContactState.hpp).
+    const PieceContactState& pieceContactState() const;
     const SurfaceIndex& surfaceIndex() const { return surf_; }
     // Box (lo, hi) of each piece's surface nodes now, grown by its particle
     // radius: 6 per piece.  Under MPI the whole pieces' (a reduction of the
@@ -330,13 +316,13 @@ public:
     const std::vector<double>& pieceBoxes();
     // Point-polygon contacts of the last step: kPP slots per surface node
     // holding 8 * (triangle within its piece) + feature (-1 = empty) and that piece; for diagnostics.
-    const Column<int32_t>& pointPolygonKeys() const { return pieceContactPhase_.state().ppKey; }
-    const Column<int32_t>& pointPolygonKeyPieces() const { return pieceContactPhase_.state().ppPiece; }
+    const Column<int32_t>& pointPolygonKeys() const;
+    const Column<int32_t>& pointPolygonKeyPieces() const;
     // Largest overlap of a piece-piece contact in the last step [m].
-    double maxPieceOverlap() const { return pieceContactPhase_.maxOverlap(); }
+    double maxPieceOverlap() const;
     // Deepest piece-piece contact of the last step: depth behind the other
     // surface over the reach (the run stops above 1).
-    double maxPieceDepthRatio() const { return pieceContactPhase_.maxDepthRatio(); }
+    double maxPieceDepthRatio() const;
 
     World();
     ~World();
@@ -346,14 +332,17 @@ public:
 private:
     // Derived per-step data the phases share (each phase declares which it
     // reads or writes: its Data).
+    // Which pieces sleep, and the awake pieces' tets, nodes and surface
+    // nodes: written by the sleep phase, read by the others.
+    AwakeSet awake_;
     // The surfaces of all pieces in global ids, with their adjacency.
     SurfaceIndex surf_;
     // Where each piece can touch anything this step.
     PieceBounds bounds_{{.pos = pos, .surfNodes = surfNodes, .nodePiece = nodePiece, .pieces = pieces,
-                         .materials = materials, .settings = settings, .sleeping = sleepPhase_, .spheres = spheres,
+                         .materials = materials, .settings = settings, .sleeping = awake_, .spheres = spheres,
                          .domain = {domain_}}};
     // Per node, from obstacles, piece contacts and spheres.
-    ContactForces contactForces_{pieces, surfNodes, sleepPhase_};
+    ContactForces contactForces_{pieces, surfNodes, awake_};
     // Energy states per piece (elastic, contact with obstacles, contact with
     // pieces: 3 each), kept for sleeping pieces, summed per thread when tracked.
     std::vector<double> pieceEnergy_;
@@ -364,54 +353,23 @@ private:
     // Under MPI: this rank's share of the world and its exchanges.
     std::unique_ptr<Domain> domain_;
 
-    // The phases of World::step, each with its own state (pkg/phases/) and
-    // given only the data it declares (Phase.hpp).  Domain, which moves
-    // every row of the world between ranks, is the one friend.
+    // The phases of World::step (Phases.hpp), each built from the data it
+    // declares.  Domain, which moves every row of the world between ranks,
+    // is the one friend besides.
     friend class Domain;
-    ObstaclePhase obstaclePhase_{{.pos = pos, .vel = vel, .mass = mass, .nodePiece = nodePiece, .surfNodes = surfNodes,
-                                  .surfWeight = surfWeight, .pieces = pieces, .materials = materials,
-                                  .settings = settings, .sleeping = sleepPhase_, .bounds = bounds_,
-                                  .obstacles = obstacles, .contacts = contactForces_, .energy = energy,
-                                  .threadPieceEnergy = threadPieceEnergy_, .iter = iter}};
-    PieceContactPhase pieceContactPhase_{{.pos = pos, .vel = vel, .refPos = refPos, .mass = mass,
-                                          .nodePiece = nodePiece, .tetNodes = tetNodes, .surfNodes = surfNodes,
-                                          .surfWeight = surfWeight, .pieces = pieces, .materials = materials,
-                                          .settings = settings, .iter = iter, .surface = surf_,
-                                          .sleeping = sleepPhase_, .bounds = bounds_, .domain = {domain_},
-                                          .contacts = contactForces_, .energy = energy,
-                                          .threadPieceEnergy = threadPieceEnergy_,
-                                          .pieceElementW2 = pieceElementW2_,
-                                          .pieceElementRate = pieceElementRate_}};
-    SpherePhase spherePhase_{{.pos = pos, .vel = vel, .mass = mass, .surfNodes = surfNodes, .pieces = pieces,
-                              .materials = materials, .settings = settings, .iter = iter, .surface = surf_,
-                              .bounds = bounds_, .domain = {domain_}, .spheres = spheres, .contacts = contactForces_,
-                              .energy = energy}};
-    ElementPhase elementPhase_{{.pos = pos, .vel = vel, .tetNodes = tetNodes, .tetPiece = tetPiece, .tetB = tetB,
-                                .tetVol0 = tetVol0, .pieces = pieces, .materials = materials, .settings = settings,
-                                .sleeping = sleepPhase_, .energy = energy, .threadPieceEnergy = threadPieceEnergy_}};
-    IntegrationPhase integrationPhase_{{.mass = mass, .extForce = extForce, .blocked = blocked,
-                                        .nodePiece = nodePiece, .pieces = pieces, .gravity = gravity,
-                                        .settings = settings, .sleeping = sleepPhase_, .elements = elementPhase_,
-                                        .contacts = contactForces_, .domain = {domain_}, .pos = pos, .vel = vel,
-                                        .force = force, .energy = energy, .iter = iter, .time = time,
-                                        .viscous = {.pos = pos, .refPos = refPos, .mass = mass, .blocked = blocked,
-                                                    .tetNodes = tetNodes, .tetB = tetB, .tetVol0 = tetVol0,
-                                                    .pieces = pieces, .materials = materials,
-                                                    .settings = settings, .iter = iter,
-                                                    .sleeping = sleepPhase_, .domain = {domain_}}}};
-    SleepPhase sleepPhase_{{.pos = pos, .vel = vel, .mass = mass, .blocked = blocked, .surfNodes = surfNodes,
-                            .pieces = pieces, .obstacles = obstacles, .spheres = spheres, .settings = settings,
-                            .gravity = gravity, .domain = {domain_}, .energy = energy, .bounds = bounds_,
-                            .obstacleContacts = obstaclePhase_, .pieceContacts = pieceContactPhase_,
-                            .integration = integrationPhase_, .force = force}};
-    // In the order of the step; Checkpoint.cpp, addPiece and report() visit
-    // them (a fixed array: report() is called every step from Python).
-    const std::array<Phase*, 6> phases_{&obstaclePhase_,    &pieceContactPhase_, &spherePhase_,
-                                        &elementPhase_,     &integrationPhase_,  &sleepPhase_};
-    const std::array<Phase*, 6>& phases() { return phases_; }
-    std::array<const Phase*, 6> phases() const {
-        return {phases_[0], phases_[1], phases_[2], phases_[3], phases_[4], phases_[5]};
-    }
+    friend struct WorldPhases;
+    std::unique_ptr<WorldPhases> phases_;
+    const std::array<Phase*, 6>& phases();
+    std::array<const Phase*, 6> phases() const;
+    // addPiece's steps: the checks that refuse a mesh before anything
+    // changes; its nodes and tets appended; the mass added to its elements
+    // (selective mass scaling); its surface, with the contact weights.
+    void checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass) const;
+    void appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pieceId, PieceInfo& p);
+    void addElementMass(const TetMesh& mesh, const std::vector<double>& tetAddedMass, const Surface& s,
+                        PieceInfo& p);
+    void appendSurface(Surface s, PieceInfo& p);
+
     // The arrays a restart keeps (Checkpoint.cpp): the world's and its phases'.
     StateColumns stateColumns();
 

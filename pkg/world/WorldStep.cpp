@@ -7,6 +7,7 @@
 #include "../core/Format.hpp"
 #include "../core/Threads.hpp"
 #include "../parallel/Domain.hpp"
+#include "Phases.hpp"
 #include "World.hpp"
 
 namespace qdem {
@@ -68,24 +69,25 @@ void World::step(double dt) {
     // Set-up of the step: a loaded state's sleeping pieces checked against
     // this world's obstacles and gravity, contact forces and energy states
     // summed afresh, the pieces' boxes from the current positions.
-    sleepPhase_.checkLoadedRest();
+    WorldPhases& ph = *phases_;
+    ph.sleep.checkLoadedRest();
     contactForces_.reset();
     if (settings.trackEnergy) {
         energy.contactElastic = 0;  // a state: summed afresh by the contact phases
         beginPieceEnergy();
     }
     bounds_.update();
-    if (domain_) spherePhase_.listActive();  // the same pairs on every rank: they size the reduction
+    if (domain_) ph.sphere.listActive();  // the same pairs on every rank: they size the reduction
     // Forces: contacts (into contactForces_), then elements (thread buffers).
-    run(obstaclePhase_);
+    run(ph.obstacle);
     refreshElementModes();  // (what the piece contacts' run-time step adds to)
-    run(pieceContactPhase_);
-    run(spherePhase_);
-    run(elementPhase_);
+    run(ph.pieceContact);
+    run(ph.sphere);
+    run(ph.element);
     // Under MPI: partial forces on ghosts to their owners.
-    if (domain_) domain_->returnGhostForces(elementPhase_.layout(), contactForces_.force.data(), contactForces_.active);
+    if (domain_) domain_->returnGhostForces(ph.element.layout(), contactForces_.force.data(), contactForces_.active);
     // Motion, the energy states of the step, the clock.
-    run(integrationPhase_);
+    run(ph.integration);
     if (settings.trackEnergy && error.empty()) finishPieceEnergy();
     // Under MPI: the moved nodes to the ranks that read them.
     if (domain_) {
@@ -95,7 +97,7 @@ void World::step(double dt) {
     time += dt;
     ++iter;
     // Which pieces sleep in the next step.
-    run(sleepPhase_);
+    run(ph.sleep);
     if (domain_) {
         domain_->finishStep(error);
         // Every rank saw the same loads: they all split again, or none does.

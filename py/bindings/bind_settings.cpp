@@ -1,5 +1,5 @@
 // The world's settings bound to Python from their one declaration
-// (pkg/world/Settings.hpp): a checked property per setting on the core World,
+// (pkg/step/Settings.hpp): a checked property per setting on the core World,
 // and qdem._core.settings(), the table QdemEngine builds its attributes from.
 #include <cmath>
 #include <sstream>

@@ -9,6 +9,7 @@
 #include "Arrays.hpp"
 #include "core/Errors.hpp"
 #include "core/Format.hpp"
+#include "phases/PieceContactState.hpp"
 #include "world/World.hpp"
 
 namespace py = pybind11;

@@ -161,7 +161,7 @@ class WorldSetting(Attr):
     creating another engine (a dead one, a throw-away one to read a stable
     step) never changes the settings of the one that runs (engine.py,
     ``_activate``).  Built
-    from the setting's one declaration in C++ (pkg/world/Settings.hpp, exposed
+    from the setting's one declaration in C++ (pkg/step/Settings.hpp, exposed
     as ``qdem._core.settings``): default, docstring and allowed values."""
 
     def __init__(self, decl):

@@ -100,7 +100,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                             "at the first step with qdem.SetupError: a piece would fall through it unseen.",
                         _shapeNames, tuple)
     # The world settings (viscosity, damping, friction, contact kinds, sleeping, ...):
-    # declared once in pkg/world/Settings.hpp; read and written on the world directly.
+    # declared once in pkg/step/Settings.hpp; read and written on the world directly.
     worldSettings(locals())
 
     _yadeAttrs = ("label", "dead")   # YADE's own Engine attributes it takes as keywords

@@ -3,7 +3,7 @@ they share and the state each owns (doc/architecture.md).
 
     /usr/bin/python3.11 scripts/doc/architecture_picture.py [--out doc/img/architecture.png]
 
-The phase list is read from pkg/world/World.hpp (World::phases_) so the picture
+The phase list is read from pkg/world/Phases.hpp (WorldPhases::list) so the picture
 follows the code; the script fails if a phase in the picture is not in it."""
 import argparse
 import os
@@ -16,20 +16,20 @@ from matplotlib.patches import FancyBboxPatch
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-# (member in World::phases, title, what it owns, what it writes)
+# (member in WorldPhases::list, title, what it owns, what it writes)
 PHASES = [
-    ("obstaclePhase_", "ObstaclePhase", "node-obstacle history\n(body id, side, spring)", "contact forces,\nobstacle reactions"),
-    ("pieceContactPhase_", "PieceContactPhase", "Verlet lists, cell grids,\npoint-polygon + edge-edge\nhistory (stable ids)", "contact forces"),
-    ("spherePhase_", "SpherePhase", "triangle grids,\nsphere-triangle history", "contact forces,\nsphere force/torque"),
-    ("elementPhase_", "ElementPhase", "thread layout,\nper-thread force buffers", "element forces\n(buffers)"),
-    ("integrationPhase_", "IntegrationPhase", "per-piece speeds", "pos, vel, force,\nkinetic energy"),
-    ("sleepPhase_", "SleepPhase", "awake set, sleep clocks,\nfrozen reactions", "asleep flags,\nawake lists"),
+    ("obstacle", "ObstaclePhase", "node-obstacle history\n(body id, side, spring)", "contact forces,\nobstacle reactions"),
+    ("pieceContact", "PieceContactPhase", "Verlet lists, cell grids,\npoint-polygon + edge-edge\nhistory (stable ids)", "contact forces"),
+    ("sphere", "SpherePhase", "triangle grids,\nsphere-triangle history", "contact forces,\nsphere force/torque"),
+    ("element", "ElementPhase", "thread layout,\nper-thread force buffers", "element forces\n(buffers)"),
+    ("integration", "IntegrationPhase", "per-piece speeds", "pos, vel, force,\nkinetic energy"),
+    ("sleep", "SleepPhase", "awake set, sleep clocks,\nfrozen reactions", "asleep flags,\nawake lists"),
 ]
 
 
 def phasesInCode():
-    src = open(os.path.join(ROOT, "pkg", "world", "World.hpp")).read()
-    m = re.search(r"std::array<Phase\*, \d+> phases_\{([^}]*)\}", src)
+    src = open(os.path.join(ROOT, "pkg", "world", "Phases.hpp")).read()
+    m = re.search(r"std::array<Phase\*, \d+> list\{([^}]*)\}", src)
     return [s.strip().lstrip("&") for s in m.group(1).split(",")]
 
 
@@ -45,7 +45,7 @@ def main():
     code = phasesInCode()
     names = [p[0] for p in PHASES]
     if code != names:
-        raise SystemExit("World::phases() is %s, the picture shows %s: update PHASES" % (code, names))
+        raise SystemExit("WorldPhases::list is %s, the picture shows %s: update PHASES" % (code, names))
 
     fig, ax = plt.subplots(figsize=(13.3, 6.2))
     ax.set_xlim(0, 13.3)
@@ -68,7 +68,7 @@ def main():
         "World data (struct of arrays, pkg/world/World.hpp): nodes pos vel refPos force extForce mass blocked nodePiece | "
         "tets tetNodes tetB tetVol0 tetPiece\nsurface surfNodes surfWeight + SurfaceIndex (triangles, edges; per-piece "
         "ranges: stable ids = piece + local id) | pieces, materials, obstacles, spheres |\n"
-        "contactForce (contacts -> integration) | piece boxes | energy, clock | Settings (pkg/world/Settings.hpp, one "
+        "contactForce (contacts -> integration) | piece boxes | energy, clock | Settings (pkg/step/Settings.hpp, one "
         "declaration each)", "#e2f2dc", size=7.5)
     box(ax, 2.05, 0.2, 5.3, 1.05, "kernels without state (pkg/contact, pkg/element):\nContactModel (mixing), ContactLaw "
         "(spring-dashpot, friction),\nPointTriangle (candidates, inside test), Geometry,\nElementKernel + laws/ "

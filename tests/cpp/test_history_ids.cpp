@@ -11,7 +11,7 @@
 #include "material/Material.hpp"
 #include "mesh/BoxMesh.hpp"
 #include "world/World.hpp"
-#include "world/WorldState.hpp"
+#include "step/WorldState.hpp"
 
 using namespace qdem;
 

@@ -1,4 +1,4 @@
-// The phases reach only the data they declare (pkg/world/Phase.hpp): each
+// The phases reach only the data they declare (pkg/step/Phase.hpp): each
 // phase class is built from its nested Data alone, and no source of
 // pkg/phases names World (so none can reach into the world past its Data).
 #include <gtest/gtest.h>

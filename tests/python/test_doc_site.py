@@ -81,13 +81,13 @@ def test_settings_table_lists_every_engine_setting_with_its_default(site):
 
 def test_a_stale_settings_table_is_detected():
     """The build compares the settings compiled into qdem._core with
-    QDEM_SETTINGS in pkg/world/Settings.hpp: equal here; a setting declared
+    QDEM_SETTINGS in pkg/step/Settings.hpp: equal here; a setting declared
     but not compiled (a stale build) is a difference, which the build turns
     into a warning and -W into a failure."""
     from qdemdoc import settingsDrift
     declared, compiled = settingsDrift()
     assert declared == compiled and len(declared) > 10
-    text = open(os.path.join(ROOT, "pkg", "world", "Settings.hpp")).read()
+    text = open(os.path.join(ROOT, "pkg", "step", "Settings.hpp")).read()
     stale = text.replace("#define QDEM_SETTINGS(X)", "#define QDEM_SETTINGS(X) X(bool, newSwitch, \"newSwitch\", "
                          "false, anyValue(), \"A setting added to the header, not yet compiled.\")", 1)
     declared, compiled = settingsDrift(stale)

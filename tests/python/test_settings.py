@@ -1,4 +1,4 @@
-"""Each world setting is declared once (pkg/world/Settings.hpp) and reaches
+"""Each world setting is declared once (pkg/step/Settings.hpp) and reaches
 Python from there (issue 13): the core World property with its check and
 docstring, the QdemEngine attribute with its default in help(), and no copy
 in the engine - the engine reads and writes the world's setting."""

@@ -1,4 +1,7 @@
-#include "Domain.hpp"
+// Domain (pkg/parallel/Domain.hpp, where the phases see it as this rank's
+// share and its exchanges) moves the World's rows between ranks: its
+// implementation reads and writes the World, so it sits in the world layer.
+#include "../parallel/Domain.hpp"
 
 #include <omp.h>
 
@@ -8,7 +11,8 @@
 #include <vector>
 
 #include "../core/Errors.hpp"
-#include "../world/World.hpp"
+#include "Phases.hpp"
+#include "World.hpp"
 #include <cmath>
 
 namespace qdem {
@@ -548,7 +552,7 @@ void Domain::finishStep(const std::string& error) {
     const bool energyOn = w_.settings.trackEnergy;
     // [failed, reactions (6 per obstacle), energies (10), sphere pairs, load]
     // of this rank.
-    const std::size_t ne = energyOn ? 10 : 0, ns = w_.spherePhase_.mpiValues();
+    const std::size_t ne = energyOn ? 10 : 0, ns = w_.phases_->sphere.mpiValues();
     const std::size_t nv = 1 + 6 * no + ne + ns + 1;
     std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
@@ -566,7 +570,7 @@ void Domain::finishStep(const std::string& error) {
     }
     // The sphere pairs this rank computed (zeros for the others'): their
     // sums are each pair's owner's force, torque and history.
-    if (ns > 0) w_.spherePhase_.packPairs(v.data() + 1 + 6 * no + ne);
+    if (ns > 0) w_.phases_->sphere.packPairs(v.data() + 1 + 6 * no + ne);
     // Summed (the load too, for its mean) and the load's maximum, in a tree
     // of fixed shape: the same bits on every rank and every run.
     v.push_back(v[nv - 1]);
@@ -588,7 +592,7 @@ void Domain::finishStep(const std::string& error) {
         const double* s = v.data() + 1 + 6 * no;
         w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
     }
-    if (ns > 0 || !w_.spheres.pairPiece.empty()) w_.spherePhase_.unpackPairs(v.data() + 1 + 6 * no + ne, w_.iter - 1);
+    if (ns > 0 || !w_.spheres.pairPiece.empty()) w_.phases_->sphere.unpackPairs(v.data() + 1 + 6 * no + ne, w_.iter - 1);
 }
 
 double Domain::load() const {

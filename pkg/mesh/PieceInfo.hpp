@@ -3,7 +3,7 @@
 #pragma once
 #include <cstdint>
 
-#include "../mesh/Surface.hpp"
+#include "Surface.hpp"
 
 namespace qdem {
 

@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 
-#include "../phases/SleepPhase.hpp"
+#include "../parallel/Domain.hpp"
 
 namespace qdem {
 

@@ -6,15 +6,14 @@
 #include <vector>
 
 #include "../core/Column.hpp"
-#include "PieceInfo.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "AwakeSet.hpp"
 
 namespace qdem {
 
-class SleepPhase;
-
 class ContactForces {
 public:
-    ContactForces(const std::vector<PieceInfo>& pieces, const Column<int32_t>& surfNodes, const SleepPhase& sleeping)
+    ContactForces(const std::vector<PieceInfo>& pieces, const Column<int32_t>& surfNodes, const AwakeSet& sleeping)
         : pieces_(pieces), surfNodes_(surfNodes), sleeping_(sleeping) {}
     Column<double> force;  // 3 per node
     bool active = false;   // force holds this step's contacts (else the integration skips it)
@@ -27,7 +26,7 @@ public:
 private:
     const std::vector<PieceInfo>& pieces_;
     const Column<int32_t>& surfNodes_;
-    const SleepPhase& sleeping_;
+    const AwakeSet& sleeping_;
 };
 
 }  // namespace qdem

@@ -9,12 +9,11 @@
 #include "../core/Column.hpp"
 #include "../material/Material.hpp"
 #include "../parallel/DomainRef.hpp"
-#include "PieceInfo.hpp"
+#include "../mesh/PieceInfo.hpp"
+#include "AwakeSet.hpp"
 #include "Settings.hpp"
 
 namespace qdem {
-
-class SleepPhase;
 
 class PieceBounds {
 public:
@@ -25,7 +24,7 @@ public:
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;
-        const SleepPhase& sleeping;
+        const AwakeSet& sleeping;
         const SphereSet& spheres;  // coupled spheres: the whole pieces' boxes under MPI
         DomainRef domain;
     };

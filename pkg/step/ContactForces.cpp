@@ -1,7 +1,5 @@
 #include "ContactForces.hpp"
 
-#include "../phases/SleepPhase.hpp"
-
 namespace qdem {
 
 void ContactForces::begin() {
