@@ -17,11 +17,16 @@ import weakref
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, lifecycle, meshchecks, mpyglue, parallel, setupcheck, yadeglue
+from .. import _core, meshchecks
+from ..attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
+from ..mpi import ranks as parallel
+from ..world import FollowsDefaultWorld
+from . import glue as yadeglue
+from . import lifecycle, setupcheck
+from . import mpy as mpyglue
+from .enginemeta import EngineMeta
+from .recorder import initialFrames
 from .spheres import SphereCoupling
-from .attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
-from .yadeclass import EngineMeta
-from .world import FollowsDefaultWorld
 
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 
@@ -38,6 +43,7 @@ def _shapeNames(v):
     return None
 
 
+@lifecycle.savedWithScene
 @documented
 class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     """Steps the QDEM world each YADE iteration.  Keyword construction as for any
@@ -138,7 +144,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self.qdemId = qdemId or lifecycle.newId()
         # The command names the engine by an id that YADE saves with the scene:
         # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
-        self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId
+        self.command = "import qdem.yade.engine; qdem.yade.engine._step('%s')" % self.qdemId
         self._freshRunState()
 
     def _ownsSettings(self):
@@ -425,14 +431,15 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         if dt == setupcheck.YADE_DEFAULT_DT and not self._warnedDefaultDt and self._dtNoted != key:
             setupcheck.noteDefaultDt(self, O, dt)
             self._dtNoted = key
-        if core.mpiSize == 1 and (parallel.launchedSize() > 1 or self._mpy is not None):
+        if core.mpiSize == 1 and self._mpy is not None:
+            mpyglue.attach(self.world)  # split over mpy's ranks (collective: every rank runs this engine)
+        elif core.mpiSize == 1 and parallel.launchedSize() > 1:
             parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
         if core.iter == 0 and core.time == 0.0:
             # A world's first step: its clock starts at YADE's (the engine may
             # join a scene that has run), so frames are named by O.iter and
             # timed by O.time; then the frame of the initial state.
             core.iter, core.time = int(O.iter), float(O.time)
-            from .recorder import initialFrames
             initialFrames(self.world)
         elif getattr(self.world, "_stepMark", None) is not None and self._mpy is None:
             # YADE made steps this engine did not (it was dead, or out of
