@@ -8,7 +8,6 @@ import importlib
 import importlib.abc
 import importlib.util
 import sys
-import types
 import warnings
 
 #: old submodule name -> the module(s) now holding its names (looked up in order)

@@ -13,6 +13,8 @@ from .cad import meshCad
 from .restart import loadState, saveState
 from .vtu import readVtu, writePvd, writeVtu
 
+__all__ = ["meshCad", "saveState", "loadState", "readVtu", "writeVtu", "writePvd"]
+
 _LAZY = ("render", "plot")
 
 
