@@ -34,9 +34,12 @@ build: configure
 ext: configure
 	@cmake --build $(BUILD) -j $(JOBS) --target _core qdem_py
 
+# The package with its subpackages; an older install is replaced, not
+# overlaid (a module moved into a subpackage must not linger at its old path).
 install: ext
-	@mkdir -p $(SITE)/qdem
-	@cp $(BUILD)/python/qdem/*.py $(BUILD)/python/qdem/_core*.so $(SITE)/qdem/
+	@test -n "$(SITE)" && rm -rf $(SITE)/qdem && mkdir -p $(SITE)/qdem
+	@cd $(BUILD)/python/qdem && find . \( -name '*.py' -o -name '_core*.so' \) -not -path '*/__pycache__/*' \
+	  -exec cp --parents {} $(SITE)/qdem/ \;
 	@echo "qdem installed in $(SITE)/qdem"
 
 demo: install

@@ -51,7 +51,7 @@ start = time.time()
 O.run(int(duration / O.dt), True)
 wall = time.time() - start
 
-from qdem.plot import energyPlot  # noqa: E402
+from qdem.io.plot import energyPlot  # noqa: E402
 
 energyPlot(OUT + "/energy.png", history["t"], {k: v for k, v in history.items() if k != "t"},
            title="Block dropped on a YADE floor")

@@ -34,7 +34,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 # The modules of the public API, in the order the reference lists them.  A
 # module's public names are its __all__.
-PUBLIC_MODULES = ["qdem", "qdem.modes", "qdem.render", "qdem.parallel", "qdem.shogi", "qdem.plot"]
+PUBLIC_MODULES = ["qdem", "qdem.modes", "qdem.io.render", "qdem.io.plot", "qdem.mpi", "qdem.yade.mpy", "qdem.scenes.shogi"]
 
 
 def moduleNames(modname):

@@ -6,7 +6,7 @@
 // of Settings (what the phases read), the Python properties of the core World
 // with their checks and docstrings, and the attributes of QdemEngine with
 // their defaults shown in help() (py/bindings/bind_settings.cpp,
-// py/qdem/engine.py).  Adding a setting is one line here.
+// py/qdem/yade/engine.py).  Adding a setting is one line here.
 #pragma once
 #include <cmath>
 #include <string>

@@ -52,6 +52,7 @@ void World::setSpheres(int32_t n, const int32_t* id, const double* radius, const
                        const double* sphereMass, const int32_t* pairStart, const int32_t* pairPiece) {
     phases_->sphere.setSpheres(n, id, radius, young, ktRatio, friction, restitution, sphereMass, pairStart,
                                pairPiece);
+    ++inputSets_;
 }
 
 std::vector<std::string> World::takeStartWarnings() {

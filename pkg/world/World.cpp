@@ -225,6 +225,7 @@ void World::setObstacles(const std::vector<Obstacle>& obs) {
     for (auto& o : obstacles) o.updateDerived();
     if (!same) phases_->obstacle.obstaclesChanged();
     omegaCache_.clear();
+    ++inputSets_;
 }
 
 void World::setObstacleState(int i, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,

@@ -93,6 +93,13 @@ struct InversionCount {
     double volumeRatio = 1;
 };
 
+// What World::periodicChecks did at one step.
+struct PeriodicChecks {
+    bool ran = false;          // the checks were due at this step (and passed)
+    InversionCount inverted;   // checkInverted's count (elements whose law pushes them back)
+    ObstacleEdgeCrossing edges;  // obstacleEdgeCrossing's finding (Box and Facet edges through surfaces)
+};
+
 class World {
 public:
     // ---- set-up -----------------------------------------------------------
@@ -186,6 +193,21 @@ public:
     // edge narrower than the node spacing passed between the nodes
     // (ObstacleEdges.cpp).  Reads every node: gatherAll() first under MPI.
     ObstacleEdgeCrossing obstacleEdgeCrossing() const;
+    // The checks due at this step, in one call, scheduled here: every
+    // checkPeriod steps (iter a multiple of it; 0: never) inverted elements
+    // (checkInverted), dt against the current shape (checkCurrentDt, when
+    // checkDt), finite state, deep piece overlap, YADE spheres inside pieces,
+    // obstacle edges through surfaces, in that order (each names what the
+    // one after it would misname).  Under MPI every rank first learns every
+    // node (gatherAll): before the checks, and every gatherPeriod steps.
+    // Throws what the checks throw (PeriodicChecks.cpp).
+    PeriodicChecks periodicChecks(long checkPeriod, long gatherPeriod, double dt, bool checkDt);
+    // A number that changes whenever something the stable step depends on
+    // has changed since it was last asked: a setting (any of Settings.hpp's,
+    // compared member by member), a piece or material added, the obstacles
+    // or the YADE spheres set.  A check of dt cached under it (QdemEngine)
+    // is redone exactly when its answer could differ (StableStepVersion.cpp).
+    long stableStepVersion() const;
     // Pieces that started pressed into an obstacle by more than a quarter of their
     // node radius (ObstaclePhase::takeStartWarnings), handed over once.
     // And pieces placed pressed into each other (PieceContactPhase::takeStartWarnings).
@@ -330,6 +352,13 @@ public:
     World& operator=(const World&) = delete;
 
 private:
+    // stableStepVersion(): obstacles and spheres set so far, and what the
+    // version was last computed from.
+    long inputSets_ = 0;
+    mutable long stableStepVersion_ = 0;
+    mutable long seenInputSets_ = -1;
+    mutable std::size_t seenPieces_ = 0, seenMaterials_ = 0;
+    mutable Settings seenSettings_{};
     // Derived per-step data the phases share (each phase declares which it
     // reads or writes: its Data).
     // Which pieces sleep, and the awake pieces' tets, nodes and surface

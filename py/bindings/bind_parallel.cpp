@@ -1,5 +1,5 @@
 // MPI for the QDEM world (doc/parallel.md): the communicator comes from
-// mpi4py (qdem/parallel.py hands over MPI.COMM_WORLD, or mpy's) and is
+// mpi4py (qdem/mpi/ranks.py hands over MPI.COMM_WORLD, or mpy's) and is
 // duplicated in the core.  Without MPI at build time, setCommunicator
 // refuses with the reason and everything else runs on one process.
 #include <pybind11/numpy.h>

@@ -12,6 +12,7 @@ void bindWorld(py::module_& m);
 void bindMesher(py::module_& m);
 void bindRemesher(py::module_& m);
 void bindSpheres(py::module_& m);
+void bindChecks(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
     m.doc() = "yade-qdem compiled core: QDEM world, meshes, contacts";
@@ -32,6 +33,7 @@ PYBIND11_MODULE(_core, m) {
           "Number of OpenMP threads QDEM uses now.");
     bindMesh(m);
     bindWorld(m);
+    bindChecks(m);  // (methods added to World)
     bindSpheres(m);
     bindMesher(m);
     bindRemesher(m);

@@ -4,6 +4,8 @@ import numbers
 
 import numpy as np
 
+from . import _core
+
 
 class Attr:
     """One documented attribute: default value, docstring, optional validator
@@ -220,7 +222,6 @@ class WorldSetting(Attr):
 def worldSettings(namespace):
     """Adds a WorldSetting to a class body (``worldSettings(locals())``) for each
     world setting that has an engine name, in declaration order."""
-    from . import _core
     for decl in _core.settings:
         if decl["engineName"]:
             namespace[decl["engineName"]] = WorldSetting(decl)

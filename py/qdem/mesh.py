@@ -1,9 +1,12 @@
 """Tetrahedral meshes for QDEM pieces: structured boxes, mesh files read by
 meshio (gmsh .msh, .vtu, medit .mesh, ...) and closed triangle surfaces
 (OFF/STL/OBJ) meshed with CGAL Mesh_3."""
+import contextlib
+import io
 import numbers
 import os
 import struct
+import warnings
 
 import numpy as np
 
@@ -16,10 +19,7 @@ def _meshioRead(path, who):
     file.  meshio answers some broken files (a truncated .vtu) by printing the
     reason and calling sys.exit(1), which would end YADE: that is caught too,
     and the printed reason goes into the message."""
-    import contextlib
-    import io
-
-    import meshio
+    import meshio  # (lazy: meshio is needed only when a file is read)
     out, err = io.StringIO(), io.StringIO()
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -756,7 +756,6 @@ def meshSurface(surface, cellSize, facetDistance=-1.0, seed=0, scale=1.0, surfac
     mesh.volumeKept = report["meshVolume"] / report["surfaceVolume"]
     mesh.meshReport = report
     if mesh.volumeKept < 0.99:
-        import warnings
         warnings.warn("meshSurface: the mesh keeps %.1f %% of the volume the surface encloses (its mass is %.1f %% "
                       "low): %s; leave surfaceSize and facetDistance at their defaults to refine the surface until "
                       "99 %% is kept, or use smaller ones"

@@ -81,7 +81,7 @@ def _medianEdge(nodes, tets, cap=20000):
 def _sceneSpheres(cap=20000):
     """Median radius of the YADE spheres among the first ``cap`` bodies of O.bodies, or None."""
     try:
-        from yade import O
+        from yade import O  # (lazy: the model runs without YADE; inside YADE, its scene's spheres)
         radii = []
         for k, b in enumerate(O.bodies):
             if k >= cap:

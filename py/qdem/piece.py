@@ -1,6 +1,9 @@
 """Piece: the handle of one deformable body, with NumPy views of its nodes."""
+import warnings
+
 import numpy as np
 
+from .attrs import boolean
 from .stress import vonMises
 
 
@@ -115,7 +118,6 @@ class Piece:
 
     @dynamic.setter
     def dynamic(self, value):
-        from .attrs import boolean
         if boolean(value):  # ('no' would count as True, as it did)
             raise ValueError("Piece.dynamic=%r is invalid: must be True or False" % (value,))
         self.world.core.setDynamic(self.id, bool(value))
@@ -314,7 +316,6 @@ class _Quantity(np.ndarray):
         return arr[()] if arr.ndim == 0 else arr
 
     def __call__(self, *args, **kw):
-        import warnings
         warnings.warn("Piece.%s() is deprecated: Piece.%s is a property (read it without parentheses%s)"
                       % (self._name, self._name,
                          "" if self._instead == self._name else "; with an argument: Piece." + self._instead),

@@ -1,5 +1,6 @@
 """The QDEM world of a scene and ``addPiece``."""
 import math
+import warnings
 
 import numpy as np
 
@@ -234,7 +235,6 @@ def _refuseTooMuchMass(x, tets, material, added, targetDt, maxAddedMass):
 def _warnMassScaling(core, piece, targetDt):
     """RuntimeWarnings for what mass scaling does not do: raise the contact
     springs' step, or leave the surface's contact dynamics as they were."""
-    import warnings
     info = core.pieceMassScaling(piece.id)
     if info["surfaceMass"] > 0:
         warnings.warn(

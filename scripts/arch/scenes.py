@@ -126,7 +126,7 @@ def shogi(a):
     second at about step 7,000 and the second starts to topple; the default
     10,000 steps run through the hit.  The rook mesh is read from --mesh (made
     once by CGAL, so both builds start from the same nodes)."""
-    from qdem import shogi as sh
+    from qdem.scenes import shogi as sh
     m = np.load(a.mesh)
     rook = qdem.Mesh(m["nodes"], m["tets"])
     mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4, frictionPiece=0.1,
@@ -146,7 +146,7 @@ def shogi(a):
 
 def shogiMesh(path):
     """The rook mesh of qdem.shogi.mesh, saved for every run of the shogi scene."""
-    from qdem import shogi as sh
+    from qdem.scenes import shogi as sh
     m = sh.mesh("rook")
     np.savez(path, nodes=m.nodes, tets=m.tets)
 

@@ -16,7 +16,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "tests", "python"))
 
 import qdem  # noqa: E402
 import testsurfaces as ts  # noqa: E402
-from qdem import shogi  # noqa: E402
+from qdem.scenes import shogi  # noqa: E402
 from qdem.shapes import icosphere  # noqa: E402
 
 

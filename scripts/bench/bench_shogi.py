@@ -37,7 +37,7 @@ sys.path.insert(0, _here[0] if _here else os.path.abspath(os.path.join("scripts"
 
 import numpy as np  # noqa: E402
 import qdem  # noqa: E402
-from qdem import shogi  # noqa: E402
+from qdem.scenes import shogi  # noqa: E402
 from yade import O, ForceResetter, FrictMat, NewtonIntegrator, utils  # noqa: E402
 
 from benchutil import BUSY_RULE, LoadProbe, summarise  # noqa: E402

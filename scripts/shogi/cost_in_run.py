@@ -24,7 +24,8 @@ import statistics
 import sys
 
 import qdem
-from qdem import _core, shogi
+from qdem import _core
+from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from scales import G, cpuMsPerStep, table1Scale  # noqa: E402

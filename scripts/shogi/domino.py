@@ -44,7 +44,8 @@ import time
 
 import numpy as np
 import qdem
-from qdem import render, shogi
+from qdem import render
+from qdem.scenes import shogi
 from yade import O, ForceResetter, FrictMat, NewtonIntegrator, PyRunner, utils
 from yade.utils import readParamsFromTable
 

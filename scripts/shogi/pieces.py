@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from qdem import shogi  # noqa: E402
+from qdem.scenes import shogi  # noqa: E402
 
 os.makedirs("out/shogi", exist_ok=True)
 fig = plt.figure(figsize=(14, 3.2))

@@ -37,7 +37,8 @@ import sys
 import time
 
 import qdem
-from qdem import _core, modes, shogi
+from qdem import _core, modes
+from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 from benchutil import floorAndGravity  # noqa: E402

@@ -8,7 +8,7 @@ import math
 import sys
 
 import qdem
-from qdem import shogi
+from qdem.scenes import shogi
 from yade import O, ForceResetter, NewtonIntegrator, utils
 
 spacing, push = float(sys.argv[1]), float(sys.argv[2])

@@ -43,7 +43,8 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 import qdem
-from qdem import _core, shogi
+from qdem import _core
+from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))

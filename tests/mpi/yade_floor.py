@@ -15,7 +15,7 @@ O.engines = [ForceResetter(), qdem.QdemEngine(label="qe", damping=0.3), NewtonIn
 O.dt = 0.5 * qdem.stableDt()["combined"]
 O.run(2000, True)
 core = qe.world.core  # noqa: F821 - YADE's label
-if qdem.parallel.isWriter():
+if qdem.mpi.isWriter():
     print("RESULT " + json.dumps({"ranks": core.mpiSize, "floor": list(O.forces.f(0)), "weight": block.totalMass * 9.81,
                                   "zmin": float(block.pos[:, 2].min()), "iter": core.iter,
                                   "energy": core.energy["total"]}), flush=True)

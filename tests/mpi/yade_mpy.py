@@ -2,7 +2,7 @@
 mode, yade.mpy: the same script serially (`yade -n -x tests/mpi/yade_mpy.py
 SCENE`, where mp.mpirun falls back to O.run) and on P ranks
 (`mpiexec -n P yade -n -x tests/mpi/yade_mpy.py SCENE`: mpy's master keeps
-the floor, the workers the spheres, placed by qdem.mpyglue.assignSubdomains
+the floor, the workers the spheres, placed by qdem.yade.mpy.assignSubdomains
 from QDEM's split).  test_mpi.py compares the two.
 
 SCENE: 'drop' (twelve spheres falling on a block that rests on a floor) or
@@ -65,13 +65,13 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall
 O.dt = 0.8 * qe.stableTimeStep()  # noqa: F821 - YADE's label
 if os.environ.get("QDEM_MPY_RUN_FIRST") == "1":
     O.run(1, True)  # refused under yade.mpy (test_mpi.py): QDEM steps with mp.mpirun there
-placed = qdem.parallel.assignSubdomains()  # spheres to the workers owning the surface near them ({} serially)
+placed = qdem.yade.mpy.assignSubdomains()  # spheres to the workers owning the surface near them ({} serially)
 core = qdem.defaultWorld().core
 x0 = np.array(core.pos, copy=True)
 series, mine = [], 0
 for chunk in range(STEPS // CHUNK):
     mp.mpirun(CHUNK)  # O.run(CHUNK, True) serially
-    counts = qdem.parallel.summedCounts(core)
+    counts = qdem.mpi.summedCounts(core)
     mine += core.contactCounts["sphere"]  # computed on this rank (the chunk's last step)
     floor = list(O.forces.f(0)) if O.bodies[0] is not None else [0.0] * 3  # (the floor lives on mpy's master)
     series.append([counts["sphere"]] + floor + [core.energy["total"]])
@@ -109,7 +109,7 @@ if os.environ.get("QDEM_MPY_MERGE") == "1" and ranks > 1:
             O.run(1, True)  # refused: QDEM steps only inside mp.mpirun, on every rank
         except RuntimeError as e:
             out["mergedStep"] = str(e)
-if qdem.parallel.isWriter():
+if qdem.mpi.isWriter():
     if os.environ.get("QDEM_MPI_OUT"):
         with open(os.environ["QDEM_MPI_OUT"], "w") as f:
             json.dump(out, f)

@@ -16,7 +16,7 @@ from yade import O, utils
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
 case = sys.argv[1]
-rank = qdem.parallel.rank()
+rank = qdem.mpi.rank()
 mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000, viscosity=5, radius=0.004)
 piece = qdem.addPiece(qdem.boxMesh((0.2, 0.1, 0.05), (8, 4, 2)), mat, pos=(0, 0, 0.1))
 O.bodies.append(utils.wall(0, axis=2, sense=1))

@@ -26,7 +26,7 @@ MPI.COMM_WORLD.Barrier()  # the file is written
 O.load(path)
 O.run(300, True)
 core = qdem.defaultWorld().core
-if qdem.parallel.isWriter():
+if qdem.mpi.isWriter():
     print("RESULT " + json.dumps({"ranks": core.mpiSize, "iter": [cont[2], core.iter],
                                   "dx": float(abs(core.pos - cont[0]).max()),
                                   "floor": [cont[1][2], list(O.forces.f(0))[2]]}), flush=True)

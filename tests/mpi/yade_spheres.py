@@ -101,7 +101,7 @@ for step in range(STEPS):
     if SAVE and step == AT:
         O.save(SAVE)
     if (step + 1) % CHUNK == 0:
-        n = qdem.parallel.summedCounts(core)["sphere"]
+        n = qdem.mpi.summedCounts(core)["sphere"]
         series.append([n] + list(O.forces.f(0)) + [core.energy["total"]])
 ledger = momentum() - p0 - impulse - totalMass() * G * (O.time - t0)
 out = {"ranks": core.mpiSize, "threads": THREADS, "series": series, "pos": np.array(core.pos).tolist(),
@@ -138,7 +138,7 @@ if SAVE:
         O.step()
     out["reloaded"] = {"iter": [cont[2], core.iter], "dx": float(np.abs(np.array(core.pos) - cont[0]).max()),
                        "dSphere": float(np.abs(np.array(sphereStates()) - np.array(cont[1])).max())}
-if qdem.parallel.isWriter():
+if qdem.mpi.isWriter():
     if os.environ.get("QDEM_MPI_OUT"):  # a long line: other ranks' exit messages would cut into it
         with open(os.environ["QDEM_MPI_OUT"], "w") as f:
             json.dump(out, f)

@@ -219,7 +219,7 @@ def test_energy_ledger_balances_with_implicit_viscosity(scene):
     worst = 0.0
     for _ in range(30):
         O.run(int(0.01 / O.dt), True)
-        total = sum(O.energy[k] for k in qdem.engine.ENERGY_KEYS.values())
+        total = sum(O.energy[k] for k in qdem.yade.engine.ENERGY_KEYS.values())
         worst = max(worst, abs(total))
     assert O.energy["qdemGravWork"] < 0
     assert O.energy["qdemViscDissip"] > 0.05 * abs(O.energy["qdemGravWork"])

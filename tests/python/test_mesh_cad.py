@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import qdem
-from qdem import cad
+from qdem.io import cad
 
 gmsh = pytest.importorskip("gmsh")
 

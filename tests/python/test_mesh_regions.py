@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import qdem
-from qdem import cad
+from qdem.io import cad
 
 
 def _twoBlocksMsh(path, physical=True):

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import qdem
-import qdem.shogi
+import qdem.scenes.shogi
 from qdem import meshchecks
 
 from conftest import lame
@@ -214,8 +214,8 @@ def test_tetgen_with_quality_gives_no_warning(scene, tmp_path):
     lambda: qdem.boxMesh((0.1, 0.2, 0.1), (3, 7, 2), tetsPerCell=5),
     lambda: qdem.ballMesh(0.05, 0.012),
     lambda: qdem.ballMesh(0.15, 0.075),
-    lambda: qdem.shogi.mesh("king"),
-    lambda: qdem.shogi.mesh("pawn"),
+    lambda: qdem.scenes.shogi.mesh("king"),
+    lambda: qdem.scenes.shogi.mesh("pawn"),
 ], ids=["box", "box5", "ball", "coarseBall", "shogiKing", "shogiPawn"])
 def test_good_meshes_give_no_warning(scene, make):
     mesh, mat = make(), _mat(viscosity=50.0)

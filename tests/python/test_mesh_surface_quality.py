@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import qdem
-from qdem import shogi
+from qdem.scenes import shogi
 from qdem.shapes import icosphere
 
 sys.path.insert(0, os.path.dirname(__file__))

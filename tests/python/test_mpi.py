@@ -494,7 +494,7 @@ _serialMpy = {}
 def test_yade_mpy_spheres_and_clump_as_serially(scene, P):
     # The same script serially and under yade.mpy on P ranks (doc/parallel.md,
     # "Under yade.mpy"): mpy's master keeps the floor, the workers the spheres
-    # (placed by qdem.parallel.assignSubdomains), QDEM's nodes go to the
+    # (placed by qdem.yade.mpy.assignSubdomains), QDEM's nodes go to the
     # workers; obstacles and spheres near pieces are gathered every step.
     requireMpi()
     if scene not in _serialMpy:  # the serial run with 1 and 2 QDEM threads (their difference is the licence)

@@ -246,7 +246,7 @@ def test_what_yade_moves_is_what_the_limit_counts(scene):
     translations only: 1/m alone.  A clump member: its clump's mass and
     inertia, and its distance from the clump's centre."""
     from yade import utils
-    from qdem import yadeglue
+    from qdem.yade import glue as yadeglue
     O = scene
     ids = [O.bodies.append(utils.box((0.3 * i, 0, 1), (0.05, 0.05, 0.01), fixed=(i == 0))) for i in range(4)]
     O.bodies[ids[1]].state.blockedDOFs = "xyzXYZ"

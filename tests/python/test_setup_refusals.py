@@ -585,7 +585,7 @@ def test_a_saved_edge_feature_angle_above_pi_loads_as_the_angle_it_acted_as():
     """A review's case: scenes saved with edgeFeatureAngle above pi (accepted
     before: "above pi: none", the help said) must still load: the angle went
     through a cosine, so it acted as acos(cos(v))."""
-    from qdem import lifecycle
+    from qdem.yade import lifecycle
     with pytest.warns(RuntimeWarning, match=r"edgeFeatureAngle = 4, above pi.*acos\(cos\(4\)\) = 2.28319"):
         s = lifecycle.savedSettings({"edgeFeatureAngle": 4.0, "verletSkin": 0.5})
     assert s == {"edgeFeatureAngle": pytest.approx(math.acos(math.cos(4.0))), "verletSkin": 0.5}

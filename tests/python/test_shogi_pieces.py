@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import qdem
-from qdem import shogi
+from qdem.scenes import shogi
 
 
 def _angles(p):

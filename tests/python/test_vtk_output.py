@@ -11,7 +11,7 @@ import pytest
 
 import qdem
 from conftest import rubber
-from qdem.vtu import readVtu
+from qdem.io.vtu import readVtu
 
 
 def test_recorder_series_reads_back_in_vtk(scene, tmp_path):
@@ -77,7 +77,7 @@ def test_frames_follow_yades_clock_when_qdem_joins_a_running_scene(scene, tmp_pa
 
 
 def test_vtu_refuses_nan_and_leaves_no_partial_file(tmp_path):
-    from qdem.vtu import writeVtu
+    from qdem.io.vtu import writeVtu
     path = str(tmp_path / "nan.vtu")
     with pytest.raises(ValueError, match="NaN"):
         writeVtu(path, np.eye(4, 3), [[0, 1, 2, 3]], pointData={"v": np.full(4, np.nan)})
@@ -134,7 +134,7 @@ def _project(points, focal, position, up, angle, size):
 
 
 def test_front_pieces_are_the_moving_ones_and_their_neighbours():
-    from qdem.render import frontPieces
+    from qdem.io.render import frontPieces
     w, pieces = _line()
     centres = [p.refPos.mean(axis=0) for p in pieces]
     speeds = [np.sqrt((p.vel ** 2).sum(axis=1)).max() for p in pieces]
@@ -149,7 +149,7 @@ def test_front_pieces_are_the_moving_ones_and_their_neighbours():
 def test_camera_follows_the_front():
     """The follow camera has the front pieces (and one either side) filling
     the picture, seen obliquely, and the line's ends out of it."""
-    from qdem.render import camera
+    from qdem.io.render import camera
     w, pieces = _line()
     size = (1280, 800)
     front = np.vstack([pieces[k].pos for k in (3, 4, 5, 6)])

@@ -83,7 +83,7 @@ def test_energy_goes_to_O_energy_and_balances(scene):
     for _ in range(30):
         O.run(int(0.01 / O.dt), True)
         e = O.energy
-        total = sum(e[k] for k in qdem.engine.ENERGY_KEYS.values())
+        total = sum(e[k] for k in qdem.yade.engine.ENERGY_KEYS.values())
         worst = max(worst, abs(total))
     keys = set(k for k, _ in O.energy.items())
     assert {"qdemKinetic", "qdemElastic", "qdemGravWork", "qdemViscDissip"} <= keys

@@ -467,7 +467,7 @@ def test_a_command_finds_its_engine_in_O_engines_and_nowhere_else(tmp_path):
     object is looked up in O.engines (YADE hands back the Python object): no
     table of engines keeps one alive or findable once it left O.engines."""
     from yade import O, ForceResetter, NewtonIntegrator
-    from qdem import lifecycle
+    from qdem.yade import lifecycle
     O.reset()
     e = qdem.QdemEngine(label="qeFind")
     r = qdem.VtkRecorder(fileBase=str(tmp_path / "find-"), iterPeriod=10)

@@ -16,7 +16,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import qdem  # noqa: E402
-from qdem import _core, shogi  # noqa: E402
+from qdem import _core  # noqa: E402
+from qdem.scenes import shogi  # noqa: E402
 from qdem.mesh import Mesh  # noqa: E402
 
 from benchutil import floorAndGravity, msPerStep  # noqa: E402

@@ -23,28 +23,29 @@ no share, as it holds no spheres), and `assignSubdomains` puts each sphere
 (each clump, members with it) on the worker owning the piece surface nearest
 to it, so that spheres live with the surface they touch.  Proxy bodies are
 not used: bodies appended after mpy's split break its ids."""
-import sys
-
 import numpy as np
+from yade import O, Vector3
 
-from . import yadeglue
+from .. import _core
+from ..mpi import ranks
+from ..world import defaultWorld
+from . import glue as yadeglue
 from .spheres import sphereProperties
 
 _ROW = 19  # id, radius, young, ks/kn, friction, restitution, mass, pos (3), vel (3), angVel (3), spin centre (3)
 
 
-def module():
-    """yade.mpy when the script runs under it on more than one rank, else None."""
-    mp = sys.modules.get("yade.mpy")
-    if mp is None or getattr(mp, "comm", None) is None or (getattr(mp, "numThreads", 1) or 1) <= 1:
-        return None
-    return mp
+module = ranks.mpyModule  # yade.mpy when the script runs under it on more than one rank, else None
 
 
 def attach(world):
     """Splits `world` over mpy's ranks, the master (rank 0) owning no node.
-    Collective: every rank's QdemEngine calls it at its first step."""
+    Collective: every rank's QdemEngine calls it at its first step, once mpy
+    has split the scene (O.splitted)."""
     mp = module()
+    if world.core.mpiSize > 1:
+        return
+    ranks.requireMpi(mp.numThreads)
     world.core.setCommunicator(mp.comm, firstRank=1)
 
 
@@ -70,12 +71,10 @@ def assignSubdomains(world=None):
     mp = module()
     if mp is None:
         return {}
-    from yade import O
-    from .world import defaultWorld
     w = world or defaultWorld()
     core = w.core
     if core.nPieces == 0:
-        raise RuntimeError("qdem.mpyglue.assignSubdomains: the QDEM world has no piece yet: add the pieces first "
+        raise RuntimeError("qdem.yade.mpy.assignSubdomains: the QDEM world has no piece yet: add the pieces first "
                            "(the spheres go to the ranks owning the surfaces near them)")
     owner = np.asarray(core.splitPreview(mp.numThreads, 1))
     surf = np.asarray(core.surfaceNodeIds)
@@ -158,7 +157,6 @@ class MpyCoupling:
 
     # -- per step ------------------------------------------------------------------
     def beforeStep(self, O):
-        from . import _core
         core = self.world.core
         if self.comm is None:
             self.comm = self.mp.comm.Dup()
@@ -225,7 +223,6 @@ class MpyCoupling:
             rows = [(i, r) for i, r in zip(self.coreObstacleIds, core.obstacleReactions()) if i in mine]
             yadeglue.applyReactions(O, [i for i, _ in rows], [r for _, r in rows])
         if len(self.sphereIds) and self.sphereBodies:
-            from yade import Vector3
             mine = {bid for bid, _ in self.sphereBodies}
             ft = core.sphereForceTorque()
             for bid, f in zip(self.sphereIds.tolist(), ft):
@@ -263,3 +260,6 @@ def _obstacle(_core, d):
     else:
         o.setVertices(*[np.array(v) for v in d[3]])
     return o
+
+
+__all__ = ["assignSubdomains"]

@@ -11,8 +11,8 @@ import warnings
 
 import numpy as np
 
-from . import _core
-from .mesh import Mesh
+from .. import _core
+from ..mesh import Mesh
 
 # File kinds by extension: those that carry their length unit (OpenCASCADE
 # converts them to metres on import) and BREP, which holds bare numbers.

@@ -24,6 +24,7 @@ How (doc/yade.md): importing qdem wraps a few methods of YADE's Omega class
   itself (``except qdem.StabilityError`` works, message intact), where YADE
   would give a generic ``RuntimeError: PyRunner error.``."""
 import base64
+import builtins
 import functools
 import io
 import json
@@ -35,20 +36,36 @@ import warnings
 import weakref
 
 import numpy as np
+from yade import O as _O, wrapper
 
-from . import parallel
+from .. import world as worldModule
+from ..io.restart import _markLoaded
+from ..material import QdemMat
+from ..mpi import ranks as parallel
+from ..piece import Piece
 
 FORMAT = 1
 TAG = "qdem"
 
 # No table of engines: O.engines hands back the QdemEngine and VtkRecorder
 # objects themselves (YADE keeps the Python object of a Python subclass), so
-# a command finds its engine there by the id it names (qdemObject).
+# a command finds its engine there by the id it names (qdemObject).  The
+# classes saved with the scene register here (savedWithScene): this module
+# sits below them (they use its ids, errors and engine lookup) and never
+# imports them.
+_KINDS = {}  # class name -> class, of the engines O.save keeps (QdemEngine, VtkRecorder)
 _pending = []  # the QDEM exception of the step that failed, for the wrappers of O.run/O.step/O.wait
 
 
 def newId():
     return uuid.uuid4().hex[:16]
+
+
+def savedWithScene(cls):
+    """Class decorator: `cls` (a PyRunner subclass with qdemId, savedState and
+    fromSaved) is saved with the scene by O.save and rebuilt by O.load."""
+    _KINDS[cls.__name__] = cls
+    return cls
 
 
 # ---------------------------------------------------------------------------
@@ -61,7 +78,6 @@ def _coreSettings(core):
 
 def sceneBlob(world, O):
     """Everything needed to rebuild `world` and the QDEM engines of O.engines, as a string."""
-    from .material import QdemMat
     core = world.core
     meta = {"format": FORMAT, "settings": _coreSettings(core), "materials": [], "pieces": [], "engines": {}}
     arrays = {}
@@ -147,9 +163,6 @@ def restoreWorld(blob, into=None):
     """A new default world built from a sceneBlob string; returns (world, engine
     states).  With `into`, a world holding the same pieces (_sameWorld): only
     its state and settings are loaded."""
-    from . import world as worldModule
-    from .material import QdemMat
-    from .piece import Piece
     data, meta = _readBlob(blob)
     if into is not None:
         for k, v in savedSettings(meta["settings"]).items():
@@ -174,7 +187,6 @@ def restoreWorld(blob, into=None):
     for k, v in savedSettings(meta["settings"]).items():
         setattr(w.core, k, v)
     w.core.loadState({k[6:]: data[k].tobytes() for k in data.files if k.startswith("state:")})
-    from .restart import _markLoaded
     _markLoaded(w)  # a VtkRecorder made after O.load goes on with the saved run's series
     return w, meta["engines"]
 
@@ -200,9 +212,7 @@ def _idOf(e):
 def _rebind(O, engineStates):
     """Replace the plain PyRunners of QDEM engines in O.engines by the engine
     objects, built from their saved settings; labels follow."""
-    from .engine import QdemEngine
-    from .recorder import VtkRecorder
-    kinds = {"QdemEngine": QdemEngine, "VtkRecorder": VtkRecorder}
+    kinds = _KINDS
     out, changed = [], False
     for e in O.engines:
         qid = _idOf(e)
@@ -215,7 +225,6 @@ def _rebind(O, engineStates):
         changed = True
     if changed:
         O.engines = out
-        import builtins
         for obj in out:
             lab = getattr(obj, "label", "")
             if lab and _idOf(obj):
@@ -226,7 +235,6 @@ def _rebind(O, engineStates):
 def afterLoad(O, how="O.load"):
     """Bring QDEM in line with a scene YADE has just loaded (by `how`, the
     method the script called: named in the refusal of stale Piece handles)."""
-    from . import world as worldModule
     _found.clear()
     blob = _blob(O)
     qdemEngines = [e for e in O.engines if _idOf(e)]
@@ -263,9 +271,7 @@ def afterLoad(O, how="O.load"):
 
 def qdemObject(e):
     """e itself when it is a QdemEngine or a VtkRecorder, else None."""
-    from .engine import QdemEngine
-    from .recorder import VtkRecorder
-    return e if isinstance(e, (QdemEngine, VtkRecorder)) else None
+    return e if isinstance(e, tuple(_KINDS.values())) else None
 
 
 def _inEngines(O, qid):
@@ -289,17 +295,15 @@ def engineFor(qid):
     obj = ref() if ref is not None else None
     if obj is not None:
         return obj
-    from yade import O
-    obj = _inEngines(O, qid)
+    obj = _inEngines(_O, qid)
     if obj is not None:
         _found[qid] = weakref.ref(obj)
         return obj
-    if _blob(O):
-        afterLoad(O)
-        obj = _inEngines(O, qid)
+    if _blob(_O):
+        afterLoad(_O)
+        obj = _inEngines(_O, qid)
         if obj is not None:
             return obj
-    from . import parallel
     if parallel._mpyInUse():
         # A yade.mpy worker whose scene mpy replaced by the master's without
         # QDEM's state (O.sceneToString not wrapped: qdem imported too late).
@@ -380,9 +384,8 @@ def _settle(O):
 
 def _wrapSave(orig, toFile=True):
     def wrapped(self, *a, **k):
-        from .world import defaultWorld
         _settle(self)
-        w = defaultWorld()
+        w = worldModule.defaultWorld()
         qdemScene = w.pieces or any(_idOf(e) for e in self.engines)
         if qdemScene and self.running and threading.current_thread() is threading.main_thread():
             # The loop thread goes on stepping while QDEM's part is written
@@ -437,7 +440,6 @@ def _forgetEngines(O, how=None):
 
 def _resetWorld(O, how=None):
     _found.clear()
-    from . import world as worldModule
     worldModule.reset()
 
 
@@ -447,7 +449,6 @@ _wrapReset = _wrapAfter(_resetWorld)   # reset, resetThisScene, resetCurrentScen
 
 def install():
     """Wrap Omega's methods (once per process)."""
-    from yade import wrapper
     Omega = wrapper.Omega
     plan = {"run": _wrapErrors, "step": _wrapErrors, "wait": _wrapErrors,
             "save": _wrapSave, "saveTmp": lambda o: _wrapSave(o, toFile=False),

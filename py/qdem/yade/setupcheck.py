@@ -36,6 +36,9 @@ step is 100 or more times larger (a one-time warning naming that step)."""
 import math
 import warnings
 
+from yade.wrapper import CombinedKinematicEngine, RotationEngine, ServoPIDController, TimeStepper
+
+from ..mpi import ranks as parallel
 from . import lifecycle
 
 #: O.dt of a new YADE scene (``O.reset(); O.dt`` in YADE 2023.02a).
@@ -145,7 +148,6 @@ def _warnTurningFirst(engine, engines, i):
     After QdemEngine its vel is the step just made's: exact."""
     if engine._warnedTurning or not engine.world.pieces:
         return
-    from yade.wrapper import CombinedKinematicEngine, RotationEngine
 
     def turning(e):
         if isinstance(e, CombinedKinematicEngine):  # (YADE's RotationEngine(...) + TranslationEngine(...))
@@ -173,7 +175,6 @@ def _checkTimeSteppers(engines, i, newton):
     tests/python/test_setup_refusals.py).  YADE's own order puts it right
     before NewtonIntegrator, which is where a user inserting QdemEngine
     after InteractionLoop leaves it."""
-    from yade.wrapper import TimeStepper
     for k in range(i + 1, newton):
         e = engines[k]
         if isinstance(e, TimeStepper) and not e.dead and getattr(e, "active", True):
@@ -192,7 +193,6 @@ def _checkForceReaders(O, engine, engines, i, newton):
     the servo reads it (else YADE stops: "ForceContainer not
     thread-synchronized"), which QdemEngine then does after adding its
     reactions (engine._syncForces)."""
-    from yade.wrapper import ServoPIDController
     coupled = ("Wall", "Box", "Facet", "Sphere", "Clump")
 
     def touches(e):
@@ -226,7 +226,6 @@ def noteDefaultDt(engine, O, dt):
     if not (stable >= 100 * dt and math.isfinite(stable)):  # (inf: no piece yet, nothing to compare)
         return
     engine._warnedDefaultDt = True
-    from . import parallel
     if not parallel.isWriter():
         return
     name = "this QdemEngine" + (" (label %r)" % engine.label if engine.label else "")

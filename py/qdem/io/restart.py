@@ -21,8 +21,8 @@ import zipfile
 
 import numpy as np
 
-from . import parallel
-from .world import defaultWorld
+from ..mpi import ranks as parallel
+from ..world import defaultWorld
 
 FORMAT = 1
 
@@ -31,10 +31,10 @@ _loads = itertools.count(1)  # numbers each loadState: a VtkRecorder follows eac
 
 def _markLoaded(world):
     """The world's state was loaded at its present step: its VtkRecorders
-    (recorder.py, VtkRecorder._sync) keep their frames up to this step - from
+    (qdem.yade.recorder, VtkRecorder._sync) keep their frames up to this step - from
     their .pvd when they have none, a restart in a new process - and time
     their next frame from it, on their period grid.  (Not imported from
-    recorder.py: qdem without YADE has no recorder.)"""
+    qdem.yade.recorder: qdem without YADE has no recorder.)"""
     world._stateLoaded = (int(world.core.iter), float(world.core.time), next(_loads))
 
 

@@ -3,7 +3,7 @@ dir() show the engine's own documented attributes and methods, not the ~140
 lines YADE's PyRunner, PeriodicEngine, Engine and Serializable add."""
 from yade import PyRunner
 
-from .attrs import AttrObject
+from ..attrs import AttrObject
 
 
 class EngineMeta(type(PyRunner)):

@@ -8,10 +8,17 @@ exchanges its halo; walls, boxes, facets and YADE spheres (clump members too)
 are known on every rank, their forces summed over the ranks, so every rank's
 copy of YADE moves alike.  After each step (QdemEngine.gatherPeriod)
 every rank learns every node's state again, so scripts read ``piece.pos`` as
-usual; rank 0 alone writes files."""
-import os
+usual; rank 0 alone writes files.
 
-from . import _core
+Below the YADE host (qdem.yade): nothing here imports YADE.  Under yade.mpy
+the host's glue (qdem.yade.mpy) splits the world over mpy's communicator;
+this module only tells whether yade.mpy is in use (mpyModule)."""
+import atexit
+import os
+import sys
+
+from .. import _core
+from .. import world as _world
 
 
 _launched = None  # launchedSize(): mpiexec's environment does not change within a process
@@ -57,31 +64,43 @@ MPY_UNSPLIT = (
     "yade.mpy'), or do not import yade.mpy and run the script under plain `mpiexec -n P yade -n -x script.py`.")
 
 
+def mpyModule():
+    """yade.mpy when the script runs under it on more than one rank, else None
+    (read from sys.modules: this never imports YADE or MPI)."""
+    mp = sys.modules.get("yade.mpy")
+    if mp is None or getattr(mp, "comm", None) is None or (getattr(mp, "numThreads", 1) or 1) <= 1:
+        return None
+    return mp
+
+
 def _mpyInUse():
-    from . import mpyglue
-    return mpyglue.module() is not None
+    return mpyModule() is not None
 
 
-def attach(world):
-    """Splits `world` across the ranks mpiexec started (a no-op serially, and
-    when it is already split).  Called by QdemEngine at its first step."""
-    from . import mpyglue
-    mp = mpyglue.module()
-    size = mp.numThreads if mp is not None else launchedSize()
-    core = world.core
-    if size <= 1 or core.mpiSize > 1:
-        return
+def requireMpi(size):
+    """Raises the error naming the fix when this build of qdem has no MPI."""
     if not _core.hasMPI:
         raise RuntimeError(
             "qdem: started by mpiexec with %d ranks, but this build of qdem has no MPI (Open MPI or mpi4py were "
             "missing when it was built): apt-get install libopenmpi-dev openmpi-bin python3-mpi4py, then make "
             "build again (or run without mpiexec)" % size)
-    if mp is not None:
-        from yade import O
-        if not getattr(O, "splitted", False):
-            raise RuntimeError(MPY_UNSPLIT % size)
-        mpyglue.attach(world)  # over mpy's communicator, its master owning no node
+
+
+def attach(world):
+    """Splits `world` across the ranks a plain mpiexec started (a no-op
+    serially, and when it is already split).  Called by QdemEngine at its
+    first step; under yade.mpy the engine splits over mpy's communicator
+    instead (qdem.yade.mpy.MpyCoupling.attach), once mpy has split the scene:
+    before that, stepping QDEM on several ranks is refused here."""
+    mp = mpyModule()
+    size = mp.numThreads if mp is not None else launchedSize()
+    core = world.core
+    if size <= 1 or core.mpiSize > 1:
         return
+    requireMpi(size)
+    if mp is not None:  # yade.mpy imported, its scene not split (mp.mpirun not called): stepped by O.run
+        raise RuntimeError(MPY_UNSPLIT % size)
+    # (mpi4py imported here, not at the top: a serial run never loads MPI)
     from mpi4py import MPI
     core.setCommunicator(MPI.COMM_WORLD)
     global _plainSplit
@@ -140,7 +159,6 @@ def abortOnError():
     then waited for good in the next step's exchange (a typo inside
     ``if rank == 0:`` hung the job until its time limit).  Installed when
     qdem is imported; a no-op serially and under yade.mpy."""
-    import sys
     if _plainMpiRanks() <= 1 or getattr(sys.exit, "_qdemAbort", False):
         return
     plainExit = sys.exit
@@ -156,7 +174,6 @@ def abortOnError():
         plainExit(code)
     exitOrAbort._qdemAbort = True
     sys.exit = exitOrAbort
-    import atexit
     atexit.register(_agreeOnScriptEnd)  # (plain Python scripts under mpiexec)
     if "yade.mpy" not in sys.modules:
         sys.meta_path.insert(0, _MpyEndHook())
@@ -183,7 +200,6 @@ class _MpyEndHook:
     def find_spec(self, name, path=None, target=None):
         if name != "yade.mpy":
             return None
-        import sys
         for f in sys.meta_path:
             if f is self or not hasattr(f, "find_spec"):
                 continue
@@ -221,8 +237,6 @@ def _agreeOnScriptEnd():
     if not _plainSplit or _endAgreed:
         return
     _endAgreed = True
-    import sys
-    from . import world as _world
     w = _world._default
     try:
         if w is not None and w.core.mpiSize > 1:
@@ -250,13 +264,3 @@ def summedCounts(core):
     return {k: (c[k] if k in _NOT_SUMMED else sum(r[i] for r in every)) for i, k in enumerate(keys)}
 
 
-def assignSubdomains(world=None):
-    """Under yade.mpy, before ``mp.mpirun``: sets each YADE sphere's and
-    clump's ``Body.subdomain`` from QDEM's own split, so that it lives on the
-    worker owning the piece surface nearest to it (mpyglue.assignSubdomains;
-    doc/parallel.md, 'Under yade.mpy').  A no-op serially and under plain
-    mpiexec; returns {rank: bodies placed}."""
-    from . import mpyglue
-    return mpyglue.assignSubdomains(world)
-
-__all__ = ["assignSubdomains", "rank", "isWriter", "launchedSize"]

@@ -17,11 +17,16 @@ import weakref
 import numpy as np
 from yade import O, PyRunner
 
-from . import _core, lifecycle, meshchecks, mpyglue, parallel, setupcheck, yadeglue
+from .. import _core, meshchecks
+from ..attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
+from ..mpi import ranks as parallel
+from ..world import FollowsDefaultWorld
+from . import glue as yadeglue
+from . import lifecycle, setupcheck
+from . import mpy as mpyglue
+from .enginemeta import EngineMeta
+from .recorder import initialFrames
 from .spheres import SphereCoupling
-from .attrs import Attr, AttrObject, WorldSetting, boolean, documented, integer, number, worldSettings
-from .yadeclass import EngineMeta
-from .world import FollowsDefaultWorld
 
 _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int32), np.zeros(0, np.int32)]
 
@@ -38,6 +43,7 @@ def _shapeNames(v):
     return None
 
 
+@lifecycle.savedWithScene
 @documented
 class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     """Steps the QDEM world each YADE iteration.  Keyword construction as for any
@@ -138,7 +144,7 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self.qdemId = qdemId or lifecycle.newId()
         # The command names the engine by an id that YADE saves with the scene:
         # after O.load the engine is rebuilt from O.tags['qdem'] (lifecycle.py).
-        self.command = "import qdem.engine; qdem.engine._step('%s')" % self.qdemId
+        self.command = "import qdem.yade.engine; qdem.yade.engine._step('%s')" % self.qdemId
         self._freshRunState()
 
     def _ownsSettings(self):
@@ -197,7 +203,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._warnedEdges = set()
         self._spheres = None  # SphereCoupling, once a sphere is seen
         self._sphereVersion = None
-        self._mpy = None      # MpyCoupling under yade.mpy (mpyglue.py)
+        self._mpy = None      # MpyCoupling under yade.mpy (mpy.py)
+        self._obstacleLink, self._sphereLink, self._mpyLink = _Obstacles(self), _Spheres(self), _Mpy(self)
 
     def _worldReplaced(self, old, new):
         """O.reset() replaced the default world: the new one takes this engine's
@@ -322,7 +329,6 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             self._states = np.zeros((len(self._ids), 16))
             self._seen = [None] * len(self._ids)  # (obstacleStates: what the rows were written from)
             self._nBodies = len(O.bodies)
-            self._dtChecked = None
         if self._ids:
             reshaped, written = [], []
             states = yadeglue.obstacleStates(O, self._ids, self._states, self._signatures, reshaped, self._seen,
@@ -343,11 +349,19 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                     self._obstacles[i] = o
                     self._signatures[i] = yadeglue.bodySignature(b)
                 core.setObstacles(self._obstacles)
-                self._dtChecked = None
                 self._seen = [None] * len(self._ids)
                 states = yadeglue.obstacleStates(O, self._ids, self._states, seen=self._seen, written=written)
             self._posDriven.watch(O, self._ids, states, bool(written))
             core.setObstacleStates(states)
+
+    def _couplings(self):
+        """This step's couplings with YADE, in order: each takes YADE's state into QDEM
+        before the step (beforeStep(O)) and QDEM's forces into O.forces after it
+        (afterStep(O)).  Under yade.mpy one, gathering obstacles and spheres from
+        their owners (mpy.py); else the walls, boxes and facets, then the spheres."""
+        if self._mpy is not None:
+            return (self._mpyLink,)
+        return (self._obstacleLink, self._sphereLink)
 
     def _run(self):
         core = self.world.core
@@ -387,52 +401,27 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                              "vector" % (tuple(g),))
         core.gravity = g
         core.trackEnergy = bool(O.trackEnergy)
-        coupling = None
-        if self._mpy is not None:
-            # yade.mpy: obstacles and spheres gathered from their owners (mpyglue.py)
-            t0 = time.perf_counter()
-            self._mpy.margin = float(self.sphereMargin)
-            self._mpy.beforeStep(O)
-            self._mpy.seconds += time.perf_counter() - t0
-        else:
-            self._syncObstacles()
-            if any(name not in self.ignoreShapes for _, name in self._unfelt):
-                # (scanned when O.bodies grew: scanned again, as an erased one keeps its length)
-                self._unfelt = yadeglue.unfeltBodies(O)
-                unfelt = [(i, name) for i, name in self._unfelt if name not in self.ignoreShapes]
-                if unfelt:
-                    raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
-            coupling = self._spheres if self.spheres and core.nPieces else None
-        if coupling is not None:
-            t0 = time.perf_counter()
-            coupling.margin = float(self.sphereMargin)
-            # spheres edited by the script: every sphere at the start of a run and every checkPeriod
-            # steps, their materials' values every step
-            fullCheck = self._runStart is not None and (self._runStart[0] == O.iter or (
-                self.checkPeriod and O.iter % self.checkPeriod == 0))
-            coupling.checkChanged(O, fullCheck)
-            coupling.beforeStep(O)
-            coupling.seconds += time.perf_counter() - t0
-        elif core.nSpheres and self._mpy is None:
-            core.setSpheres(*_NO_SPHERES)
+        couplings = self._couplings()
+        for c in couplings:  # YADE's state into QDEM
+            c.beforeStep(O)
         dt = O.dt
-        spheresVersion = coupling.version if coupling else (self._mpy.version if self._mpy else None)
-        key = (dt, core.nPieces, self.viscosity, self.viscousIntegration, self.friction, self.frictionModel,
-               spheresVersion)
+        # O.dt is checked again when it or anything the stable step depends on changed (the core's version)
+        key = (dt, core.stableStepVersion)
         if self.checkDt and self._dtChecked != key:
             core.checkDt(dt)
             self._dtChecked = key
         if dt == setupcheck.YADE_DEFAULT_DT and not self._warnedDefaultDt and self._dtNoted != key:
             setupcheck.noteDefaultDt(self, O, dt)
             self._dtNoted = key
-        if core.mpiSize == 1 and (parallel.launchedSize() > 1 or self._mpy is not None):
+        if core.mpiSize == 1 and self._mpy is not None:
+            mpyglue.attach(self.world)  # split over mpy's ranks (collective: every rank runs this engine)
+        elif core.mpiSize == 1 and parallel.launchedSize() > 1:
             parallel.attach(self.world)  # split across the ranks (collective: every rank runs this engine)
         if core.iter == 0 and core.time == 0.0:
             # A world's first step: its clock starts at YADE's (the engine may
             # join a scene that has run), so frames are named by O.iter and
             # timed by O.time; then the frame of the initial state.
             core.iter, core.time = int(O.iter), float(O.time)
-            from .recorder import initialFrames
             initialFrames(self.world)
         elif getattr(self.world, "_stepMark", None) is not None and self._mpy is None:
             # YADE made steps this engine did not (it was dead, or out of
@@ -460,16 +449,8 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         # Where YADE's next step starts, and QDEM's step now: kept with the
         # world, so that a new engine on it notices steps none made.
         self.world._stepMark = (int(O.iter) + 1, float(O.time) + dt, core.iter)
-        if self._mpy is not None:
-            t0 = time.perf_counter()
-            self._mpy.afterStep(O)
-            self._mpy.seconds += time.perf_counter() - t0 + core.sphereSeconds
-        elif self._ids:
-            yadeglue.applyReactions(O, self._ids, core.obstacleReactions())
-        if coupling is not None:
-            t0 = time.perf_counter()
-            coupling.afterStep(O)
-            coupling.seconds += time.perf_counter() - t0 + core.sphereSeconds
+        for c in couplings:  # QDEM's forces into O.forces
+            c.afterStep(O)
         if self._syncForces and len(O.bodies):
             # A ServoPIDController follows and reads O.forces, which YADE
             # 2023.02a refuses unsynchronised after addF (setupcheck._checkForceReaders).
@@ -478,24 +459,17 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             for k, v in core.energy.items():
                 if k in ENERGY_KEYS:
                     O.energy[ENERGY_KEYS[k]] = v
-        checking = self.checkPeriod and core.iter % self.checkPeriod == 0
-        if core.mpiSize > 1 and (checking or (self.gatherPeriod and core.iter % self.gatherPeriod == 0)):
-            core.gatherAll()  # every rank sees every node: the checks agree, scripts read current arrays
         for msg in core.takeStartWarnings():  # pieces placed pressed into an obstacle: at once (they are thrown)
             warnings.warn(msg, RuntimeWarning, stacklevel=3)
-        if checking and core.trackEnergy and self.energyDrift > 0 and not core.nSpheres:
-            self._checkLedger(core)
-        if checking:
-            self._checkInverted(core, dt)  # first: an inverted element is named as inverted
-            if self.checkDt:  # then: a strained, stiffened element is named before it blows up
-                core.checkCurrentDt(dt)
-            core.checkFinite()
-            if core.nPieces > 1:  # a node sunk into another piece beyond the contact's reach
-                core.checkDeepOverlap()
-            if core.nSpheres and core.nPieces:  # a YADE sphere sunk into (or placed in) a piece
-                core.checkSpheresInside()
+        # The checks due at this step, scheduled and run by the core (every checkPeriod steps;
+        # under MPI every node gathered first, and every gatherPeriod steps for the scripts).
+        checked = core.periodicChecks(int(self.checkPeriod), int(self.gatherPeriod), dt, bool(self.checkDt))
+        if checked is not None:
+            self._noteInverted(core, dt, checked["inverted"])
             if core.nObstacles and core.nPieces:
-                self._checkObstacleEdges(core)
+                self._noteObstacleEdges(core, checked["edges"])
+            if core.trackEnergy and self.energyDrift > 0 and not core.nSpheres:
+                self._checkLedger(core)
         if self.progressPeriod and core.iter % self.progressPeriod == 0:
             counts = parallel.summedCounts(core)  # (collective under MPI: every rank gets here)
             if parallel.isWriter():
@@ -533,11 +507,11 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             RuntimeWarning, stacklevel=4)
         self._ledger = dict(ref=total, peak=scale, pieces=core.nPieces, iter=core.iter, since=core.iter)
 
-    def _checkObstacleEdges(self, core):
+    def _noteObstacleEdges(self, core, c):
         """Warns (once per obstacle and piece) when a Box or Facet edge has passed
-        between a piece's surface nodes: pieces feel obstacles at their nodes
-        only, so such an edge cuts into the piece unresisted."""
-        c = core.obstacleEdgeCrossing()
+        between a piece's surface nodes (c: what the core's check found): pieces
+        feel obstacles at their nodes only, so such an edge cuts into the piece
+        unresisted."""
         self.edgeCrossings = c["count"]
         if not c["count"]:
             return
@@ -557,10 +531,9 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                           % (core.iter, c["bodyId"], kind, c["piece"], tuple(round(x, 6) for x in c["point"]),
                              c["count"], self.world.pieces[c["piece"]].material.radius), RuntimeWarning, stacklevel=3)
 
-    def _checkInverted(self, core, dt):
-        # Raises StabilityError (naming piece, element, volume ratio, fix) for a law that
-        # cannot push an inverted element back; counts them otherwise.
-        r = core.checkInverted()
+    def _noteInverted(self, core, dt, r):
+        # r: the core's count of inverted elements (it raised StabilityError, naming piece,
+        # element, volume ratio and fix, for a law that cannot push them back).
         inv, n = self.inverted, r["count"]
         since = core.time - self._lastCheckTime if self._lastCheckTime is not None else self.checkPeriod * dt
         self._lastCheckTime = core.time
@@ -611,6 +584,87 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
             e = core.energy
             line += "  E_kin=%.4g J  E_el=%.4g J" % (e["kinetic"], e["elastic"])
         print(line, flush=True)
+
+
+class _Obstacles:
+    """The coupling with YADE's walls, boxes and facets: their states into QDEM
+    before the step (scanned again when O.bodies changes), their reactions into
+    O.forces after it."""
+
+    def __init__(self, engine):
+        self.engine = engine
+
+    def beforeStep(self, O):
+        e = self.engine
+        e._syncObstacles()
+        if any(name not in e.ignoreShapes for _, name in e._unfelt):
+            # (scanned when O.bodies grew: scanned again, as an erased one keeps its length)
+            e._unfelt = yadeglue.unfeltBodies(O)
+            unfelt = [(i, name) for i, name in e._unfelt if name not in e.ignoreShapes]
+            if unfelt:
+                raise setupcheck.SetupError(setupcheck.unfeltMessage(unfelt))
+
+    def afterStep(self, O):
+        e = self.engine
+        if e._ids:
+            yadeglue.applyReactions(O, e._ids, e.world.core.obstacleReactions())
+
+
+class _Spheres:
+    """The coupling with YADE's spheres and clumps (spheres.py), when the engine
+    couples them and a piece is there; else the core is told of no sphere.
+    Its wall time goes to sphereCouplingTime()."""
+
+    def __init__(self, engine):
+        self.engine = engine
+        self.coupling = None  # the SphereCoupling of this step, if any
+
+    def beforeStep(self, O):
+        e = self.engine
+        core = e.world.core
+        self.coupling = e._spheres if e.spheres and core.nPieces else None
+        c = self.coupling
+        if c is None:
+            if core.nSpheres:
+                core.setSpheres(*_NO_SPHERES)
+            return
+        t0 = time.perf_counter()
+        c.margin = float(e.sphereMargin)
+        # spheres edited by the script: every sphere at the start of a run and every checkPeriod
+        # steps, their materials' values every step
+        fullCheck = e._runStart is not None and (e._runStart[0] == O.iter or (
+            e.checkPeriod and O.iter % e.checkPeriod == 0))
+        c.checkChanged(O, fullCheck)
+        c.beforeStep(O)
+        c.seconds += time.perf_counter() - t0
+
+    def afterStep(self, O):
+        c = self.coupling
+        if c is not None:
+            t0 = time.perf_counter()
+            c.afterStep(O)
+            c.seconds += time.perf_counter() - t0 + self.engine.world.core.sphereSeconds
+
+
+class _Mpy:
+    """The coupling under yade.mpy (mpy.py): obstacles and spheres gathered from
+    the ranks owning them before the step, forces to the owners after it."""
+
+    def __init__(self, engine):
+        self.engine = engine
+
+    def beforeStep(self, O):
+        m = self.engine._mpy
+        t0 = time.perf_counter()
+        m.margin = float(self.engine.sphereMargin)
+        m.beforeStep(O)
+        m.seconds += time.perf_counter() - t0
+
+    def afterStep(self, O):
+        m = self.engine._mpy
+        t0 = time.perf_counter()
+        m.afterStep(O)
+        m.seconds += time.perf_counter() - t0 + self.engine.world.core.sphereSeconds
 
 
 def _duration(s):

@@ -17,20 +17,14 @@ import warnings
 import math
 
 import numpy as np
+import yade
 
-from . import _core, yadeglue
+from .. import _core
+from . import glue as yadeglue
+from .glue import PROXY_LABEL as _PROXY_LABEL, looksLikeProxy  # noqa: F401  (looksLikeProxy: spheres' API)
 
 TAN = np.tan
 _PROXY_MASK_DEFAULT = -1
-_PROXY_LABEL = "qdemProxy"  # material label of the proxy bodies
-
-
-def looksLikeProxy(b):
-    """Is YADE body b one of QDEM's proxy bodies (a non-dynamic Tetra of the
-    proxy material)?"""
-    mat = b.material
-    return (mat is not None and mat.label == _PROXY_LABEL and type(b.shape).__name__ == "Tetra"
-            and not b.dynamic)
 
 
 def _vertices(lo, hi):
@@ -113,7 +107,6 @@ class SphereCoupling:
     def _ensureCollider(self, O):
         if self.collider is None:
             self.collider = self._findCollider(O)
-        import yade
         funcs = list(self.collider.boundDispatcher.functors)
         if not any(type(f).__name__ == "Bo1_Tetra_Aabb" for f in funcs):
             self.collider.boundDispatcher.functors = funcs + [yade.Bo1_Tetra_Aabb()]
@@ -123,7 +116,6 @@ class SphereCoupling:
         return lo - m, hi + m, m
 
     def _placeProxy(self, O, i, lo, hi):
-        import yade
         glo, ghi, _ = self._grownBox(lo, hi)
         centre = 0.5 * (glo + ghi)
         if i < len(self.proxies) and self.proxies[i] >= 0:

@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-from .stress import vonMises
+from ..stress import vonMises
 
 _xvfb = None
 

@@ -14,14 +14,17 @@ import xml.etree.ElementTree as ElementTree
 import zlib
 
 import numpy as np
-from yade import PyRunner
+from yade import O, PyRunner
+from yade.utils import TableParamReader
 
-from . import lifecycle, parallel
-from .attrs import Attr, AttrObject, documented, integer, number
-from .stress import vonMises
-from .vtu import TENSOR6, writePvd, writeVtu
-from .world import FollowsDefaultWorld
-from .yadeclass import EngineMeta
+from ..attrs import Attr, AttrObject, documented, integer, number
+from ..io.vtu import TENSOR6, writePvd, writeVtu
+from ..mpi import ranks as parallel
+from ..stress import vonMises
+from ..world import FollowsDefaultWorld
+from . import lifecycle
+from .enginemeta import EngineMeta
+from .setupcheck import SetupError
 
 _STRESS_TO_PARAVIEW = [0, 1, 2, 5, 3, 4]  # core xx yy zz yz xz xy -> ParaView XX YY ZZ XY YZ XZ
 
@@ -100,12 +103,10 @@ def batchDescription():
     spec = os.environ.get("YADE_BATCH", "")
     if not spec:
         return None
-    from yade import O
     if O.tags.has_key("description") and O.tags["description"]:
         return O.tags["description"]
     table, _, line = spec.rpartition(":")
     try:
-        from yade.utils import TableParamReader
         return TableParamReader(table).paramDict()[int(line)]["description"]
     except Exception:  # (an unreadable table: yade-batch itself would have refused it)
         return "line" + line
@@ -137,6 +138,7 @@ class _FileBaseAttr(Attr):
         return defaultFileBase() if v is None else v
 
 
+@lifecycle.savedWithScene
 @documented
 class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     """Writes ``<fileBase>NNNNNN.vtu`` frames and keeps ``<fileBase>.pvd`` (open it
@@ -183,7 +185,7 @@ class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
         self._seenLoad = None  # the world's last qdem.loadState this recorder followed (restart._markLoaded)
         self._claimed = False  # its .pvd checked against the other recorders' (_claimPvd)
         self.qdemId = qdemId or lifecycle.newId()
-        self.command = "import qdem.recorder; qdem.recorder._record('%s')" % self.qdemId
+        self.command = "import qdem.yade.recorder; qdem.yade.recorder._record('%s')" % self.qdemId
 
     def _worldReplaced(self, old, new):
         """O.reset() replaced the default world: the new scene's frames start a new collection."""
@@ -303,8 +305,6 @@ class VtkRecorder(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     def _claimPvd(self):
         """Refuse a second live recorder writing this one's .pvd: each would
         rewrite the collection with its own frames only, silently."""
-        from yade import O
-        from .setupcheck import SetupError
         mine = os.path.realpath(self.pvdPath())
         for e in O.engines:
             if isinstance(e, VtkRecorder) and e is not self and not e.dead \
@@ -359,7 +359,6 @@ def initialFrames(world):
     world that has no frame yet writes the initial state (step 0, t = 0).  The
     world's clock starts here, so an old .pvd of the same fileBase (a run
     before) is replaced, not continued."""
-    from yade import O
     for e in O.engines:
         if isinstance(e, VtkRecorder) and e.world is world and e._last is None and not e.dead:
             e.record()

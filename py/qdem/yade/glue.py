@@ -1,12 +1,24 @@
-"""Reading YADE's scene: rigid obstacles (Wall, Box, Facet), gravity, O.forces.
-Only this module touches YADE objects, so the rest of qdem runs without YADE."""
+"""Reading YADE's scene: rigid obstacles (Wall, Box, Facet), gravity, O.forces,
+and which bodies are QDEM's own proxies.  The lowest module of the YADE host
+(qdem.yade): the model below it (qdem.world, qdem.piece, ...) runs without YADE."""
 import math
+import warnings
 
 import numpy as np
+from yade import Vector3
 
-from . import _core
+from .. import _core
 
 KIND = {"Wall": 0, "Box": 1, "Facet": 2}
+PROXY_LABEL = "qdemProxy"  # material label of the proxy bodies (spheres.py)
+
+
+def looksLikeProxy(b):
+    """Is YADE body b one of QDEM's proxy bodies (a non-dynamic Tetra of the
+    proxy material)?"""
+    mat = b.material
+    return (mat is not None and mat.label == PROXY_LABEL and type(b.shape).__name__ == "Tetra"
+            and not b.dynamic)
 
 
 def findGravity(O):
@@ -93,7 +105,6 @@ def unfeltBodies(O):
     GridConnection, PFacet, Tetra, ...), less QDEM's own proxy bodies and
     yade.mpy's subdomains.  (Spheres with QdemEngine(spheres=False) are not
     listed: the script asked for that.)"""
-    from .spheres import looksLikeProxy
     out = []
     for b in O.bodies:
         if b is None or b.shape is None:
@@ -203,7 +214,6 @@ def obstacleStates(O, ids, out, signatures=None, reshaped=None, seen=None, writt
 
 def applyReactions(O, ids, reactions):
     """Add each obstacle's reaction force and torque to O.forces."""
-    from yade import Vector3
     rows = np.asarray(reactions, dtype=float).reshape(-1, 6).tolist()  # (Python floats: a NumPy row costs 10x)
     for bid, r in zip(ids, rows):
         if r[0] or r[1] or r[2] or r[3] or r[4] or r[5]:
@@ -234,7 +244,6 @@ class PosDrivenWatch:
         """ids: the engine's list of obstacle ids (the same list object until
         it scans O.bodies again); changed: whether any row of states differs
         from the last call's (False: only the step is new)."""
-        import warnings
         prev = self.prev
         if not changed and self.still and prev is not None and prev[0] is ids and prev[1] == O.iter - 1:
             # Nothing moved and nothing has a velocity, as at the last step:

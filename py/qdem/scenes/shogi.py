@@ -10,7 +10,8 @@ import math
 
 import numpy as np
 
-from .mesh import meshSurface
+from ..mesh import meshSurface
+from ..world import World, defaultWorld
 
 # Rank 0 = largest.  (height, base width, base thickness) in mm.
 _KING = np.array([32.0, 28.7, 9.7])
@@ -103,7 +104,6 @@ def stableScale(material, dt=6.4e-6, kinds=ORDER, margin=1.05):
     every kind of piece meshed as by mesh(): the stable step of these meshes
     grows as scale^2 when viscosity limits it and as scale when elasticity
     does, so the scale is found from one mesh per kind at real size."""
-    from .world import World
     need = 1.0
     for k in kinds:
         w = World()
@@ -128,7 +128,6 @@ def dominoLine(kinds, material, scale=1.0, spacing=0.5, push=1.0, offsets=None, 
     eccentric hits; xs: optional positions along the line, in units of the
     spacing (default 0, 1, 2, ...).  Returns the list of Pieces (meshes are
     made once per kind)."""
-    from .world import defaultWorld
     world = world or defaultWorld()
     meshes = {}
     hMax = max(KINDS[k][0] for k in kinds) * scale * 1e-3
