@@ -7,6 +7,7 @@
 // doc/formulation.md, "Contact law".
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
@@ -45,7 +46,9 @@ struct ContactResult {
 
 // n: unit normal towards the particle; overlap > 0; vRel: particle velocity
 // minus obstacle velocity at the contact point; shear: tangential spring
-// elongation carried from step to step (updated in place).
+// elongation carried from step to step (updated in place); spin: the rate
+// [rad/s] at which the contact turns about n, by which the spring is turned
+// with it.
 // Regularized: instead of the spring, viscous-regularised Coulomb sliding
 // Ft = -mu Fn vt / max(|vt|, vReg): mu Fn against the slip above vReg, a
 // viscous drag below it, no spring.  The drag c = mu Fn /
@@ -58,7 +61,8 @@ struct ContactResult {
 // estimate the other forces, below), not a spring.
 template <bool Friction, bool Regularized = false>
 inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d& n, double overlap,
-                                  const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
+                                  const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear,
+                                  double spin = 0.0) {
     ContactResult r;
     const double vn = vRel.dot(n);
     const double fnSpring = p.kn * overlap;
@@ -98,6 +102,15 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
         shear -= shear.dot(n) * n;
         const double lenNew = shear.norm();
         if (lenNew > 0) shear *= len / lenNew;
+        // And turn it with the contact about n (the twist): left in place, a
+        // spring holding a force on a turning contact lagged behind it, the
+        // contact crept at spin |Ft| / kt (doc/formulation.md, "Twist").
+        // On the tangent plane now, so the turn keeps its length exactly:
+        // the spring stores no energy by it.
+        if (spin != 0) {
+            const double a = spin * dt;
+            shear = std::cos(a) * shear + std::sin(a) * n.cross(shear);
+        }
         const double storedBefore = 0.5 * p.kt * shear.squaredNorm();
         const Eigen::Vector3d vt = vRel - vn * n;
         shear += vt * dt;
@@ -141,11 +154,16 @@ inline ContactResult contactForce(const ContactParams& p, const Eigen::Vector3d&
 // The law as every contact kind calls it: no tangential force at all unless
 // friction is on (the caller's switch and a positive coefficient), then the
 // tangential spring or, when chosen, the regularised law.
+// spin: the contact's rate of turn about n (the spring's twist; the
+// regularised law has no spring and ignores it).  Passed where one side is
+// a rigid body (a YADE wall, box, facet or sphere): that body's spin
+// (doc/formulation.md, "Twist"); 0 between pieces.
 inline ContactResult lawForce(bool friction, bool regularized, const ContactParams& p, const Eigen::Vector3d& n,
-                              double overlap, const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear) {
+                              double overlap, const Eigen::Vector3d& vRel, double dt, Eigen::Vector3d& shear,
+                              double spin = 0.0) {
     if (!friction) return contactForce<false>(p, n, overlap, vRel, dt, shear);
     return regularized ? contactForce<true, true>(p, n, overlap, vRel, dt, shear)
-                       : contactForce<true>(p, n, overlap, vRel, dt, shear);
+                       : contactForce<true>(p, n, overlap, vRel, dt, shear, spin);
 }
 
 }  // namespace qdem

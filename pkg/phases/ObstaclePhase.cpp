@@ -271,7 +271,8 @@ void ObstaclePhase::run(double dt) {
                 const Eigen::Vector3d vo = o.velocityAt(hit.point, dt);
                 const Eigen::Vector3d vRel = v - vo;
                 const ContactResult r =
-                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh);
+                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh,
+                             o.angVel.dot(hit.normal));  // a node is a point: the obstacle's spin alone
                 if (hit.overlap > deepest.ratio * m.radius)
                     deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
                 newBody[used] = o.bodyId;

@@ -563,8 +563,11 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov,
                                             slot < 0 && touched ? 0.0 : law.reach, vRel.dot(nrm), dt);
                     if (handed[k] > 0) r0 = handOverRef(ov, r0, handed[k]);
+                    // The spring turns with the ball's spin about n: a rigid
+                    // body's, the same on every rank and smooth in time
+                    // (doc/formulation.md, "Twist").
                     const ContactResult r =
-                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh, w.dot(nrm));
                     newKey[nNew] = kk;
                     newRef[nNew] = r0;
                     newShear[nNew] = sh;
