@@ -28,6 +28,15 @@ struct ViscousStressOnly {
     double energyFinish(double /*aux*/) const { return 0.0; }
 };
 
+// The gradients of the four nodes' shape functions, from the element's
+// inverse reference edge matrix B (rows: nodes 1-3; node 0's closes the sum).
+inline void shapeGradients(const Mat3& B, Vec3 g[4]) {
+    g[1] = B.row(0).transpose();
+    g[2] = B.row(1).transpose();
+    g[3] = B.row(2).transpose();
+    g[0] = -(g[1] + g[2] + g[3]);
+}
+
 // Diagonal of one element's C on its 12 DOFs (d[a][i]: node a, direction i).
 // Velocity e_i at node a alone gives F^T dF/dt = phi g_a^T with phi = F^T e_i
 // (row i of F) and g_a the gradient of node a's shape function, so
@@ -35,10 +44,7 @@ struct ViscousStressOnly {
 //     C_(ai)(ai) = V0 beta (lambda (phi.g_a)^2 + mu (|phi|^2 |g_a|^2 + (phi.g_a)^2)).
 inline void viscousDiagonal(const Mat3& F, const Mat3& B, double V0, const ElementParams& p, double d[4][3]) {
     Vec3 g[4];
-    g[1] = B.row(0).transpose();
-    g[2] = B.row(1).transpose();
-    g[3] = B.row(2).transpose();
-    g[0] = -(g[1] + g[2] + g[3]);
+    shapeGradients(B, g);
     const double bl = V0 * p.beta * p.lambda, bm = V0 * p.beta * p.mu;
     for (int i = 0; i < 3; ++i) {
         const Vec3 phi = F.row(i).transpose();
@@ -61,10 +67,7 @@ inline void viscousDiagonal(const Mat3& F, const Mat3& B, double V0, const Eleme
 // (the shape rotated rigidly) phi_i = R^T e_i and C = R K R^T node-blockwise.
 inline void viscousReferenceMatrix(const Mat3& B, double V0, const ElementParams& p, double K[12][12]) {
     Vec3 g[4];
-    g[1] = B.row(0).transpose();
-    g[2] = B.row(1).transpose();
-    g[3] = B.row(2).transpose();
-    g[0] = -(g[1] + g[2] + g[3]);
+    shapeGradients(B, g);
     const double bl = V0 * p.beta * p.lambda, bm = V0 * p.beta * p.mu;
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) {

@@ -3,6 +3,7 @@
 
 #include <omp.h>
 
+#include <Eigen/LU>  // determinant()
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <algorithm>

@@ -42,6 +42,7 @@
 #include "element/ElementKernel.hpp"
 #include "element/MaterialLaw.hpp"
 #include "mesh/BoxMesh.hpp"
+#include "phases/PieceContactState.hpp"
 #include "world/World.hpp"
 
 using namespace qdem;
