@@ -94,7 +94,9 @@ def test_pieces_started_interpenetrated_are_let_separate():
     mat = rubber(radius=2e-3, viscosity=100.0, young=1e7)
     a = w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3), 5), mat, pos=(-(1 - frac) * L / 2, 0, 0))
     b = w.addPiece(qdem.boxMesh((L, L, L), (3, 3, 3), 5), mat, pos=((1 - frac) * L / 2, 0.013, 0.007))
-    dt = 0.8 * w.stableDt()["combined"]
+    # (0.7: pressed this deep, the contacts as they are lower the step by
+    # ~20 % against the estimate before the run, and the run would stop)
+    dt = 0.7 * w.stableDt()["combined"]
     for _ in range(15):
         w.core.step(dt, 100)
         w.core.checkDeepOverlap()

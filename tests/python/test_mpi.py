@@ -164,8 +164,13 @@ def test_implicit_viscosity_on_ranks_as_serially(P, warm, pre):
     # (the order of the partial sums is the only difference).
     d = r["maxDisplacement"]
     assert d > 1e-3
-    assert r["dx"] <= max(10 * r["dxThreads"], 1e-13 * d)
-    assert r["dv"] <= max(10 * r["dvThreads"], 1e-10 * r["vmax"])
+    # Warm starts carry each step's rounding into the next solve's start,
+    # and the solve stops at its tolerance (1e-3 by default), not at the
+    # same bits: on 3 ranks with Jacobi 1.2e-13 of 8.9e-3 m and 2.5e-9 of
+    # 0.65 m/s, where 1 and 2 threads happened to part by 10-30x less (one
+    # sample of that spread).  Cold, the serial thread difference holds.
+    assert r["dx"] <= max(10 * r["dxThreads"], (1e-10 if warm else 1e-13) * d)
+    assert r["dv"] <= max(10 * r["dvThreads"], (1e-7 if warm else 1e-10) * r["vmax"])
     # Floor reaction, energy ledger (total, viscous dissipation, kinetic) as serial.
     s, ss = np.array(r["series"]), np.array(r["serialSeries"])
     assert ss[-1, 4] > 1e-3 * ss[-1, 3], "viscosity must dissipate a visible share"
