@@ -24,7 +24,8 @@ import sys
 import time
 
 import qdem
-from qdem import _core, shogi
+from qdem import _core
+from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 from benchutil import BUSY_RULE, LoadProbe  # noqa: E402
