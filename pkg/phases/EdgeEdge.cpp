@@ -8,6 +8,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/ContactDetail.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../parallel/Domain.hpp"
 #include "ContactLoad.hpp"
 #include "PieceContactPhase.hpp"
@@ -80,12 +81,13 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
     constexpr int KE = PieceContactState::kEdgeList, kER = PieceContactState::kEdgeRec;
     constexpr int32_t kAheadFar = 4, kAheadNear = 2;
 
-    // The energies are reduced from zero and added after: a reduction into a
-    // running total (point-polygon's) adds the threads' parts in the order
-    // they end, and the ledger's last bits could change from run to run.
-    double dampHere = 0, slipHere = 0;
-#pragma omp parallel reduction(+ : dampHere, slipHere, count) reduction(max : maxOv)
+    // The energies are summed per thread and the threads' parts added in
+    // thread order, then into the running total (ThreadPartials.hpp): the
+    // ledger's last bits do not depend on which thread ends first.
+    ThreadPartials<2> energyParts(omp_get_max_threads());
+#pragma omp parallel reduction(+ : count) reduction(max : maxOv)
     {
+        double dampHere = 0, slipHere = 0;
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* load = st_.threadLoad[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -316,9 +318,11 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
             }
         }
+        energyParts.set(omp_get_thread_num(), {dampHere, slipHere});
     }
-    eDamp += dampHere;
-    eSlip += slipHere;
+    const std::array<double, 2> energySum = energyParts.sum();
+    eDamp += energySum[0];
+    eSlip += energySum[1];
 }
 
 template void PieceContactPhase::edgeEdge<true>(double, double&, double&, long&, double&);

@@ -11,6 +11,7 @@
 
 #include "../element/ElementKernel.hpp"
 #include "../element/MaterialLaw.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../step/AwakeSet.hpp"
 #include "ElementPhase.hpp"
 
@@ -48,11 +49,12 @@ void ElementPhase::buildLayout(int threads) {
 void ElementPhase::run(double dt) {
     const int nth = omp_get_max_threads();
     if (!layout_.matches(nth, w_.sleeping.version())) buildLayout(nth);
-    double diss = 0;
     const bool energyOn = w_.settings.trackEnergy;
-#pragma omp parallel num_threads(layout_.nThreads) reduction(+ : diss)
+    ThreadPartials<1> dissParts(layout_.nThreads);  // viscous power, added in thread order
+#pragma omp parallel num_threads(layout_.nThreads)
     {
         const int th = omp_get_thread_num();
+        double diss = 0;
         AlignedVector<double>& buf = layout_.buffers[th];
         std::fill(buf.begin(), buf.end(), 0.0);
         const int32_t lo = layout_.nodeLo[th];
@@ -73,8 +75,9 @@ void ElementPhase::run(double dt) {
             });
             if (energyOn) pe[3 * sg.piece] += w;  // strain energy per piece (sleeping ones keep theirs)
         }
+        dissParts.set(th, {diss});
     }
-    if (energyOn) w_.energy.viscous += diss * dt;
+    if (energyOn) w_.energy.viscous += dissParts.sum()[0] * dt;
 }
 
 // ---------------------------------------------------------------------------

@@ -10,6 +10,7 @@
 
 #include "../core/Errors.hpp"
 #include "../core/Format.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
 #include "ElementPhase.hpp"
@@ -74,9 +75,10 @@ const double* IntegrationPhase::viscousCorrection(const NodeUpdate u, bool impli
 
 template <bool Implicit, bool Damp, bool EnergyOn, bool SleepOn>
 std::array<double, 5> IntegrationPhase::advance(const NodeUpdate u, double dt, const double* Fq, double* dV) {
-    double ekT = 0, egT = 0, edT = 0, ebT = 0, sumT = 0;
-#pragma omp parallel num_threads(u.nth) reduction(+ : ekT, egT, edT, ebT, sumT)
+    ThreadPartials<5> parts(u.nth);  // the threads' sums, added in thread order
+#pragma omp parallel num_threads(u.nth)
     {
+        double ekT = 0, egT = 0, edT = 0, ebT = 0, sumT = 0;
         double* speed2 = SleepOn ? threadSpeed2_[omp_get_thread_num()].data() : nullptr;
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
         for (int32_t i = 0; i < u.count; ++i) {
@@ -127,8 +129,10 @@ std::array<double, 5> IntegrationPhase::advance(const NodeUpdate u, double dt, c
                 m = std::max(m, v2);
             }
         }
+        parts.set(omp_get_thread_num(), {ekT, egT, edT, ebT, sumT});
     }
-    return std::array<double, 5>{ekT, egT, edT, std::isfinite(sumT) ? 1.0 : 0.0, ebT};
+    const std::array<double, 5> s = parts.sum();
+    return std::array<double, 5>{s[0], s[1], s[2], std::isfinite(s[4]) ? 1.0 : 0.0, s[3]};
 }
 
 std::array<double, 5> IntegrationPhase::advanceAny(const NodeUpdate u, double dt, const double* Fq, double* dV,
@@ -213,10 +217,11 @@ std::array<double, 4> IntegrationPhase::advancePlain(double dt) {
     const double* const Fg = w_.domain.any() ? w_.domain.any()->ghostForce() : nullptr;
     const double* const M = w_.mass.data();
     const uint8_t* const blk = w_.blocked.data();
-    double sum = 0, ek = 0, eg = 0, eb = 0;
-#pragma omp parallel num_threads(nth) reduction(+ : sum, ek, eg, eb)
+    ThreadPartials<4> parts(nth);  // the threads' sums, added in thread order
+#pragma omp parallel num_threads(nth)
     {
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        double sum = 0, ek = 0, eg = 0, eb = 0;
         const auto first = static_cast<int32_t>(static_cast<int64_t>(N) * t / nt);
         const auto last = static_cast<int32_t>(static_cast<int64_t>(N) * (t + 1) / nt);
         alignas(64) double inv3[3 * kTile];  // 1/m per DOF, 0 on a blocked one
@@ -295,8 +300,10 @@ std::array<double, 4> IntegrationPhase::advancePlain(double dt) {
                 }
             }
         }
+        parts.set(t, {ek, eg, eb, sum});
     }
-    return {ek, eg, eb, std::isfinite(sum) ? 1.0 : 0.0};
+    const std::array<double, 4> tot = parts.sum();
+    return {tot[0], tot[1], tot[2], std::isfinite(tot[3]) ? 1.0 : 0.0};
 }
 
 void IntegrationPhase::reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const {

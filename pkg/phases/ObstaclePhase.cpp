@@ -11,6 +11,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../core/Errors.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../core/Format.hpp"
 #include "../step/AwakeSet.hpp"
 #include "ObstaclePhase.hpp"
@@ -90,7 +91,6 @@ void ObstaclePhase::run(double dt) {
     threadReaction_.assign(static_cast<std::size_t>(nth) * reactStride, 0.0);
     const bool energyOn = w_.settings.trackEnergy;
     const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
-    double eDamp = 0, eSlip = 0, eBound = 0;
     // Sleeping pieces' nodes are skipped (their history kept as it is);
     // held pieces' are not (above).  (Their velocities are zero: a held
     // node is a fixed point.)
@@ -141,9 +141,11 @@ void ObstaclePhase::run(double dt) {
     threadThrough_.assign(nth, Through{});
     threadDeepest_.assign(nth, Deepest{});
     long nWall = 0;
-#pragma omp parallel num_threads(nth) reduction(+ : eDamp, eSlip, eBound, nWall)
+    ThreadPartials<3> energyParts(nth);  // damping, slip, boundary work: added in thread order
+#pragma omp parallel num_threads(nth) reduction(+ : nWall)
     {
         const int th = omp_get_thread_num();
+        double eDampT = 0, eSlipT = 0, eBoundT = 0;
         Through& through = threadThrough_[th];
         Deepest& deepest = threadDeepest_[th];
         double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
@@ -300,9 +302,9 @@ void ObstaclePhase::run(double dt) {
                 }
                 if (energyOn) {
                     pe[3 * ip + 1] += r.elastic;
-                    eDamp += r.dampPower * dt;
-                    eSlip += r.slipWork;
-                    eBound -= r.force.dot(vo) * dt;
+                    eDampT += r.dampPower * dt;
+                    eSlipT += r.slipWork;
+                    eBoundT -= r.force.dot(vo) * dt;
                 }
             }
             for (int k = 0; k < kSlots; ++k) {
@@ -313,7 +315,9 @@ void ObstaclePhase::run(double dt) {
             }
             for (int d = 0; d < 3; ++d) Fc[3 * node + d] += fNode[d];
         }
+        energyParts.set(th, {eDampT, eSlipT, eBoundT});
     }
+    const std::array<double, 3> energySum = energyParts.sum();
     contacts_ = nWall;
     Deepest deepest;
     for (const Deepest& d : threadDeepest_)
@@ -335,9 +339,9 @@ void ObstaclePhase::run(double dt) {
         o.reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
     }
     if (energyOn) {
-        w_.energy.contactDamping += eDamp;
-        w_.energy.friction += eSlip;
-        w_.energy.boundaryWork += eBound;
+        w_.energy.contactDamping += energySum[0];
+        w_.energy.friction += energySum[1];
+        w_.energy.boundaryWork += energySum[2];
     }
 }
 

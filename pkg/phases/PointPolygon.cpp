@@ -10,6 +10,7 @@
 #include "../contact/ContactLaw.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/Errors.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../contact/ContactDetail.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
@@ -64,8 +65,10 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
         double depth = 0, speed = 0, mass = 0, kn = 0;
     } tunnel;
 
-#pragma omp parallel reduction(+ : eDamp, eSlip, count, interiorTests, interiorNear, listed) reduction(max : maxOv)
+    ThreadPartials<2> energyParts(omp_get_max_threads());  // damping, slip: added in thread order
+#pragma omp parallel reduction(+ : count, interiorTests, interiorNear, listed) reduction(max : maxOv)
     {
+        double eDampT = 0, eSlipT = 0;
         double* buf = st_.threadForce[omp_get_thread_num()].data();
         double* load = st_.threadLoad[omp_get_thread_num()].data();
         double* pe = w_.settings.trackEnergy ? w_.threadPieceEnergy[omp_get_thread_num()].data() : nullptr;
@@ -449,8 +452,8 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                                        tangential);
                     }
                 if (pe) pe[3 * pa + 2] += r.elastic;
-                eDamp += r.dampPower * dt;
-                eSlip += r.slipWork;
+                eDampT += r.dampPower * dt;
+                eSlipT += r.slipWork;
                 ++count;
                 maxOv = std::max(maxOv, overlap);
             }
@@ -463,7 +466,11 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                     for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
             }
         }
+        energyParts.set(omp_get_thread_num(), {eDampT, eSlipT});
     }
+    const std::array<double, 2> energySum = energyParts.sum();
+    eDamp += energySum[0];
+    eSlip += energySum[1];
     listedTriangles_ = listed;
     interiorFaceTests_ = interiorTests;
     interiorFaceNear_ = interiorNear;

@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "../contact/ContactLaw.hpp"
+#include "../core/ThreadPartials.hpp"
 #include "../contact/Obstacle.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../contact/Geometry.hpp"
@@ -408,8 +409,10 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
     // the step that would do.  The lowest sphere index found, so that every
     // thread count (and every MPI rank: all hold every sphere) says the same.
     int32_t fastSphere = INT32_MAX, fastPiece = -1;
-#pragma omp parallel reduction(+ : eEl, eDamp, eSlip, count)
+    ThreadPartials<3> energyParts(omp_get_max_threads());  // elastic, damping, slip: added in thread order
+#pragma omp parallel reduction(+ : count)
     {
+        double eElT = 0, eDampT = 0, eSlipT = 0;
         std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
         bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
         double* buf = bufv.data();
@@ -576,9 +579,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     T += arm.cross(r.force);
                     for (int j = 0; j < 3; ++j)
                         if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
-                    eEl += r.elastic;
-                    eDamp += r.dampPower * dt;
-                    eSlip += r.slipWork;
+                    eElT += r.elastic;
+                    eDampT += r.dampPower * dt;
+                    eSlipT += r.slipWork;
                     ++count;
                 }
                 for (int k = 0; k < K; ++k) {
@@ -591,7 +594,12 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                 for (int d = 0; d < 3; ++d) ft[d] = F[d], ft[3 + d] = T[d];
             }
         }
+        energyParts.set(omp_get_thread_num(), {eElT, eDampT, eSlipT});
     }
+    const std::array<double, 3> energySum = energyParts.sum();
+    eEl += energySum[0];
+    eDamp += energySum[1];
+    eSlip += energySum[2];
     if (fastSphere != INT32_MAX) {
         const int32_t i = fastSphere;
         const double speed = Vector3d(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]).norm();
