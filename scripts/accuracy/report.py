@@ -251,7 +251,7 @@ precision throughout, as Debian's YADE.
   stable step), not second: a penalty contact switches on between two
   steps.  Fine for every use so far; a scene that needs the energy better
   than 0.5 % needs a smaller step.
-* The seed's face-only inside test (now `pointPolygonRegions=False`) loses
+* The seed's face-only inside test (`pointPolygonRegions=False`) loses
   the contacts of nodes that face the other body's convex edges: on faceted
   spheres {e('hertz', 'contact kinds', 'point-polygon, face only')} instead of
   {e('hertz', 'contact kinds', '+ edge and vertex regions')}.
