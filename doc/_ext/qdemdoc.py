@@ -14,9 +14,9 @@ are generated from the package, so that they are never written twice.
     the compiled table differs from the header, i.e. when the package the
     site is built from is stale.
 ``.. bench-table::`` / ``.. bench-figure::``
-    the Performance page's tables and plots, printed or drawn from the
-    benchmark JSON kept in ``bench/logs/`` (scripts/bench/perf_tables.py,
-    perf_plots.py).
+    the tables and plots of measured figures (Performance, MPI at scale, ...),
+    printed or drawn from the benchmark JSON kept in ``bench/logs/``
+    (scripts/bench/perf_tables.py, perf_plots.py).
 ``.. qdem-world-settings::``
     the world settings that are not engine attributes (set on ``World.core``).
 
@@ -182,11 +182,12 @@ class WorldSettingsDirective(SphinxDirective):
 
 
 class BenchTableDirective(SphinxDirective):
-    """``bench-table:: <kind> <json> [more json]``: a table of the Performance
-    page printed from a kept benchmark JSON by scripts/bench/perf_tables.py,
-    so that no figure on the page is copied by hand."""
+    """``bench-table:: <kind> <json> [more json]``: a table printed from kept
+    benchmark JSON by ``perf_tables.<kind>(json, *more)`` in
+    scripts/bench/perf_tables.py (the first file loaded, the others passed as
+    paths), so that no figure of a table is copied by hand."""
     required_arguments = 2
-    optional_arguments = 2
+    optional_arguments = 4
 
     def run(self):
         import contextlib
@@ -195,17 +196,18 @@ class BenchTableDirective(SphinxDirective):
         import sys
         sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
         import perf_tables
-        kind, path = self.arguments[0], self.arguments[1]
-        full = os.path.join(ROOT, path)
-        self.env.note_dependency(full)
+        kind, paths = self.arguments[0], [os.path.join(ROOT, a) for a in self.arguments[1:]]
+        if kind not in perf_tables.GENERATORS:
+            logger.warning("bench-table: scripts/bench/perf_tables.py has no table %r; one of %s"
+                           % (kind, ", ".join(sorted(perf_tables.GENERATORS))), location=(self.env.docname, self.lineno))
+            return []
+        for p in paths:
+            self.env.note_dependency(p)
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
-            d = json.load(open(full))
-            if kind == "roofline":
-                perf_tables.roofline(d, *[os.path.join(ROOT, a) for a in self.arguments[2:]])
-            else:
-                getattr(perf_tables, kind)(d)
-        return _parse(self, out.getvalue().splitlines() + ["", "(`%s`)" % path])
+            perf_tables.GENERATORS[kind](json.load(open(paths[0])), *paths[1:])
+        source = "(%s)" % ", ".join("`%s`" % a for a in self.arguments[1:])
+        return _parse(self, out.getvalue().splitlines() + ["", source])
 
 
 class BenchFigureDirective(SphinxDirective):
