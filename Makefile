@@ -100,7 +100,7 @@ bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
 
-# MPI (doc/parallel.md): ping-pong alpha/beta, the contact-free scene on 1-4
+# MPI at scale (doc/parallel_scaling.md): ping-pong alpha/beta, the contact-free scene on 1-4
 # ranks, the partitioner to 128 ranks, the weak-scaling model to 16,384;
 # about 3-4 minutes.  Combined figures: out/bench/mpi.json, plots in doc/img.
 MPIRUN := timeout 120 mpiexec --allow-run-as-root --oversubscribe

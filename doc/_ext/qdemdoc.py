@@ -199,7 +199,8 @@ class BenchTableDirective(SphinxDirective):
         kind, paths = self.arguments[0], [os.path.join(ROOT, a) for a in self.arguments[1:]]
         if kind not in perf_tables.GENERATORS:
             logger.warning("bench-table: scripts/bench/perf_tables.py has no table %r; one of %s"
-                           % (kind, ", ".join(sorted(perf_tables.GENERATORS))), location=(self.env.docname, self.lineno))
+                           % (kind, ", ".join(sorted(perf_tables.GENERATORS))),
+                           location=(self.env.docname, self.lineno))
             return []
         for p in paths:
             self.env.note_dependency(p)

@@ -1,5 +1,7 @@
-"""The tables of doc/performance.md, printed (markdown) from the benchmarks'
-JSON, so that the doc is refreshed by pasting, never by retyping figures.
+"""The tables of measured figures on the user pages (doc/performance.md,
+doc/parallel_scaling.md, ...), printed (markdown) from the benchmarks' JSON:
+the site prints them at build time (the bench-table directive, which calls
+GENERATORS[kind](json, *more json paths)), so no figure is retyped.
 
     /usr/bin/python3.11 scripts/bench/perf_tables.py elements  bench/logs/elements_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json KERNEL_OPS.json]
@@ -8,6 +10,8 @@ JSON, so that the doc is refreshed by pasting, never by retyping figures.
     /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-28.json \
         [--doc doc/performance.md]   (the table written into the doc between its markers)
     /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py zoltan    bench/logs/mpi_zoltan.json bench/logs/mpi.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py mpiRanks  bench/logs/mpi.json     (and the other mpi* tables)
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
@@ -364,8 +368,9 @@ def mpiRanks(d):
     print("|---|---|---|---|")
     for run in d["ranks"]["runs"]:
         dx = run["maxAbsDxVsP1"]
-        print("| %d | %.6g | %.2f → %.2f | %s |" % (run["P"], run["ranks"][0]["imbalance"], run["loadAverageBefore"][0],
-                                                   run["loadAverageAfter"][0], "%.1e m" % dx if dx else "0"))
+        print("| %d | %.6g | %.2f → %.2f | %s |" % (run["P"], run["ranks"][0]["imbalance"],
+                                                   run["loadAverageBefore"][0], run["loadAverageAfter"][0],
+                                                   "%.1e m" % dx if dx else "0"))
 
 
 def mpiInputs(d):
@@ -379,12 +384,14 @@ def mpiInputs(d):
           "obstacles) | %.1f ns/tet (%.1f from the fastest step) | `model.inputs.ns_per_tet`, "
           "`ns_per_tet_from_min_step` |" % (i["ns_per_tet"], i["ns_per_tet_from_min_step"]))
     top = max(r["ranks"] for r in d["partition"]["rows"])
-    more = sorted(set(r["ranks"] for r in d["partition_more"]["rows"]) - set(r["ranks"] for r in d["partition"]["rows"]))
+    more = sorted(set(r["ranks"] for r in d["partition_more"]["rows"]) - set(r["ranks"] for r in
+                                                                            d["partition"]["rows"]))
     print("| owned tets, imbalance, halo, neighbours, bytes per rank | the real partitioner (`pkg/parallel`) on "
           "synthetic scenes of P × %s nodes, P = 1..%d in `make bench-mpi`, %s from the one-off run | | "
           "`mpi.json: partition.rows`, `mpi_partition_512.json: rows` |"
           % (thousands(i["nodes_per_rank"]), top, " and ".join(map(str, more))))
-    print("| same, P > %d | fits to the partitioner's rows (below) | | `model.extrapolation` |" % i["partitioner_max_P"])
+    print("| same, P > %d | fits to the partitioner's rows (below) | | `model.extrapolation` |"
+          % i["partitioner_max_P"])
     print("| times | the formula below | | `model.projection` |")
 
 

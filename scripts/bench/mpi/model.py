@@ -1,4 +1,4 @@
-"""Weak-scaling model of QDEM under MPI to 16,384 ranks (doc/parallel.md,
+"""Weak-scaling model of QDEM under MPI to 16,384 ranks (doc/parallel_scaling.md,
 "Weak-scaling model").
 
 Time of one step on the slowest rank of P, each rank holding ~50,000 nodes:
@@ -387,7 +387,7 @@ def main():
         json.dump(res, f, indent=1)
     if a.combined:
         with open(a.combined, "w") as f:
-            json.dump({"what": "make bench-mpi: doc/parallel.md, sections Benchmark and Weak-scaling model",
+            json.dump({"what": "make bench-mpi: doc/parallel_scaling.md, sections Benchmark and Weak-scaling model",
                        "pingpong": pp, "pingpong_yield": ppy, "ranks": ranks, "partition": part,
                        "partition_more": more, "model": res}, f, indent=1)
     plots(proj, rows, a.img, scenes)
