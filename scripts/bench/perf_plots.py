@@ -1,8 +1,10 @@
-"""The figures of doc/performance.md, drawn (PNG) from the benchmarks' kept
-JSON, as perf_tables.py prints its tables: no point on a plot is typed by hand.
+"""The figures of doc/performance.md and doc/parallel_scaling.md, drawn (PNG)
+from the benchmarks' kept JSON, as perf_tables.py prints its tables: no point
+on a plot is typed by hand.
 
     /usr/bin/python3.11 scripts/bench/perf_plots.py roofline OUT.png \
         bench/logs/roofline_2026-11-24.json ELEMENTS.json KERNEL_OPS.json
+    /usr/bin/python3.11 scripts/bench/perf_plots.py mpiEfficiency OUT.png bench/logs/mpi.json   (or mpiHalo)
 
 roofline: the machine's ceilings measured by scripts/bench/roofline.cpp (the
 best on-CPU FMA rate, the best triad bandwidths from L3 and DRAM) against
@@ -89,12 +91,87 @@ def roofline(out, roofPath, elementsPath, opsPath):
     plt.close(fig)
 
 
+# -- MPI at scale (doc/parallel_scaling.md): the weak-scaling model's projection --
+
+MPI_COLOURS = {"pieces": "tab:blue", "body": "tab:red", "mixed": "tab:green"}
+
+
+def _mpiScenes(proj):
+    return [s for s in ("pieces", "body", "mixed") if "%s/hilbert" % s in proj]
+
+
+def drawMpiEfficiency(proj, out):
+    """E(P) of every scene and split (model.projection), the seed's 5,120 cores marked."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for scene in _mpiScenes(proj):
+        for method, ls in (("hilbert", "-"), ("slabs", "--")):
+            pts = [p for p in proj["%s/%s" % (scene, method)] if p["P"] != 5120]
+            ax.plot([p["P"] for p in pts], [p["efficiency"] for p in pts], ls, color=MPI_COLOURS[scene], marker=".",
+                    label="%s, %s" % (scene, method))
+    ax.axvline(5120, color="grey", lw=0.8)
+    ax.text(5120, 0.05, " seed: 5,120 cores\n (no figure given)", fontsize=8, color="grey")
+    ax.set_xscale("log", base=2)
+    ax.set_ylim(0, 1.05)
+    ax.set_xlabel("ranks P (50,000 nodes each)")
+    ax.set_ylabel("weak-scaling efficiency T(1)/T(P)")
+    ax.set_title("QDEM weak scaling, model (measured alpha, beta, ns/tet)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def drawMpiHalo(proj, out):
+    """Halo over owned and neighbours (maxima over ranks) against P: the
+    partitioner's rows as dots, the fits beyond them faint."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axs = plt.subplots(1, 2, figsize=(11, 4.5))
+    for scene in _mpiScenes(proj):
+        for method, ls in (("hilbert", "-"), ("slabs", "--")):
+            pts = proj["%s/%s" % (scene, method)]
+            meas = [p for p in pts if p["source"] == "partitioner"]
+            fit = [p for p in pts if p["source"] == "fit" or p is meas[-1]]
+            for ax, key in ((axs[0], "halo_over_owned_max"), (axs[1], "neighbours_max")):
+                ax.plot([p["P"] for p in meas], [p[key] for p in meas], ls, color=MPI_COLOURS[scene], marker="o",
+                        ms=3, label="%s, %s" % (scene, method))
+                ax.plot([p["P"] for p in fit], [p[key] for p in fit], ls, color=MPI_COLOURS[scene], alpha=0.4)
+    for ax, lab in ((axs[0], "halo / owned nodes (max over ranks)"), (axs[1], "neighbours (max over ranks)")):
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("ranks P (50,000 nodes each)")
+        ax.set_ylabel(lab)
+        ax.grid(alpha=0.3, which="both")
+    axs[0].legend(fontsize=8)
+    fig.suptitle("Partitioner (dots), fits beyond (faint): Hilbert (solid) vs slabs (dashed)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def mpiEfficiency(out, mpiPath):
+    """The projected efficiency plot from a kept make bench-mpi JSON (model.projection)."""
+    drawMpiEfficiency(json.load(open(mpiPath))["model"]["projection"], out)
+
+
+def mpiHalo(out, mpiPath):
+    """The halo and neighbours plot from a kept make bench-mpi JSON (model.projection)."""
+    drawMpiHalo(json.load(open(mpiPath))["model"]["projection"], out)
+
+
 def main():
     kind, out = sys.argv[1], sys.argv[2]
     if kind == "roofline":
         roofline(out, *sys.argv[3:6])
+    elif kind in ("mpiEfficiency", "mpiHalo"):
+        globals()[kind](out, sys.argv[3])
     else:
-        raise SystemExit("unknown figure %r: roofline" % kind)
+        raise SystemExit("unknown figure %r: roofline, mpiEfficiency, mpiHalo" % kind)
 
 
 if __name__ == "__main__":

@@ -86,6 +86,21 @@ def test_no_hand_typed_table_of_figures(page):
                        "scripts/bench/perf_tables.py): %s" % (page, rows[:3])
 
 
+@pytest.mark.parametrize("page", GENERATED_ONLY)
+def test_the_plots_are_drawn_from_the_kept_json(page, tmp_path):
+    """The page's plots are bench-figure directives drawn by
+    scripts/bench/perf_plots.py from kept JSON, not committed images."""
+    import perf_plots
+    text = open(os.path.join(ROOT, page), encoding="utf-8").read()
+    assert not re.search(r"!\[[^]]*\]\(img/", text), "%s: a committed image; draw it with bench-figure" % page
+    figures = re.findall(r"^```\{bench-figure\}\s+(\S+)\s+(.+?)\s*$", text, re.M)
+    assert figures
+    for kind, paths in figures:
+        png = tmp_path / ("%s.png" % kind)
+        getattr(perf_plots, kind)(str(png), *[os.path.join(ROOT, p) for p in paths.split()])
+        assert png.stat().st_size > 10000, kind
+
+
 def test_hand_typed_check_catches_a_table():
     """The check itself: a typed row with figures is caught, a directive and
     prose with figures are not."""
