@@ -100,9 +100,10 @@ bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
 
-# MPI (doc/parallel.md): ping-pong alpha/beta, the contact-free scene on 1-4
+# MPI at scale (doc/parallel_scaling.md): ping-pong alpha/beta, the contact-free scene on 1-4
 # ranks, the partitioner to 128 ranks, the weak-scaling model to 16,384;
-# about 3-4 minutes.  Combined figures: out/bench/mpi.json, plots in doc/img.
+# about 3-4 minutes.  Combined figures: out/bench/mpi.json, plots in out/bench/img
+# (doc/parallel_scaling.md draws its own from the kept bench/logs/mpi.json).
 MPIRUN := timeout 120 mpiexec --allow-run-as-root --oversubscribe
 bench-mpi: build
 	@mkdir -p out/bench
@@ -116,7 +117,7 @@ bench-mpi: build
 	@echo "bench-mpi: the contact-free scene on 1..4 ranks"
 	@$(PY) scripts/bench/mpi/run_ranks.py --build $(BUILD) --out out/bench/mpi_ranks.json
 	@echo "bench-mpi: the weak-scaling model"
-	@MPLBACKEND=Agg $(PY) scripts/bench/mpi/model.py --out out/bench/mpi_model.json --img doc/img \
+	@MPLBACKEND=Agg $(PY) scripts/bench/mpi/model.py --out out/bench/mpi_model.json --img out/bench/img \
 	  --partition-more bench/logs/mpi_partition_512.json --combined out/bench/mpi.json
 
 # What accuracy costs in time (3-5 min on one thread): out/accuracy/, doc/accuracy.md

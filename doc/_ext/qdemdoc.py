@@ -13,6 +13,10 @@ are generated from the package, so that they are never written twice.
     ``qdem._core.settings``; the build fails (a warning under ``-W``) when
     the compiled table differs from the header, i.e. when the package the
     site is built from is stale.
+``.. bench-table::`` / ``.. bench-figure::``
+    the tables and plots of measured figures (Performance, MPI at scale, ...),
+    printed or drawn from the benchmark JSON kept in ``bench/logs/``
+    (scripts/bench/perf_tables.py, perf_plots.py).
 ``.. qdem-world-settings::``
     the world settings that are not engine attributes (set on ``World.core``).
 
@@ -178,11 +182,12 @@ class WorldSettingsDirective(SphinxDirective):
 
 
 class BenchTableDirective(SphinxDirective):
-    """``bench-table:: <kind> <json> [more json]``: a table of the Performance
-    page printed from a kept benchmark JSON by scripts/bench/perf_tables.py,
-    so that no figure on the page is copied by hand."""
+    """``bench-table:: <kind> <json> [more json]``: a table printed from kept
+    benchmark JSON by ``perf_tables.<kind>(json, *more)`` in
+    scripts/bench/perf_tables.py (the first file loaded, the others passed as
+    paths), so that no figure of a table is copied by hand."""
     required_arguments = 2
-    optional_arguments = 2
+    optional_arguments = 4
 
     def run(self):
         import contextlib
@@ -191,17 +196,44 @@ class BenchTableDirective(SphinxDirective):
         import sys
         sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
         import perf_tables
-        kind, path = self.arguments[0], self.arguments[1]
-        full = os.path.join(ROOT, path)
-        self.env.note_dependency(full)
+        kind, paths = self.arguments[0], [os.path.join(ROOT, a) for a in self.arguments[1:]]
+        if kind not in perf_tables.GENERATORS:
+            logger.warning("bench-table: scripts/bench/perf_tables.py has no table %r; one of %s"
+                           % (kind, ", ".join(sorted(perf_tables.GENERATORS))),
+                           location=(self.env.docname, self.lineno))
+            return []
+        for p in paths:
+            self.env.note_dependency(p)
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
-            d = json.load(open(full))
-            if kind == "roofline":
-                perf_tables.roofline(d, *[os.path.join(ROOT, a) for a in self.arguments[2:]])
-            else:
-                getattr(perf_tables, kind)(d)
-        return _parse(self, out.getvalue().splitlines() + ["", "(`%s`)" % path])
+            perf_tables.GENERATORS[kind](json.load(open(paths[0])), *paths[1:])
+        source = "(%s)" % ", ".join("`%s`" % a for a in self.arguments[1:])
+        return _parse(self, out.getvalue().splitlines() + ["", source])
+
+
+class BenchFigureDirective(SphinxDirective):
+    """``bench-figure:: <kind> <json> [more json]``: a PNG of the Performance
+    page drawn from kept benchmark JSON by scripts/bench/perf_plots.py at
+    build time (into ``doc/_generated/``, not kept in git), so that no point
+    on a plot is typed by hand; the directive's content is the caption."""
+    required_arguments = 2
+    optional_arguments = 4
+    has_content = True
+
+    def run(self):
+        import sys
+        sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+        import perf_plots
+        kind, paths = self.arguments[0], [os.path.join(ROOT, a) for a in self.arguments[1:]]
+        for p in paths:
+            self.env.note_dependency(p)
+        gen = os.path.join(self.env.srcdir, "_generated")
+        os.makedirs(gen, exist_ok=True)
+        png = os.path.join(gen, "%s.png" % kind)
+        getattr(perf_plots, kind)(png, *paths)
+        caption = list(self.content) + ["", "(drawn from %s)" % ", ".join("`%s`" % a for a in self.arguments[1:])]
+        lines = [":::{figure} /_generated/%s.png" % kind, ":width: 90%", ""] + caption + [":::"]
+        return _parse(self, lines)
 
 
 def _parse(directive, lines):
@@ -243,6 +275,7 @@ def setup(app):
     app.add_directive("qdem-settings", SettingsDirective)
     app.add_directive("qdem-world-settings", WorldSettingsDirective)
     app.add_directive("bench-table", BenchTableDirective)
+    app.add_directive("bench-figure", BenchFigureDirective)
     app.connect("autodoc-process-docstring", _stripAttributeList)
     app.connect("autodoc-process-docstring", _plainText)
     app.connect("autodoc-process-docstring", _requireDocstring)

@@ -1,5 +1,7 @@
 """The keys each benchmark JSON must hold: what perf_tables.py and the docs
-read from it (doc/performance.md, doc/spheres.md, doc/parallel.md).  A key
+read from it (doc/performance.md, doc/spheres.md; the MPI logs printed on
+doc/parallel.md and doc/parallel_scaling.md are checked by running each
+table's generator on its kept JSON, tests/python/test_doc_generated_tables.py).  A key
 path is dotted; "[]" means every element of a list (or every value of a
 dict) must hold the rest.  `make bench` checks out/bench/ at its end (every
 file named in SCHEMA must be there and complete); the tests check every

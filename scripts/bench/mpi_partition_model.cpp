@@ -1,4 +1,4 @@
-// The partition half of the MPI scaling model (doc/parallel.md): the real
+// The partition half of the MPI scaling model (doc/parallel_scaling.md): the real
 // partitioner (pkg/parallel/Partition.hpp) run for P ranks on one core, on
 // synthetic scenes of about `nodesPerRank` nodes per rank, for the Hilbert
 // split and, for comparison, slabs along the longest axis.  Per P and method:

@@ -1,4 +1,4 @@
-// The synthetic scenes of the MPI partition benchmarks (doc/parallel.md) and
+// The synthetic scenes of the MPI partition benchmarks (doc/parallel_scaling.md) and
 // the halo figures they report, shared by mpi_partition_model (our Hilbert
 // split against slabs) and mpi_zoltan_compare (against Zoltan), so both
 // measure the same scenes the same way.

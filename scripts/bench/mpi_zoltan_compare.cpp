@@ -1,6 +1,6 @@
 // Our Hilbert split (pkg/parallel/Partition.hpp) against Zoltan's geometric
 // partitioners, on the scenes of the partition model (mpi_scenes.hpp), for
-// doc/parallel.md.  Zoltan runs on one MPI process and cuts the nodes into
+// doc/parallel_scaling.md.  Zoltan runs on one MPI process and cuts the nodes into
 // P parts (NUM_GLOBAL_PARTS); each method's node owners then go through the
 // same code as ours: a tet is computed by the lowest owner of its nodes, and
 // the halos come from haloAll, so every figure is measured the same way.

@@ -1,5 +1,7 @@
-"""The tables of doc/performance.md, printed (markdown) from the benchmarks'
-JSON, so that the doc is refreshed by pasting, never by retyping figures.
+"""The tables of measured figures on the user pages (doc/performance.md,
+doc/parallel_scaling.md, ...), printed (markdown) from the benchmarks' JSON:
+the site prints them at build time (the bench-table directive, which calls
+GENERATORS[kind](json, *more json paths)), so no figure is retyped.
 
     /usr/bin/python3.11 scripts/bench/perf_tables.py elements  bench/logs/elements_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py roofline  bench/logs/roofline_2026-11-24.json [ELEMENTS.json KERNEL_OPS.json]
@@ -8,6 +10,8 @@ JSON, so that the doc is refreshed by pasting, never by retyping figures.
     /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-28.json \
         [--doc doc/performance.md]   (the table written into the doc between its markers)
     /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py zoltan    bench/logs/mpi_zoltan.json bench/logs/mpi.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py mpiRanks  bench/logs/mpi.json     (and the other mpi* tables)
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
@@ -234,6 +238,269 @@ def effects(d):
             mins(e.get("on_cpu", {"all": {}})), mins(e["qdem"]), mins({"all": e["all"]})))
 
 
+# -- MPI at scale (doc/parallel_scaling.md) and under yade.mpy (doc/parallel.md) --
+
+SCENE_ORDER = ("pieces", "body", "mixed")
+ZOLTAN_METHODS = ("hilbert", "hilbert-split", "zoltan-hsfc", "zoltan-hsfc-whole", "zoltan-rcb")
+SPLIT = {"hilbert": "Hilbert", "slabs": "slabs"}
+
+
+def sig2(x):
+    """Two significant figures, trailing zero kept (1.0, 0.52, 16)."""
+    return "%.0f" % x if abs(x) >= 10 else "%.1f" % x if abs(x) >= 1 else "%.2f" % x
+
+
+def thousands(n):
+    """16384 -> '16,384'."""
+    return "{:,}".format(int(n))
+
+
+def stepOverWork(row, alpha, beta, w):
+    """The modelled step of the worst rank over the mean share's work
+    (doc/parallel_scaling.md, "The formula", without the allgather, which is
+    the same for every method): (w imbalance tets/P + alpha 2 neighbours_max
+    + beta bytes_max) / (w tets/P)."""
+    share = w * row["tets"] / row["ranks"]
+    bytesMax = max(row["bytes_sent_per_step_max"], row["bytes_received_per_step_max"])
+    return (share * row["imbalance"] + alpha * 2 * row["neighbours_max"] + beta * bytesMax) / share
+
+
+def _modelInputs(mpiJson):
+    inp = json.load(open(mpiJson))["model"]["inputs"]
+    return inp["alpha_s"], inp["beta_s_per_byte"], inp["ns_per_tet"] * 1e-9
+
+
+def _zoltanRows(d, ranks):
+    rows = [r for r in d["rows"] if r["ranks"] == ranks]
+    order = {(s, m): i for i, (s, m) in enumerate((s, m) for s in SCENE_ORDER for m in ZOLTAN_METHODS)}
+    return sorted(rows, key=lambda r: order.get((r["scene"], r["method"]), len(order)))
+
+
+def zoltan(d, mpiJson):
+    """Our split against Zoltan's (mpi_zoltan.json) at the largest P and at
+    P = 16; step / work with alpha, beta, w of mpi.json's model.inputs, and
+    again with alpha and beta ten times larger."""
+    alpha, beta, w = _modelInputs(mpiJson)
+    top = max(r["ranks"] for r in d["rows"])
+    for ranks in (top, 16):
+        print("P = %d:\n" % ranks)
+        print("| scene | method | imbalance | halo/owned mean / max | neighbours mean / max | bytes/step max (KB) "
+              "| pieces split | partition (s) | step / work | same, 10× slower network |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        for r in _zoltanRows(d, ranks):
+            print("| %s | %s | %.4f | %.3f / %.3f | %.1f / %d | %.0f | %d | %.2f | %.3f | %.3f |" % (
+                r["scene"], r["method"], r["imbalance"], r["halo_over_owned_mean"], r["halo_over_owned_max"],
+                r["neighbours_mean"], r["neighbours_max"],
+                max(r["bytes_sent_per_step_max"], r["bytes_received_per_step_max"]) / 1000, r["pieces_split"],
+                r["partition_seconds"], stepOverWork(r, alpha, beta, w),
+                stepOverWork(r, 10 * alpha, 10 * beta, w)))
+        print()
+
+
+def zoltanByP(d):
+    """Imbalance and maximum halo over owned by P, ours against Zoltan's
+    HSFC and RCB (mpi_zoltan.json)."""
+    methods = ("hilbert", "zoltan-hsfc", "zoltan-rcb")
+    ranks = sorted(set(r["ranks"] for r in d["rows"]))
+    at = {(r["scene"], r["method"], r["ranks"]): r for r in d["rows"]}
+    for key, title, digits in (("imbalance", "Imbalance", 3), ("halo_over_owned_max", "Halo over owned, maximum "
+                                                                "over ranks", 3)):
+        print("%s by P (%s):\n" % (title, " / ".join(methods)))
+        print("| scene | P = %s |" % " | ".join(str(p) for p in ranks))
+        print("|---|%s" % ("---|" * len(ranks)))
+        for s in SCENE_ORDER:
+            print("| %s | %s |" % (s, " | ".join(" / ".join("%.*f" % (digits, at[s, m, p][key]) for m in methods)
+                                                for p in ranks)))
+        print()
+
+
+def zoltanSlowNetwork(d, mpiJson):
+    """Step / work at the largest P with alpha and beta ten times those of
+    mpi.json (an assumed cluster network, not a measurement)."""
+    alpha, beta, w = _modelInputs(mpiJson)
+    top = max(r["ranks"] for r in d["rows"])
+    methods = ("hilbert", "hilbert-split", "zoltan-rcb", "zoltan-hsfc")
+    at = {(r["scene"], r["method"]): r for r in d["rows"] if r["ranks"] == top}
+    print("| scene | %s |" % " | ".join("`%s`" % m for m in methods))
+    print("|---|%s" % ("---|" * len(methods)))
+    for s, label in (("pieces", "heap"), ("mixed", "mixed"), ("body", "body")):
+        print("| %s | %s |" % (label, " | ".join("%.2f" % stepOverWork(at[s, m], 10 * alpha, 10 * beta, w)
+                                                for m in methods)))
+
+
+def mpiPingpong(d):
+    """The ping-pong fits t(m) = alpha + beta m (mpi.json: pingpong, pingpong_yield)."""
+    p, y = d["pingpong"], d["pingpong_yield"]
+    rows = [("busy polling, fit on the minima (**model input**)", p["alpha_s_min"], p["beta_s_per_byte_min"],
+             "`mpi.json: pingpong.alpha_s_min, beta_s_per_byte_min`", True),
+            ("busy polling, fit on the medians", p["alpha_s_median"], p["beta_s_per_byte_median"],
+             "`pingpong.*_median`", False),
+            ("messages ≤ 1 KB only (mean) / ≥ 64 KB only (slope)", p["alpha_s_small_messages_min"],
+             p["beta_s_per_byte_large_messages_min"],
+             "`pingpong.alpha_s_small_messages_min`, `beta_s_per_byte_large_messages_min`", False),
+            ("passive waits (`OMPI_MCA_mpi_yield_when_idle=1`), minima", y["alpha_s_min"], y["beta_s_per_byte_min"],
+             "`pingpong_yield.*_min`", False)]
+    print("| | alpha | beta | bandwidth 1/beta | source |")
+    print("|---|---|---|---|---|")
+    for label, a, b, src, bold in rows:
+        cells = ["%.2f µs" % (a * 1e6), "%.2e s/B" % b, "%.1f GB/s" % (1e-9 / b)]
+        if bold:
+            cells = ["**%s**" % c for c in cells]
+        print("| %s | %s | %s |" % (label, " | ".join(cells), src))
+
+
+def mpiRanks(d):
+    """The contact-free scene on P ranks, rank by rank, then run by run
+    (mpi.json: ranks.runs); times in ms."""
+    print("| P | rank | owned nodes | owned tets | ghosts | neighbours | bytes sent/step | messages/step "
+          "| step median | step min | elements median | exchange median | exchange min |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for run in d["ranks"]["runs"]:
+        for r in run["ranks"]:
+            print("| %d | %d | %d | %d | %d | %s | %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (
+                run["P"], r["rank"], r["ownedNodes"], r["ownedTets"], r["ghosts"],
+                ",".join(map(str, r["neighbours"])) or "-", r["stepBytes"], r["stepMessages"],
+                1e3 * r["stepSeconds"]["median"], 1e3 * r["stepSeconds"]["min"],
+                1e3 * r["phaseSeconds"]["elements"]["median"], 1e3 * r["exchangeSeconds"]["median"],
+                1e3 * r["exchangeSeconds"]["min"]))
+    print("\n| P | imbalance (max/mean owned tets) | load average before → after | max \\|Δx\\| vs P = 1 after %d "
+          "steps |" % (d["ranks"]["runs"][0]["warmupSteps"] + d["ranks"]["runs"][0]["timedSteps"]))
+    print("|---|---|---|---|")
+    for run in d["ranks"]["runs"]:
+        dx = run["maxAbsDxVsP1"]
+        print("| %d | %.6g | %.2f → %.2f | %s |" % (run["P"], run["ranks"][0]["imbalance"],
+                                                   run["loadAverageBefore"][0], run["loadAverageAfter"][0],
+                                                   "%.1e m" % dx if dx else "0"))
+
+
+def mpiInputs(d):
+    """What the weak-scaling model measures and what it models (mpi.json: model.inputs)."""
+    i = d["model"]["inputs"]
+    print("| input | how | value | source |")
+    print("|---|---|---|---|")
+    print("| alpha, beta | ping-pong (busy polling, minima) | %.2f µs, %.2e s/B | `mpi.json: model.inputs` |"
+          % (i["alpha_s"] * 1e6, i["beta_s_per_byte"]))
+    print("| work per tet `w` | P = 1 run: median step / tets (everything in the step: elements, integration, "
+          "obstacles) | %.1f ns/tet (%.1f from the fastest step) | `model.inputs.ns_per_tet`, "
+          "`ns_per_tet_from_min_step` |" % (i["ns_per_tet"], i["ns_per_tet_from_min_step"]))
+    top = max(r["ranks"] for r in d["partition"]["rows"])
+    more = sorted(set(r["ranks"] for r in d["partition_more"]["rows"]) - set(r["ranks"] for r in
+                                                                            d["partition"]["rows"]))
+    print("| owned tets, imbalance, halo, neighbours, bytes per rank | the real partitioner (`pkg/parallel`) on "
+          "synthetic scenes of P × %s nodes, P = 1..%d in `make bench-mpi`, %s from the one-off run | | "
+          "`mpi.json: partition.rows`, `mpi_partition_512.json: rows` |"
+          % (thousands(i["nodes_per_rank"]), top, " and ".join(map(str, more))))
+    print("| same, P > %d | fits to the partitioner's rows (below) | | `model.extrapolation` |"
+          % i["partitioner_max_P"])
+    print("| times | the formula below | | `model.projection` |")
+
+
+def _efficiencyTable(at, scenes=SCENE_ORDER, bold=()):
+    ps = sorted(at, key=int)
+    print("| scene / split | P = %s |" % " | ".join("**%s**" % thousands(p) if p in bold else thousands(p) for p in ps))
+    print("|---|%s" % ("---|" * len(ps)))
+    for s in scenes:
+        for m in ("hilbert", "slabs"):
+            print("| %s, %s | %s |" % (s, SPLIT[m], " | ".join("%.3f" % at[p]["%s/%s" % (s, m)] for p in ps)))
+
+
+def mpiEfficiency(d):
+    """Projected weak-scaling efficiency E(P) (mpi.json: model.efficiency_at)."""
+    _efficiencyTable(d["model"]["efficiency_at"], bold=("16384",))
+
+
+def mpiProjection(d):
+    """The step at the largest projected P split into its terms (model.projection)."""
+    rows = (("pieces", "hilbert"), ("body", "hilbert"), ("body", "slabs"))
+    last = {k: v[-1] for k, v in d["model"]["projection"].items()}
+    print("At P = %s, times in ms:\n" % thousands(last["body/hilbert"]["P"]))
+    print("| | halo/owned (max) | neighbours (max) | bytes (max) | work | halo exchange | allgather | step |")
+    print("|---|---|---|---|---|---|---|---|")
+    for s, m in rows:
+        q = last["%s/%s" % (s, m)]
+        print("| %s, %s | %s | %.0f | %s MB | %.2f | %.2f | %.2f | %.2f |" % (
+            s, SPLIT[m], sig2(q["halo_over_owned_max"]), q["neighbours_max"], sig2(q["bytes_max"] / 1e6),
+            1e3 * q["work_s"], 1e3 * q["halo_s"], 1e3 * q["collective_s"], 1e3 * q["step_s"]))
+
+
+def _hilbertSlabs(at):
+    print("| | Hilbert | slabs |")
+    print("|---|---|---|")
+    for s in ("pieces", "body"):
+        print("| %s | %.3f | %.3f |" % (s, at["%s/hilbert" % s], at["%s/slabs" % s]))
+
+
+def mpiPingpongCurve(d):
+    """E at 16,384 ranks with each rank's halo costed by the measured
+    ping-pong curve (model.efficiency_at_pingpong_curve)."""
+    _hilbertSlabs(d["model"]["efficiency_at_pingpong_curve"]["16384"])
+
+
+def mpiRerun(d):
+    """E at 16,384 ranks from a second run of make bench-mpi (mpi_rerun.json: model.efficiency_at)."""
+    _hilbertSlabs(d["model"]["efficiency_at"]["16384"])
+
+
+def _signedPercent(x):
+    return ("%+.0f %%" % (100 * x)).replace("-", "−")
+
+
+def mpiExtrapolation(d):
+    """The fits' check: fitted on the partitioner's rows to P = 128, their
+    relative error at the P it also reached (model.extrapolation[*][*].check_on_overlap)."""
+    ex = d["model"]["extrapolation"]
+    keys = ("halo_over_owned_max", "bytes_max", "neighbours_max")
+    ps = sorted(ex["pieces"]["hilbert"]["check_on_overlap"]["bytes_max"]["predicted_vs_partitioner"], key=int)
+    print("| | %s |" % " | ".join("%s, %s" % (k, " / ".join(ps)) for k in
+                                   ("halo/owned max", "bytes max", "neighbours max")))
+    print("|---|---|---|---|")
+    for m in ("hilbert", "slabs"):
+        for s in SCENE_ORDER:
+            c = ex[s][m]["check_on_overlap"]
+            fitted = c["bytes_max"]["fitted_on_P"]
+            print("| %s, %s (fit on %d..%d) | %s |" % (s, SPLIT[m], fitted[0], fitted[-1], " | ".join(
+                " / ".join(_signedPercent(c[k]["predicted_vs_partitioner"][p]["relative_error"]) for p in ps)
+                for k in keys)))
+
+
+def mpiValidation(d):
+    """Modelled against measured step times of the slowest rank, P = 2..4 (model.validation), in ms."""
+    print("| P | model, w from the P = 1 median | model, w from the P = 1 minimum | measured, slowest rank, median "
+          "| measured, minimum |")
+    print("|---|---|---|---|---|")
+    for v in d["model"]["validation"]:
+        print("| %d | %.2f | %.2f | %.2f | %.2f |" % (v["P"], 1e3 * v["step_s_model_max"],
+                                                    1e3 * v["step_s_model_from_min_max"],
+                                                    1e3 * v["step_s_measured_median_max"],
+                                                    1e3 * v["step_s_measured_min_max"]))
+
+
+def mpiMemory(d):
+    """Memory per rank with the world replicated on every rank
+    (model.memory.replicated_GB_per_rank_at)."""
+    print("| P | memory per rank |")
+    print("|---|---|")
+    for p, gb in sorted(d["model"]["memory"]["replicated_GB_per_rank_at"].items(), key=lambda kv: int(kv[0])):
+        print("| %s | %s |" % (thousands(p), "%s TB" % sig2(gb / 1000) if gb >= 1000 else "%s GB" % sig2(gb)))
+
+
+def mpiMpy(d):
+    """QDEM under yade.mpy against serial runs (mpi_mpy.json from scripts/mpi/mpy_vs_serial.py)."""
+    print("| scene (under mpy, %s steps) | P | max \\|Δx\\| / largest displacement | sphere states / their largest "
+          "value | floor force | QDEM energy |" % thousands(d["drop"]["mpy3ranks"]["steps"]))
+    print("|---|---|---|---|---|---|")
+    for name, label in (("drop", "%d spheres dropped on a block"), ("clump", "a clump thrown along a slab")):
+        s = d[name]
+        if "%d" in label:
+            label %= sum(len(o) for o in s["mpy3ranks"]["owners"])
+        for i, (key, p) in enumerate((("mpy3ranks", "3"), ("mpy4ranks", "4"), ("serial1vs2threads",
+                                                                              "serial, 1 vs 2 threads"))):
+            v = s[key].get("vsSerial", s[key])
+            force = "%.1e" % v["floorForce"] + (" of %.0f N" % s["floorForceMax"] if i == 0 else "")
+            print("| %s | %s | %.1e | %.1e | %s | %.1e |" % (label if i == 0 else "", p, v["dxOverDisp"],
+                                                            v["sphereStates"], force, v["energy"]))
+
+
 BEGIN, END = "<!-- perf_tables.py effects: begin -->", "<!-- perf_tables.py effects: end -->"
 
 
@@ -249,19 +516,25 @@ def intoDoc(doc, table, source):
         f.write("%s%s\n%s\nFrom `%s`.\n%s%s" % (head, BEGIN, table.rstrip("\n"), source, END, tail))
 
 
+# Every table this file prints: generator(json, *more json paths).
+GENERATORS = {f.__name__: f for f in (
+    elements, roofline, cubes27, shogi, effects, ops, spheres, glue, meshSurface, zoltan, zoltanByP,
+    zoltanSlowNetwork, mpiPingpong, mpiRanks, mpiInputs, mpiEfficiency, mpiProjection, mpiPingpongCurve, mpiRerun,
+    mpiExtrapolation, mpiValidation, mpiMemory, mpiMpy)}
+
+
 def main():
-    kind, path = sys.argv[1], sys.argv[2]
+    kind, path, more = sys.argv[1], sys.argv[2], [a for a in sys.argv[3:] if not a.startswith("--")]
     d = json.load(open(path))
     if kind == "effects" and "--doc" in sys.argv:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             effects(d)
         intoDoc(sys.argv[sys.argv.index("--doc") + 1], buf.getvalue(), path)
-    elif kind == "roofline":
-        roofline(d, *sys.argv[3:5])
+    elif kind in GENERATORS:
+        GENERATORS[kind](d, *more)
     else:
-        {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops,
-         "spheres": spheres, "glue": glue, "meshSurface": meshSurface}[kind](d)
+        sys.exit("perf_tables: no table %r; one of %s" % (kind, ", ".join(sorted(GENERATORS))))
 
 
 if __name__ == "__main__":

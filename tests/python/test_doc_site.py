@@ -67,6 +67,18 @@ def test_every_public_name_is_in_the_reference(site):
     assert not missing, "public names missing from the API reference: %s" % missing
 
 
+def test_performance_page_draws_its_roofline_from_kept_json(site):
+    """The roofline plot is drawn at build time from the JSON under
+    bench/logs/ (the bench-figure directive), never a PNG kept by hand: the
+    page shows it and names the JSON it was drawn from."""
+    r, html = site
+    assert r.returncode == 0, r.stderr[-3000:]
+    png = html / "_images" / "roofline.png"
+    assert png.exists() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20000
+    page = (html / "performance.html").read_text()
+    assert "roofline.png" in page and "bench/logs/roofline_2026-11-24.json" in page
+
+
 def test_settings_table_lists_every_engine_setting_with_its_default(site):
     """The QdemEngine table names each declared world setting and shows its
     compiled default: the table is generated, never written by hand."""

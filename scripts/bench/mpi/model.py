@@ -1,4 +1,4 @@
-"""Weak-scaling model of QDEM under MPI to 16,384 ranks (doc/parallel.md,
+"""Weak-scaling model of QDEM under MPI to 16,384 ranks (doc/parallel_scaling.md,
 "Weak-scaling model").
 
 Time of one step on the slowest rank of P, each rank holding ~50,000 nodes:
@@ -20,7 +20,7 @@ run_ranks.py), and their times are compared.
 
     python3 model.py --pingpong out/bench/mpi_pingpong.json --ranks out/bench/mpi_ranks.json \
         --partition out/bench/mpi_partition.json [--partition-more bench/logs/mpi_partition_512.json] \
-        --out out/bench/mpi_model.json --img doc/img
+        --out out/bench/mpi_model.json --img out/bench/img
 """
 import argparse
 import json
@@ -258,53 +258,14 @@ def validate(ranksJson, baseDir, nsPerTet, nsPerTetMin, alpha, beta, alphaYield,
 # ---- plots ---------------------------------------------------------------------------------
 
 def plots(proj, rows, imgDir, scenes):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """parallel_efficiency.png and parallel_halo.png in imgDir, drawn as the
+    site draws them from the kept JSON (scripts/bench/perf_plots.py)."""
+    import sys
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    import perf_plots
     os.makedirs(imgDir, exist_ok=True)
-    colours = {"pieces": "tab:blue", "body": "tab:red", "mixed": "tab:green"}
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for scene in scenes:
-        for method, ls in (("hilbert", "-"), ("slabs", "--")):
-            pts = proj["%s/%s" % (scene, method)]
-            pts = [p for p in pts if p["P"] != 5120]
-            ax.plot([p["P"] for p in pts], [p["efficiency"] for p in pts], ls, color=colours[scene], marker=".",
-                    label="%s, %s" % (scene, method))
-    ax.axvline(5120, color="grey", lw=0.8)
-    ax.text(5120, 0.05, " seed: 5,120 cores\n (no figure given)", fontsize=8, color="grey")
-    ax.set_xscale("log", base=2)
-    ax.set_ylim(0, 1.05)
-    ax.set_xlabel("ranks P (50,000 nodes each)")
-    ax.set_ylabel("weak-scaling efficiency T(1)/T(P)")
-    ax.set_title("QDEM weak scaling, model (measured alpha, beta, ns/tet)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
-    fig.savefig(os.path.join(imgDir, "parallel_efficiency.png"), dpi=110)
-    plt.close(fig)
-
-    fig, axs = plt.subplots(1, 2, figsize=(11, 4.5))
-    for scene in scenes:
-        for method, ls in (("hilbert", "-"), ("slabs", "--")):
-            pts = proj["%s/%s" % (scene, method)]
-            meas = [p for p in pts if p["source"] == "partitioner"]
-            fit = [p for p in pts if p["source"] == "fit" or p is meas[-1]]
-            for ax, key in ((axs[0], "halo_over_owned_max"), (axs[1], "neighbours_max")):
-                ax.plot([p["P"] for p in meas], [p[key] for p in meas], ls, color=colours[scene], marker="o", ms=3,
-                        label="%s, %s" % (scene, method))
-                ax.plot([p["P"] for p in fit], [p[key] for p in fit], ls, color=colours[scene], alpha=0.4)
-    for ax, lab in ((axs[0], "halo / owned nodes (max over ranks)"), (axs[1], "neighbours (max over ranks)")):
-        ax.set_xscale("log", base=2)
-        ax.set_yscale("log")
-        ax.set_xlabel("ranks P (50,000 nodes each)")
-        ax.set_ylabel(lab)
-        ax.grid(alpha=0.3, which="both")
-    axs[0].legend(fontsize=8)
-    fig.suptitle("Partitioner (dots), fits beyond (faint): Hilbert (solid) vs slabs (dashed)",
-                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(imgDir, "parallel_halo.png"), dpi=110)
-    plt.close(fig)
+    perf_plots.drawMpiEfficiency(proj, os.path.join(imgDir, "parallel_efficiency.png"))
+    perf_plots.drawMpiHalo(proj, os.path.join(imgDir, "parallel_halo.png"))
 
 
 def main():
@@ -316,7 +277,7 @@ def main():
     ap.add_argument("--partition-more", default=None,
                     help="a partitioner run to more ranks (once: minutes and GB): its rows beyond --partition join it")
     ap.add_argument("--out", default="out/bench/mpi_model.json")
-    ap.add_argument("--img", default="doc/img")
+    ap.add_argument("--img", default="out/bench/img")
     ap.add_argument("--combined", default=None, help="also write every input and the model in one JSON here")
     a = ap.parse_args()
     pp = json.load(open(a.pingpong))
@@ -387,7 +348,7 @@ def main():
         json.dump(res, f, indent=1)
     if a.combined:
         with open(a.combined, "w") as f:
-            json.dump({"what": "make bench-mpi: doc/parallel.md, sections Benchmark and Weak-scaling model",
+            json.dump({"what": "make bench-mpi: doc/parallel_scaling.md, sections Benchmark and Weak-scaling model",
                        "pingpong": pp, "pingpong_yield": ppy, "ranks": ranks, "partition": part,
                        "partition_more": more, "model": res}, f, indent=1)
     plots(proj, rows, a.img, scenes)

@@ -1,5 +1,5 @@
 """Latency alpha and inverse bandwidth beta between two MPI ranks, by ping-pong
-(doc/parallel.md, "Benchmark").  Run under mpiexec with 2 ranks:
+(doc/parallel_scaling.md, "Benchmark").  Run under mpiexec with 2 ranks:
 
     mpiexec -n 2 python3 pingpong.py --out out/bench/mpi_pingpong.json
 

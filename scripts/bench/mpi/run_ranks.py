@@ -1,4 +1,4 @@
-"""The contact-free scene on P = 1..4 ranks of this machine (doc/parallel.md,
+"""The contact-free scene on P = 1..4 ranks of this machine (doc/parallel_scaling.md,
 "Benchmark").  The driver (default) starts `mpiexec -n P` on this same file
 with --worker, one run per P, with a timeout, OMP_NUM_THREADS=1 and passive
 waits (OMPI_MCA_mpi_yield_when_idle=1), and writes one JSON of every run:
