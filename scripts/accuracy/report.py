@@ -91,13 +91,31 @@ def _table(res):
     return "\n".join(lines)
 
 
+KEPT = os.path.join(ROOT, "bench", "logs", "accuracy.json")
+
+
 def writeDoc(out, outdir):
-    P = out["problems"]
+    """doc/accuracy.md and its plots from a full run; the run's JSON is kept
+    as bench/logs/accuracy.json, from which the page can be checked
+    (tests/python/test_accuracy_page.py) and regenerated."""
     imgdir = os.path.join(ROOT, "doc", "img")
     os.makedirs(imgdir, exist_ok=True)
     for f in os.listdir(outdir):
         if f.startswith("accuracy_") and f.endswith(".png"):
             shutil.copy(os.path.join(outdir, f), os.path.join(imgdir, f))
+    with open(KEPT, "w") as f:
+        json.dump(out, f, indent=1)
+    path = os.path.join(ROOT, "doc", "accuracy.md")
+    with open(path, "w") as f:
+        f.write(docText(out, outdir))
+    return path
+
+
+def docText(out, outdir):
+    """The text of doc/accuracy.md from a full run's JSON; the sections of the
+    implicit-viscosity and mass-scaling studies from their JSON in outdir, or
+    the kept ones in bench/logs/."""
+    P = out["problems"]
 
     def row(p, knob, prefix):
         for r in P[p]["rows"]:
@@ -145,7 +163,8 @@ Time is the wall time of `World.step` on one thread of a shared machine
 (repeat runs differ by ~10 %: compare within a column, not across runs).  Threads
 are not a knob here: they change the cost, never the result
 (`tests/python/test_threads.py`; costs in [performance.md](performance.md)).
-Raw numbers: `out/accuracy/accuracy.json`.
+Raw numbers: `out/accuracy/accuracy.json`; the run shown here is kept as
+`bench/logs/accuracy.json`, and the page is checked against it by `make test`.
 
 ## The problems and their reference answers
 
@@ -300,10 +319,7 @@ precision throughout, as Debian's YADE.
             continue
         seen.add(mod)
         text += "### `scripts/accuracy/%s.py`\n\n```\n%s\n```\n\n" % (mod.__name__, mod.__doc__.strip())
-    path = os.path.join(ROOT, "doc", "accuracy.md")
-    with open(path, "w") as f:
-        f.write(text)
-    return path
+    return text
 
 
 if __name__ == "__main__":
