@@ -7,7 +7,7 @@
 namespace qdem {
 
 WorldPhases::WorldPhases(World& w)
-    : obstacle{{.pos = w.pos, .vel = w.vel, .mass = w.mass, .nodePiece = w.nodePiece, .surfNodes = w.surfNodes,
+    : obstacle{{.pos = w.pos, .vel = w.vel, .refPos = w.refPos, .mass = w.mass, .nodePiece = w.nodePiece, .surfNodes = w.surfNodes,
                 .surfWeight = w.surfWeight, .pieces = w.pieces, .materials = w.materials, .settings = w.settings,
                 .sleeping = w.awake_, .bounds = w.bounds_, .obstacles = w.obstacles, .contacts = w.contactForces_,
                 .energy = w.energy, .threadPieceEnergy = w.threadPieceEnergy_, .iter = w.iter}},
