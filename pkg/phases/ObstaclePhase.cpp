@@ -178,21 +178,6 @@ void ObstaclePhase::run(double dt) {
         for (int d = 0; d < 3; ++d) e = std::max(e, w_.bounds.hi[3 * ip + d] - w_.bounds.lo[3 * ip + d] - 2 * r);
         pieceExtent_[ip] = std::min(e, restDiagonal_[ip]);
     }
-    // Any node deeper than that, inner nodes too (the pieces' boxes hold the
-    // surface nodes only): inner nodes of a soft cube at nine times its wave
-    // speed went 0.27 m behind the wall while the wall held its surface
-    // nodes, unnamed until a NaN twenty steps later.  One compare per node.
-    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip)
-        for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
-            const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
-            if (o.kind != ObstacleKind::Wall || o.sense == 0 || w_.sleeping.asleep(ip)) continue;
-            const double* x = w_.pos.data() + o.axis;
-            const double limit = o.sense * o.pos[o.axis] - pieceExtent_[ip];  // deeper: sense * x below it
-            bool deep = false;
-            for (int32_t n = w_.pieces[ip].nodeBegin; n < w_.pieces[ip].nodeEnd; ++n)
-                deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
-            if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
-        }
     const double* extent = pieceExtent_.data();
     threadThrough_.assign(nth, Through{});
     threadDeepest_.assign(nth, Deepest{});
@@ -379,6 +364,21 @@ void ObstaclePhase::run(double dt) {
     for (const Through& t : threadThrough_)
         if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
     if (first) reportThrough(*first, dt);
+    // An inner node deeper behind a one-sided wall than its piece's extent
+    // (the pieces' boxes hold the surface nodes only): inner nodes of a soft cube at nine times its wave
+    // speed went 0.27 m behind the wall while the wall held its surface
+    // nodes, unnamed until a NaN twenty steps later.  One compare per node.
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip)
+        for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
+            const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
+            if (o.kind != ObstacleKind::Wall || o.sense == 0 || w_.sleeping.asleep(ip)) continue;
+            const double* x = w_.pos.data() + o.axis;
+            const double limit = o.sense * o.pos[o.axis] - pieceExtent_[ip];  // deeper: sense * x below it
+            bool deep = false;
+            for (int32_t n = w_.pieces[ip].nodeBegin; n < w_.pieces[ip].nodeEnd; ++n)
+                deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
+            if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
+        }
     if (anyDynamic) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
