@@ -365,9 +365,10 @@ void ObstaclePhase::run(double dt) {
         if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
     if (first) reportThrough(*first, dt);
     // An inner node deeper behind a one-sided wall than its piece's extent
-    // (the pieces' boxes hold the surface nodes only): inner nodes of a soft cube at nine times its wave
-    // speed went 0.27 m behind the wall while the wall held its surface
-    // nodes, unnamed until a NaN twenty steps later.  One compare per node.
+    // (the pieces' boxes hold the surface nodes only): inner nodes of a soft
+    // cube at nine times its wave speed went 0.27 m behind the wall while
+    // the wall held its surface nodes, unnamed until a NaN twenty steps
+    // later.  One compare per node.
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip)
         for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
             const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
@@ -467,7 +468,8 @@ void ObstaclePhase::reportThrough(const Through& t, double dt) const {
                                  "zone thicker (QdemMat radius)."));
     const double stop = t.speed * std::sqrt(t.mass / t.kn);
     throw StabilityError(cat(where, ": it is ", t.depth, " m behind the wall's plane, more than the piece's largest ",
-                             "extent (", pieceExtent_[t.piece], " m, at most its rest shape's diagonal). The contact is too soft for this load: ",
+                             "extent (", pieceExtent_[t.piece], " m, at most its rest shape's diagonal). The contact ",
+                             "is too soft for this load: ",
                              "stopping distance v sqrt(m_node/kn) = ", stop, " m at ", t.speed, " m/s (node mass ",
                              t.mass, " kg, kn ", t.kn, " N/m). Make the contact stiffer (kn = E r: a larger QdemMat ",
                              "young or radius), the impact slower, or check the mesh's units (a mesh in mm with SI ",
