@@ -355,7 +355,10 @@ def runScene(spec):
     O.reset()
     qdem.reset()
     kind = spec["kind"]
-    meshes = [makeMesh(p["mesh"]) for p in spec["pieces"]]
+    try:  # a mesh the mesher refuses, naming why and what to change, is a named stop too
+        meshes = [makeMesh(p["mesh"]) for p in spec["pieces"]]
+    except Exception as e:  # noqa: BLE001 - classified in _stopped
+        return _stopped(out, e)
     mats = [makeMaterial(p["material"], *m) for p, m in zip(spec["pieces"], meshes)]
     pieces = []
     for p, (nodes, tets), mat in zip(spec["pieces"], meshes, mats):

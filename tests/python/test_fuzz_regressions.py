@@ -196,3 +196,22 @@ def test_a_light_sphere_touching_a_soft_one_cell_cube_keeps_the_ledger(scene):
                         "spin": [0, 0, 0]}}
     out = fuzzscene.runScene(spec)
     fuzzscene.check(out)
+
+
+def test_a_mesh_the_mesher_refuses_is_a_named_stop(scene):
+    """Hypothesis's shrunk scene: a CGAL octahedron (circumradius 0.1 m) at
+    cellSize 0.8 of its size, dropped on facets.  Mesh_3 gives it a flat
+    tetrahedron (volume 4e-18 against edges of 0.52) and qdem.meshSurface
+    refuses it with a ValueError naming the element and the fix (a smaller
+    cellSize, another seed): a named stop, as the fuzzer's rules say.  The
+    fuzzer let that error escape runScene and failed the run (every
+    octahedron drawn at 0.8 did); it is classified now."""
+    spec = {"threads": 1, "dtFraction": 0.5, "steps": 200, "speed": 1.0, "approach": 0.0, "offset": 0.0,
+            "offsetAngle": 0.0, "kind": "drop", "gravity": False,
+            "pieces": [_piece({"kind": "cgal", "shape": "octahedron", "size": 0.1, "cellSize": 0.8, "seed": 0,
+                               "convex": True}, _rubber(density=1000.0, restitution=1.0))],
+            "obstacle": {"kind": "facets", "frictionAngle": 0.0}, "incidence": 0.0}
+    out = fuzzscene.runScene(spec)
+    fuzzscene.check(out)
+    assert out.stop is not None and out.stop.startswith("ValueError: meshClosedSurface"), out
+    assert "smaller cellSize" in out.stop, out
