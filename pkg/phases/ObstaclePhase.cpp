@@ -18,6 +18,42 @@
 
 namespace qdem {
 
+namespace {
+
+// A node of piece ip deeper behind one-sided wall io than the piece's own
+// size: the piece was crushed through itself against the wall.  Named with
+// the figures that say why (impact speed, wave speed, a surface node's
+// stopping distance on its contact spring) and what would hold it.
+[[noreturn]] void reportCrushedThrough(const ObstaclePhase::Data& w, std::size_t ip, int io, const PairConst& pc,
+                                       double extent) {
+    const PieceInfo& p = w.pieces[ip];
+    const Obstacle& o = w.obstacles[io];
+    const Material& m = w.materials[p.material];
+    int32_t node = p.nodeBegin;
+    double depth = -INFINITY, mass = 0, momentum = 0;
+    for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) {
+        const double d = depthBehind(o, Eigen::Map<const Eigen::Vector3d>(&w.pos[3 * static_cast<std::size_t>(n)]));
+        if (d > depth) depth = d, node = n;
+        mass += w.mass[n];
+        momentum += w.mass[n] * w.vel[3 * static_cast<std::size_t>(n) + o.axis];
+    }
+    const double speed = std::max(0.0, -o.sense * momentum / mass);  // the piece's centre, towards the wall
+    const double wave = std::sqrt(m.young / m.density);
+    const double stop = speed * std::sqrt(p.minSurfaceMassPerWeight / pairLaw(pc, 1.0).kn);
+    throw StabilityError(cat(
+        "QDEM: during step ", w.iter + 1, " node ", node - p.nodeBegin, " of piece ", ip, " is ", depth,
+        " m behind the one-sided wall (YADE body ", o.bodyId, "), more than the piece's own size (", extent,
+        " m): the piece was crushed through itself against the wall, its inner nodes driven past the surface ",
+        "nodes the wall holds. The impact is too fast for its elements and contacts: its centre moves at ", speed,
+        " m/s towards the wall, ", speed / wave, " times the material's wave speed sqrt(E/rho) = ", wave,
+        " m/s, and a surface node needs v sqrt(m/kn) = ", stop, " m to stop on its contact spring, against a ",
+        "contact radius of ", m.radius, " m. Make the material stiffer (QdemMat young), the contact stiffer or ",
+        "thicker (QdemMat radius), or the impact slower; a smaller O.dt does not hold a piece that cannot keep ",
+        "its shape (doc/hard_cases.md, \"Found by the fuzzer\")."));
+}
+
+}  // namespace
+
 void ObstaclePhase::run(double dt) {
     const int nObs = static_cast<int>(w_.obstacles.size());
     for (auto& o : w_.obstacles) {
@@ -130,12 +166,17 @@ void ObstaclePhase::run(double dt) {
     // through the solid.  (Not half the thickness, as point-polygon's "past
     // the middle": a rubber cube hitting a floor at 50 m/s pushes nodes 45 %
     // of its size behind the plane and still comes back, test_hard_cases.py.)
+    // At most its rest shape's diagonal: a piece crushed through itself
+    // spreads its box with the nodes that went through, and a box-only
+    // bound grew with them (a soft cube at 9 times its wave speed, nodes
+    // 0.27 m behind the wall, its box 0.47 m: unnamed until a NaN).
     pieceExtent_.resize(w_.pieces.size());
+    if (restDiagonal_.size() != w_.pieces.size()) measureRestShapes();  // (pieces from a loaded state)
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
         const double r = w_.materials[w_.pieces[ip].material].radius;
         double e = 0;
         for (int d = 0; d < 3; ++d) e = std::max(e, w_.bounds.hi[3 * ip + d] - w_.bounds.lo[3 * ip + d] - 2 * r);
-        pieceExtent_[ip] = e;
+        pieceExtent_[ip] = std::min(e, restDiagonal_[ip]);
     }
     const double* extent = pieceExtent_.data();
     threadThrough_.assign(nth, Through{});
@@ -327,6 +368,22 @@ void ObstaclePhase::run(double dt) {
     for (const Through& t : threadThrough_)
         if (t.node >= 0 && (!first || t.node < first->node)) first = &t;
     if (first) reportThrough(*first, dt);
+    // An inner node deeper behind a one-sided wall than its piece's extent
+    // (the pieces' boxes hold the surface nodes only): inner nodes of a soft
+    // cube at nine times its wave speed went 0.27 m behind the wall while
+    // the wall held its surface nodes, unnamed until a NaN twenty steps
+    // later.  One compare per node.
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip)
+        for (int j = pieceObstacleBegin_[ip]; j < pieceObstacleBegin_[ip + 1]; ++j) {
+            const Obstacle& o = w_.obstacles[pieceObstacles_[j]];
+            if (o.kind != ObstacleKind::Wall || o.sense == 0 || w_.sleeping.asleep(ip)) continue;
+            const double* x = w_.pos.data() + o.axis;
+            const double limit = o.sense * o.pos[o.axis] - pieceExtent_[ip];  // deeper: sense * x below it
+            bool deep = false;
+            for (int32_t n = w_.pieces[ip].nodeBegin; n < w_.pieces[ip].nodeEnd; ++n)
+                deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
+            if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
+        }
     if (anyDynamic) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
@@ -415,7 +472,8 @@ void ObstaclePhase::reportThrough(const Through& t, double dt) const {
                                  "zone thicker (QdemMat radius)."));
     const double stop = t.speed * std::sqrt(t.mass / t.kn);
     throw StabilityError(cat(where, ": it is ", t.depth, " m behind the wall's plane, more than the piece's largest ",
-                             "extent (", pieceExtent_[t.piece], " m). The contact is too soft for this load: ",
+                             "extent (", pieceExtent_[t.piece], " m, at most its rest shape's diagonal). The contact ",
+                             "is too soft for this load: ",
                              "stopping distance v sqrt(m_node/kn) = ", stop, " m at ", t.speed, " m/s (node mass ",
                              t.mass, " kg, kn ", t.kn, " N/m). Make the contact stiffer (kn = E r: a larger QdemMat ",
                              "young or radius), the impact slower, or check the mesh's units (a mesh in mm with SI ",
@@ -434,6 +492,21 @@ void ObstaclePhase::piecesAdded() {
     slotShear_.resize(3 * kSlots * ns, 0.0);
     slotSide_.resize(kSlots * ns, 0);
     startChecked_.resize(w_.pieces.size(), 0);
+    measureRestShapes();
+}
+
+void ObstaclePhase::measureRestShapes() {
+    restDiagonal_.resize(w_.pieces.size());
+    for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
+        const PieceInfo& p = w_.pieces[ip];
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+        for (int32_t n = p.nodeBegin; n < p.nodeEnd; ++n) {
+            const Eigen::Map<const Eigen::Vector3d> x(&w_.refPos[3 * static_cast<std::size_t>(n)]);
+            lo = lo.cwiseMin(x);
+            hi = hi.cwiseMax(x);
+        }
+        restDiagonal_[ip] = p.nodeEnd > p.nodeBegin ? (hi - lo).norm() : INFINITY;
+    }
 }
 
 }  // namespace qdem

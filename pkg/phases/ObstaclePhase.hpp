@@ -30,6 +30,7 @@ public:
     struct Data {
         const Column<double>& pos;
         const Column<double>& vel;
+        const Column<double>& refPos;    // rest shape: how deep behind a wall a node may go (restDiagonal_)
         const Column<double>& mass;
         const Column<int32_t>& nodePiece;
         const Column<int32_t>& surfNodes;
@@ -126,6 +127,8 @@ private:
     std::set<std::pair<int, int>> softWarned_;  // (YADE body id, piece) already named
     void warnSoftObstacle(const Deepest& d);
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
+    std::vector<double> restDiagonal_;    // per piece: its rest shape's bounding-box diagonal (piecesAdded)
+    void measureRestShapes();
 
     Data w_;
 

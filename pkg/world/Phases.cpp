@@ -7,10 +7,11 @@
 namespace qdem {
 
 WorldPhases::WorldPhases(World& w)
-    : obstacle{{.pos = w.pos, .vel = w.vel, .mass = w.mass, .nodePiece = w.nodePiece, .surfNodes = w.surfNodes,
-                .surfWeight = w.surfWeight, .pieces = w.pieces, .materials = w.materials, .settings = w.settings,
-                .sleeping = w.awake_, .bounds = w.bounds_, .obstacles = w.obstacles, .contacts = w.contactForces_,
-                .energy = w.energy, .threadPieceEnergy = w.threadPieceEnergy_, .iter = w.iter}},
+    : obstacle{{.pos = w.pos, .vel = w.vel, .refPos = w.refPos, .mass = w.mass, .nodePiece = w.nodePiece,
+                .surfNodes = w.surfNodes, .surfWeight = w.surfWeight, .pieces = w.pieces, .materials = w.materials,
+                .settings = w.settings, .sleeping = w.awake_, .bounds = w.bounds_, .obstacles = w.obstacles,
+                .contacts = w.contactForces_, .energy = w.energy, .threadPieceEnergy = w.threadPieceEnergy_,
+                .iter = w.iter}},
       pieceContact{{.pos = w.pos, .vel = w.vel, .refPos = w.refPos, .mass = w.mass, .nodePiece = w.nodePiece,
                     .tetNodes = w.tetNodes, .surfNodes = w.surfNodes, .surfWeight = w.surfWeight, .pieces = w.pieces,
                     .materials = w.materials, .settings = w.settings, .iter = w.iter, .surface = w.surf_,
