@@ -58,22 +58,29 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
     PieceStepReport& r = stepReports_[i];
     if (stepReportDone_[i]) return r;
     const PieceInfo& p = pieces[i];
-    const Material& m = materials[p.material];
-    double lam = m.lambda(), mu = m.mu();
-    withLaw(m, [&](const auto& law) { law.lameAtRest(lam, mu); });  // as elementOmegaMax
+    // Each element's Lame constants at rest (as elementOmegaMax; a bonded
+    // piece's elements each with their own material).
+    auto lameAtRest = [&](int32_t e, double& lam, double& mu) {
+        const Material& m = tetMat(e);
+        lam = m.lambda(), mu = m.mu();
+        withLaw(m, [&](const auto& law) { law.lameAtRest(lam, mu); });
+    };
     const int32_t n = p.tetEnd - p.tetBegin;
     // Identical shapes (structured meshes) are solved once.
     // Selective mass scaling (MassScaling.cpp) adds mass per tet: the
     // element's own mass is rho V + added, its effective density below.
-    auto density = [&](int32_t e) { return m.density + tetAddedMass[e] / tetVol0[e]; };
-    std::map<std::array<double, 10>, double> solved;
+    auto density = [&](int32_t e) { return tetMat(e).density + tetAddedMass[e] / tetVol0[e]; };
+    std::map<std::array<double, 11>, double> solved;
     auto exact = [&](int32_t local) {
         const int32_t e = p.tetBegin + local;
-        std::array<double, 10> key;
+        std::array<double, 11> key;
         std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
         key[9] = tetAddedMass[e];
+        key[10] = tetMaterial[e];
         const auto it = solved.find(key);
         if (it != solved.end()) return it->second;
+        double lam, mu;
+        lameAtRest(e, lam, mu);
         const double w2 = restElementOmega2(&tetB[9 * e], tetVol0[e], lam, mu, density(e));
         solved.emplace(key, w2);
         return w2;
@@ -92,9 +99,11 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
     // The stiffest elements: by the cheap upper bound (elementOmegaMax's)
     // first, exact frequencies for every element whose bound reaches a
     // quarter of the largest exact one found (omega within 2x).
-    const double c = 4.0 * (std::max(lam, 0.0) + 2 * mu);
     std::vector<double> bound(n);
     for (int32_t e = 0; e < n; ++e) {
+        double lam, mu;
+        lameAtRest(p.tetBegin + e, lam, mu);
+        const double c = 4.0 * (std::max(lam, 0.0) + 2 * mu);
         const Mat3 B = loadRowMajor(&tetB[9 * (p.tetBegin + e)]);
         bound[e] = c / density(p.tetBegin + e) * (B.squaredNorm() + (B.row(0) + B.row(1) + B.row(2)).squaredNorm());
     }
