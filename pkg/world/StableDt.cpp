@@ -258,13 +258,13 @@ void World::checkCurrentDt(double dt) const {
                 const double h = (F - Mat3::Identity()).norm(), s1 = std::sqrt(std::max(s2, 0.0));
                 const double w2 = omega2Tet_[e] + perMass * law.tangentChangeBound(F, s1);
                 const double rate = beta * (omega2Tet_[e] + perMass * d0 * h * (s1 + 1.0));
-                if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) continue;  // (NaN: checkFinite's)
+                if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) return;  // (NaN: checkFinite's)
                 // The exact condition on the element's own matrices.
                 const double nodeMass = elementNodeMass(e, m);
                 const Mat12 K = elementStiffness(B, law.tangent(F), tetVol0[e]);
                 const Mat12 Cv = beta > 0 ? viscousMatrix(F, B, tetVol0[e], lam, mu, beta) : Mat12::Zero();
                 const Mat12 Kp = positivePart(K);
-                if (largestEigenvalue(0.5 * dt * Cv + 0.25 * dt * dt * Kp) / nodeMass < room) continue;
+                if (largestEigenvalue(0.5 * dt * Cv + 0.25 * dt * dt * Kp) / nodeMass < room) return;
                 const double now = leapfrogStep(Kp / nodeMass, Cv / nodeMass, 2 * xic * wc, wc * wc, dt);
                 const double J = F.determinant();
                 const std::string where = cat("QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i);

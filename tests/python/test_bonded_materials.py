@@ -319,3 +319,18 @@ def test_region_materials_are_checked(scene):
         qdem.addPiece(plain, regionMaterials={1: _mat(E1)})
     # Nothing was added by the refused calls: the next piece is piece 0.
     assert qdem.addPiece(mesh, regionMaterials={1: _mat(E1), 2: _mat(E2)}).id == 0
+
+
+def test_a_bonded_piece_split_across_two_ranks_steps_as_serially():
+    """Under MPI a bonded bar spanning two ranks steps as one process does (to
+    the rounding of the partial force sums): every rank holds each element's
+    material, so the element blocks of either material compute alike."""
+    from mpi_launch import mpirun, python, requireMpi, result
+    requireMpi()
+    rc, out = mpirun(2, python("tests/mpi/check_bonded.py"))
+    assert rc == 0, out[-4000:]
+    r = result(out)
+    assert all(n > 0 for n in r["tetsPerRank"])
+    assert r["disp"] > 1e-3 and r["viscous"] > 0
+    assert r["dx"] <= 1e-12 * r["disp"] + 1e-15
+    assert r["dv"] <= 1e-9 * r["vmax"]
