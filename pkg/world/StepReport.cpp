@@ -85,17 +85,6 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
         solved.emplace(key, w2);
         return w2;
     };
-    // The median element: exact frequencies of every element up to kSample
-    // of them, else of kSample at an even stride (its step to well under 1 %).
-    constexpr int32_t kSample = 4096;
-    const int32_t ns = std::min(n, kSample);
-    std::vector<double> sample(ns);
-    for (int32_t k = 0; k < ns; ++k) sample[k] = exact(n <= kSample ? k : int32_t(int64_t(k) * n / kSample));
-    if (ns > 0) {
-        // The median step is the ns/2-th smallest step: the ns/2-th largest frequency.
-        std::nth_element(sample.begin(), sample.begin() + ns / 2, sample.end(), std::greater<double>());
-        r.omegaMedian = std::sqrt(sample[ns / 2]);
-    }
     // The stiffest elements: by the cheap upper bound (elementOmegaMax's)
     // first, exact frequencies for every element whose bound reaches a
     // quarter of the largest exact one found (omega within 2x).
@@ -121,6 +110,26 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
     std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
         return a.first > b.first || (a.first == b.first && a.second < b.second);
     });
+    // The median element: exact frequencies of every element up to kSample
+    // of them, else of kSample at an even stride (its step to well under 1 %).
+    // In a bonded piece of several materials, of the elements of the
+    // stiffest one's material: the others' steps differ by their material,
+    // which is no defect of the mesh.
+    std::vector<int32_t> same;
+    if (p.materialCount > 1 && !near.empty())
+        for (int32_t e = 0; e < n; ++e)
+            if (tetMaterial[p.tetBegin + e] == tetMaterial[p.tetBegin + near.front().second]) same.push_back(e);
+    const auto nm = same.empty() ? n : static_cast<int32_t>(same.size());
+    auto member = [&](int32_t k) { return same.empty() ? k : same[k]; };
+    constexpr int32_t kSample = 4096;
+    const int32_t ns = std::min(nm, kSample);
+    std::vector<double> sample(ns);
+    for (int32_t k = 0; k < ns; ++k) sample[k] = exact(member(nm <= kSample ? k : int32_t(int64_t(k) * nm / kSample)));
+    if (ns > 0) {
+        // The median step is the ns/2-th smallest step: the ns/2-th largest frequency.
+        std::nth_element(sample.begin(), sample.begin() + ns / 2, sample.end(), std::greater<double>());
+        r.omegaMedian = std::sqrt(sample[ns / 2]);
+    }
     r.omegaMax = std::sqrt(best);
     r.nearLimit = static_cast<int64_t>(near.size());
     for (const auto& [w2, local] : near) {
