@@ -74,7 +74,7 @@ def test_two_materials_in_series_have_the_series_stiffness(scene):
     the bottom and pressed by F = 100 N spread over its top face: its static
     shortening is d = F (L1/(E1 A) + L2/(E2 A)), bonded (no contact
     compliance at the interface, which the split pieces of
-    test_mesh_regions.py add).  Measured 0.0 %; one material (E1) for both
+    test_mesh_regions.py add).  Measured 0.01 %; one material (E1) for both
     halves would give 2.5x less."""
     O = scene
     F = 100.0
@@ -118,7 +118,7 @@ def test_two_layers_in_parallel_have_the_summed_stiffness(scene):
     (Poisson 0), its bottom held and its top face moved down by d and held
     there: at rest the reaction is F = (E1 A1 + E2 A2) d / L (both layers
     strained alike; E_eff = (E1 A1 + E2 A2)/A).  Measured from the element
-    forces on the held top nodes: within 1 %; E1 alone would be 1.6x off."""
+    forces on the held top nodes: within 1 % (0.04 %); E1 alone would be 1.6x off."""
     O = scene
     L, d = 0.2, 1e-3
     mesh = _twoRegionBox((W, W, L), (4, 4, 8), 0, 0.0)
@@ -176,7 +176,7 @@ def test_stable_step_is_set_by_the_stiffer_lighter_material(scene):
         warnings.simplefilter("error")
         w.addPiece(mesh, regionMaterials={1: stiff, 2: soft})
     s = w.stableDt()
-    assert s["medianElastic"] == pytest.approx(s["pieceElastic"], rel=1e-9)
+    assert s["medianFactorElastic"] == pytest.approx(1.0, rel=1e-9)
     alone = {}
     for name, m in (("stiff", stiff), ("soft", soft)):
         wa = qdem.World()
