@@ -11,7 +11,11 @@ struct PieceInfo {
     int32_t nodeBegin, nodeEnd;  // [begin, end) in the global node arrays
     int32_t tetBegin, tetEnd;    // [begin, end) in the global tet arrays
     int32_t surfBegin, surfEnd;  // [begin, end) in surfNodes
-    int material;
+    int material;                // its contact material, and its elements' unless bonded
+    // A bonded piece of several materials (World::tetMaterial): how many, and
+    // the largest viscosity among them (= the material's for one).
+    int32_t materialCount = 1;
+    double maxViscosity = 0;
     Surface surface;             // in global node / tet ids
     double volume = 0, mass = 0;  // mass: rho V plus addedMass
     // Selective mass scaling (World::massScaling): the mass added to the

@@ -47,8 +47,6 @@ bool CorotatedCholesky::sameKey(const Key& a, const Key& b) {
 
 void CorotatedCholesky::factor(int32_t piece, const Key& key) {
     const PieceInfo& pc = w_.pieces[piece];
-    const Material& mat = w_.materials[pc.material];
-    const ElementParams prm{mat.lambda(), mat.mu(), mat.beta()};
     const int32_t nb = pc.nodeBegin, n = 3 * (pc.nodeEnd - pc.nodeBegin);
     // A_ref = M + dt C_ref, lower triangle (the factorization reads that).
     std::vector<Eigen::Triplet<double, int>> t;
@@ -56,6 +54,8 @@ void CorotatedCholesky::factor(int32_t piece, const Key& key) {
     for (int32_t i = 0; i < n; ++i) t.emplace_back(i, i, w_.mass[nb + i / 3]);
     double K[12][12];
     for (int32_t e = pc.tetBegin; e < pc.tetEnd; ++e) {
+        const Material& mat = w_.materials[w_.tetMaterial[e]];  // each element its own C
+        const ElementParams prm{mat.lambda(), mat.mu(), mat.viscosity > 0 ? mat.beta() : 0.0};
         const int32_t* c = w_.tetNodes.data() + 4 * e;
         viscousReferenceMatrix(loadRowMajor(w_.tetB.data() + 9 * e), w_.tetVol0[e], prm, K);
         for (int a = 0; a < 4; ++a)
@@ -121,7 +121,7 @@ void CorotatedCholesky::prepare(double dt) {
     int32_t off = 0, maxNodes = 0;
     for (std::size_t p = 0; p < np; ++p) {
         const PieceInfo& pc = w_.pieces[p];
-        if (w_.sleeping.asleep(p) || !w_.settings.viscosityOn || !(w_.materials[pc.material].viscosity > 0)) continue;
+        if (w_.sleeping.asleep(p) || !w_.settings.viscosityOn || !(pc.maxViscosity > 0)) continue;
         const auto piece = static_cast<int32_t>(p);
         maxNodes = std::max(maxNodes, pc.nodeEnd - pc.nodeBegin);
         if (!dom) {

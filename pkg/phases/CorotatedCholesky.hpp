@@ -41,6 +41,7 @@ public:
         const Column<int32_t>& tetNodes;
         const Column<double>& tetB;
         const Column<double>& tetVol0;
+        const Column<int32_t>& tetMaterial;  // each element's material (the factor's C per element)
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;

@@ -43,7 +43,7 @@ void ElementPhase::elementRange(const Law& law, const TetBlock* blocks, const Bl
 
 void ElementPhase::buildLayout(int threads) {
     layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), threads, w_.sleeping.version(), kForceStride);
-    buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), blocks_);
+    buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), w_.tetMaterial.data(), blocks_);
 }
 
 void ElementPhase::run(double dt) {
@@ -61,10 +61,10 @@ void ElementPhase::run(double dt) {
         double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
         const TetBlock* blocks = blocks_[th].blocks.data();
         for (const BlockSegment& sg : blocks_[th].segments) {
-            const Material& m = w_.materials[w_.pieces[sg.piece].material];
+            const Material& m = w_.materials[sg.material];
             const bool visc = w_.settings.viscosityOn && m.viscosity > 0;
             double w = 0;
-            // The law is chosen once per segment (one piece's tets): the
+            // The law is chosen once per segment (one material's tets): the
             // kernel below is compiled per law, with no call through a pointer.
             withLaw(m, [&](const auto& law) {
                 using Law = std::decay_t<decltype(law)>;
@@ -87,8 +87,7 @@ void ElementPhase::stress(double* out) const {
     const auto T = static_cast<int32_t>(w_.tetVol0.size());
 #pragma omp parallel for schedule(static)
     for (int32_t e = 0; e < T; ++e) {
-        const PieceInfo& p = w_.pieces[w_.tetPiece[e]];
-        const Material& m = w_.materials[p.material];
+        const Material& m = w_.materials[w_.tetMaterial[e]];
         const ElementParams prm{m.lambda(), m.mu(), w_.settings.viscosityOn ? m.beta() : 0.0};
         const int32_t* c = w_.tetNodes.data() + 4 * e;
         const Mat3 B = loadRowMajor(w_.tetB.data() + 9 * e);

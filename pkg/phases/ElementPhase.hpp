@@ -29,6 +29,7 @@ public:
         const Column<int32_t>& tetPiece;
         const Column<double>& tetB;
         const Column<double>& tetVol0;
+        const Column<int32_t>& tetMaterial;  // each element's material
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;

@@ -34,7 +34,7 @@ bool ViscousSolve::active() const {
     // a viscous piece's tets, and every rank must take part in the solve's
     // reductions (the sleep decisions are the same on every rank).
     for (std::size_t p = 0; p < w_.pieces.size(); ++p)
-        if (!w_.sleeping.asleep(p) && w_.materials[w_.pieces[p].material].viscosity > 0) return true;
+        if (!w_.sleeping.asleep(p) && w_.pieces[p].maxViscosity > 0) return true;
     return false;
 }
 
@@ -83,7 +83,7 @@ void ViscousSolve::apply(double* p, double* y) {
         // p holds 3 per node, as pos does (solve() sizes it)
         const auto last = static_cast<int32_t>(std::min(w_.pos.size() / 3, w_.mass.size())) - 1;
         for (const BlockSegment& sg : blocks_[th].segments) {
-            const Material& m = w_.materials[w_.pieces[sg.piece].material];
+            const Material& m = w_.materials[sg.material];
             if (!viscous(w_.settings, m)) continue;
             const ElementParams prm{m.lambda(), m.mu(), m.beta()};
             const TetBlock* b = blocks + sg.first;
@@ -121,10 +121,10 @@ void ViscousSolve::diagonal(double* diag) {
         const int32_t lo = layout_.nodeLo[th];
         const double* X = w_.pos.data();
         for (const TetSegment& sg : layout_.share[th]) {
-            const Material& m = w_.materials[w_.pieces[sg.piece].material];
-            if (!viscous(w_.settings, m)) continue;
-            const ElementParams prm{m.lambda(), m.mu(), m.beta()};
             for (int32_t e = sg.t0; e < sg.t1; ++e) {
+                const Material& m = w_.materials[w_.tetMaterial[e]];
+                if (!viscous(w_.settings, m)) continue;
+                const ElementParams prm{m.lambda(), m.mu(), m.beta()};
                 const int32_t* c = conn + 4 * e;
                 const Mat3 B = loadRowMajor(w_.tetB.data() + 9 * e);
                 const Mat3 F = edgeMatrix(X + 3 * c[0], X + 3 * c[1], X + 3 * c[2], X + 3 * c[3]) * B;
@@ -245,7 +245,7 @@ const double* ViscousSolve::solve(double dt, const double* f) {
     const int nth = omp_get_max_threads();
     if (!layout_.matches(nth, w_.sleeping.version())) {
         layout_.build(w_.tetNodes.data(), w_.sleeping.awakeTets(), nth, w_.sleeping.version());
-        buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), blocks_);
+        buildThreadBlocks(layout_, w_.tetNodes.data(), w_.tetB.data(), w_.tetVol0.data(), w_.tetMaterial.data(), blocks_);
     }
     const std::size_t n3 = 3 * w_.mass.size();
     for (auto* v : {&x_, &r_, &z_, &p_, &cp_, &q_, &diag_, &delta_})

@@ -49,6 +49,7 @@ public:
         const Column<int32_t>& tetNodes;
         const Column<double>& tetB;
         const Column<double>& tetVol0;
+        const Column<int32_t>& tetMaterial;  // each element's material
         const std::vector<PieceInfo>& pieces;
         const std::vector<Material>& materials;
         const Settings& settings;
@@ -59,7 +60,7 @@ public:
     explicit ViscousSolve(const Data& data)
         : w_(data),
           precond_({.pos = data.pos, .refPos = data.refPos, .mass = data.mass, .tetNodes = data.tetNodes,
-                    .tetB = data.tetB, .tetVol0 = data.tetVol0, .pieces = data.pieces, .materials = data.materials,
+                    .tetB = data.tetB, .tetVol0 = data.tetVol0, .tetMaterial = data.tetMaterial, .pieces = data.pieces, .materials = data.materials,
                     .settings = data.settings, .sleeping = data.sleeping, .domain = data.domain}) {}
     // Implicit viscosity asked for, viscosity on, and an awake piece viscous
     // (the same answer on every MPI rank).

@@ -44,6 +44,8 @@ WorldState World::saveState() const {
     // part of the scene, kept to refuse a load into a scene built without it
     // (its node masses, so its trajectories, would differ).
     s.put("tetAddedMass", tetAddedMass.data(), nTets());
+    // Each element's material, for the same reason (a bonded piece's regions).
+    s.put("tetMaterial", tetMaterial.data(), nTets());
     // (the columns are only read here)
     for (const auto& r : const_cast<World*>(this)->stateColumns().refs)
         if (r.restart) s.putBytes(r.name, r.data, r.count, r.elemSize);
@@ -79,6 +81,15 @@ void World::loadState(const WorldState& s) {
                                  "pieces have ", b, " kg (or on other elements): add the pieces with the same "
                                  "targetDt (qdem.addPiece(..., targetDt=...)) as the run that saved it"));
         }
+    }
+    if (s.fields.count("tetMaterial")) {  // (states saved before bonded pieces: one material per piece)
+        const std::vector<int32_t> saved = s.getAll<int32_t>("tetMaterial");
+        for (std::size_t e = 0; e < nTets(); ++e)
+            if (saved.size() != nTets() || saved[e] != tetMaterial[e])
+                throw InputError(cat("world state: element ", e, " (piece ", tetPiece[e], ") was saved with material ",
+                                     saved.size() == nTets() ? saved[e] : -1, ", this world gives it material ",
+                                     tetMaterial[e], ": add the pieces with the same materials (and regionMaterials) "
+                                     "as the run that saved it"));
     }
     const StateColumns cols = stateColumns();
     for (const auto& r : cols.refs)

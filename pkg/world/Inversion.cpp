@@ -23,9 +23,6 @@ InversionCount World::countInverted() const {
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         if (asleep(i)) continue;  // does not move: counted while it was awake
         const PieceInfo& p = pieces[i];
-        const bool recovers = withLaw(materials[p.material], [](const auto& law) {
-            return std::decay_t<decltype(law)>::kRecoversFromInversion;
-        });
         for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
             const int32_t* c = &tetNodes[4 * e];
             // J = det(Ds B) = det(Ds) det(B); det(B) = 1/(6 V0) > 0 for the
@@ -33,6 +30,10 @@ InversionCount World::countInverted() const {
             const Mat3 Ds = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]);
             const double det = Ds.determinant();
             if (!(det <= 0)) continue;  // (NaN: checkFinite's business)
+            // (Each element's own law: a bonded piece has several.)
+            const bool recovers = withLaw(tetMat(e), [](const auto& law) {
+                return std::decay_t<decltype(law)>::kRecoversFromInversion;
+            });
             ++r.count;
             if (!recovers) ++r.unrecoverable;
             const bool first = r.count == 1 || (!recovers && r.unrecoverable == 1);

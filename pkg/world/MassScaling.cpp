@@ -81,7 +81,7 @@ void World::rigidContactLimit(std::size_t i, double& contact, double& combined) 
     const double wc = std::sqrt((spring ? std::max(pair.kn, pair.kt) : pair.kn) / p.minSurfaceMassPerWeight);
     contact = leapfrogLimit(wc, pair.xi);
     const double we = omegaCache_[i];
-    const double beta = settings.viscosityOn ? m.beta() : 0.0;
+    const double beta = settings.viscosityOn ? pieceBeta(i) : 0.0;
     const double w = std::sqrt(we * we + wc * wc);
     combined = leapfrogLimit(w, w > 0 ? (beta * we * we + 2 * pair.xi * wc) / (2 * w) : 0.0);
 }

@@ -160,11 +160,11 @@ double restElementOmega2(const double* B9, double V, double lambda, double mu, d
 }
 
 double World::elementOmegaMax(const PieceInfo& p) const {
-    const Material& m = materials[p.material];
-    const double lam = m.lambda(), mu = m.mu();
     const int32_t n = p.tetEnd - p.tetBegin;
     std::vector<double> bound(n);
     for (int32_t e = 0; e < n; ++e) {
+        const Material& m = tetMat(p.tetBegin + e);  // (a bonded piece: each element its own)
+        const double lam = m.lambda(), mu = m.mu();
         const Mat3 B = loadRowMajor(&tetB[9 * (p.tetBegin + e)]);
         const double sumG2 = B.squaredNorm() + (B.row(0) + B.row(1) + B.row(2)).squaredNorm();
         // omega^2 = lambda_max(K) / (rho V / 4); V cancels.  Mass added by
@@ -180,18 +180,21 @@ double World::elementOmegaMax(const PieceInfo& p) const {
     double best = 0;  // exact omega^2 maximum found so far
     // Structured meshes repeat a few element shapes thousands of times: the
     // eigenvalue depends only on B, so identical B are solved once.
-    // (The key holds the added mass too: two such elements may differ in it.)
-    std::map<std::array<double, 10>, double> solved;
-    // The reference stiffness is the law's tangent at F = I, which every law
-    // makes Hooke's with the material's (lambda, mu) (lameAtRest; checked
-    // against tangent(I) in tests/cpp/test_laws.cpp): the closed form.
-    double lam0 = lam, mu0 = mu;
-    withLaw(m, [&](const auto& law) { law.lameAtRest(lam0, mu0); });
+    // (The key holds the added mass and the material too: two such elements
+    // may differ in them.)
+    std::map<std::array<double, 11>, double> solved;
     for (int32_t k = 0; k < n && bound[order[k]] > best; ++k) {
         const int32_t e = p.tetBegin + order[k];
-        std::array<double, 10> key;
+        const Material& m = tetMat(e);
+        // The reference stiffness is the law's tangent at F = I, which every law
+        // makes Hooke's with the material's (lambda, mu) (lameAtRest; checked
+        // against tangent(I) in tests/cpp/test_laws.cpp): the closed form.
+        double lam0 = m.lambda(), mu0 = m.mu();
+        withLaw(m, [&](const auto& law) { law.lameAtRest(lam0, mu0); });
+        std::array<double, 11> key;
         std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
         key[9] = tetAddedMass[e];
+        key[10] = tetMaterial[e];
         if (solved.count(key)) {
             omega2Tet_[e] = solved[key];
             continue;
@@ -225,10 +228,8 @@ void World::checkCurrentDt(double dt) const {
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         if (asleep(i)) continue;  // does not move: checked while it was awake, and again when it wakes
         const PieceInfo& p = pieces[i];
-        const Material& m = materials[p.material];
         // Implicit viscosity damps without limiting the step (stableDt()).
         const bool implicit = settings.viscousIntegration == ViscousIntegration::Implicit;
-        const double beta = settings.viscosityOn && !implicit ? m.beta() : 0.0;
         double wc = 0, xic = 0;
         contactMode(i, wc, xic);  // as in stableDt()
         // The contact springs and dashpots on a node, as a share of its mass
@@ -236,10 +237,12 @@ void World::checkCurrentDt(double dt) const {
         // of the leapfrog condition M - dt/2 C - dt^2/4 K > 0 is what they leave.
         const double room = 1.0 - 0.5 * dt * 2 * xic * wc - 0.25 * dt * dt * wc * wc;
         if (!(room > 0)) continue;  // the contact limit alone: checkDt's business
-        const double lam = m.lambda(), mu = m.mu();
-        const double d0 = std::max(3 * lam + 2 * mu, 2 * mu);  // ||D0||, the Kelvin-Voigt stress per strain rate
-        withLaw(m, [&](const auto& law) {
-            for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
+        for (int32_t e = p.tetBegin; e < p.tetEnd; ++e) {
+            const Material& m = tetMat(e);  // (a bonded piece: each element its own)
+            const double beta = settings.viscosityOn && !implicit ? m.beta() : 0.0;
+            const double lam = m.lambda(), mu = m.mu();
+            const double d0 = std::max(3 * lam + 2 * mu, 2 * mu);  // ||D0||, the Kelvin-Voigt stress per strain rate
+            withLaw(m, [&](const auto& law) {
                 const int32_t* c = &tetNodes[4 * e];
                 const Mat3 B = loadRowMajor(&tetB[9 * e]);
                 const Mat3 F = edgeMatrix(&pos[3 * c[0]], &pos[3 * c[1]], &pos[3 * c[2]], &pos[3 * c[3]]) * B;
@@ -255,13 +258,13 @@ void World::checkCurrentDt(double dt) const {
                 const double h = (F - Mat3::Identity()).norm(), s1 = std::sqrt(std::max(s2, 0.0));
                 const double w2 = omega2Tet_[e] + perMass * law.tangentChangeBound(F, s1);
                 const double rate = beta * (omega2Tet_[e] + perMass * d0 * h * (s1 + 1.0));
-                if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) continue;  // (NaN: checkFinite's)
+                if (0.5 * dt * rate + 0.25 * dt * dt * w2 < room) return;  // (NaN: checkFinite's)
                 // The exact condition on the element's own matrices.
                 const double nodeMass = elementNodeMass(e, m);
                 const Mat12 K = elementStiffness(B, law.tangent(F), tetVol0[e]);
                 const Mat12 Cv = beta > 0 ? viscousMatrix(F, B, tetVol0[e], lam, mu, beta) : Mat12::Zero();
                 const Mat12 Kp = positivePart(K);
-                if (largestEigenvalue(0.5 * dt * Cv + 0.25 * dt * dt * Kp) / nodeMass < room) continue;
+                if (largestEigenvalue(0.5 * dt * Cv + 0.25 * dt * dt * Kp) / nodeMass < room) return;
                 const double now = leapfrogStep(Kp / nodeMass, Cv / nodeMass, 2 * xic * wc, wc * wc, dt);
                 const double J = F.determinant();
                 const std::string where = cat("QDEM: at step ", iter, " tetrahedron ", e - p.tetBegin, " of piece ", i);
@@ -279,8 +282,8 @@ void World::checkCurrentDt(double dt) const {
                         "stiffer material or a smaller impact speed; or lower O.dt."));
                 throw StabilityError(cat(where, " is strained (largest stretch ", s1, ", volume ratio ", J,
                                          ") and has stiffened: ", limit, ". Lower O.dt, or use a mesh without slivers."));
-            }
-        });
+            });
+        }
     }
 }
 
@@ -417,7 +420,21 @@ double World::dynamicObstacleLimit(const Obstacle& o) const {
 void World::ensureElementOmegas() const {
     if (omegaCache_.size() == pieces.size()) return;
     omegaCache_.resize(pieces.size());
-    for (std::size_t i = 0; i < pieces.size(); ++i) omegaCache_[i] = elementOmegaMax(pieces[i]);
+    pieceRateMax_.assign(pieces.size(), 0.0);
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        omegaCache_[i] = elementOmegaMax(pieces[i]);
+        // omega2Tet_ is exact or an upper bound at most the piece's maximum.
+        for (int32_t e = pieces[i].tetBegin; e < pieces[i].tetEnd; ++e)
+            pieceRateMax_[i] = std::max(pieceRateMax_[i], tetMat(e).beta() * omega2Tet_[e]);
+    }
+}
+
+double World::pieceBeta(std::size_t i) const {
+    const PieceInfo& p = pieces[i];
+    if (p.materialCount == 1) return tetMat(p.tetBegin).beta();
+    ensureElementOmegas();
+    const double w2 = omegaCache_[i] * omegaCache_[i];
+    return w2 > 0 ? pieceRateMax_[i] / w2 : 0.0;
 }
 
 // What each piece's elements put on a node of the leapfrog condition, for
@@ -435,7 +452,7 @@ void World::refreshElementModes() {
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         const double w2 = omegaCache_[i] * omegaCache_[i];
         pieceElementW2_[i] = w2;
-        pieceElementRate_[i] = explicitViscosity ? materials[pieces[i].material].beta() * w2 : 0.0;
+        pieceElementRate_[i] = explicitViscosity ? pieceBeta(i) * w2 : 0.0;
     }
 }
 
@@ -444,10 +461,8 @@ StableDt World::stableDt() const {
     StableDt r{inf, inf, inf, inf, "none", inf, inf};
     ensureElementOmegas();
     for (std::size_t i = 0; i < pieces.size(); ++i) {
-        const PieceInfo& p = pieces[i];
-        const Material& m = materials[p.material];
         const double we = omegaCache_[i];
-        const double beta = settings.viscosityOn ? m.beta() : 0.0;
+        const double beta = settings.viscosityOn ? pieceBeta(i) : 0.0;
         r.elastic = std::min(r.elastic, leapfrogLimit(we, 0.0));
         r.viscous = std::min(r.viscous, leapfrogLimit(we, 0.5 * beta * we));
         double wc = 0, xic = 0;
@@ -493,14 +508,14 @@ StableDt World::stableDt() const {
     double pieceLimit = inf;
     for (std::size_t i = 0; i < pieces.size(); ++i) {
         const double we = omegaCache_[i];
-        const double beta = settings.viscosityOn ? materials[pieces[i].material].beta() : 0.0;
+        const double beta = settings.viscosityOn ? pieceBeta(i) : 0.0;
         const double d = viscousCounts ? leapfrogLimit(we, 0.5 * beta * we) : leapfrogLimit(we, 0.0);
         if (d < pieceLimit) pieceLimit = d, r.piece = static_cast<int>(i);
     }
     if (r.piece >= 0) {
         const PieceStepReport& pr = pieceStepReport(r.piece);
         const PieceInfo& p = pieces[r.piece];
-        const double beta = settings.viscosityOn ? materials[p.material].beta() : 0.0;
+        const double beta = settings.viscosityOn ? pieceBeta(r.piece) : 0.0;
         const double we = omegaCache_[r.piece], wm = pr.omegaMedian;
         r.pieceElastic = leapfrogLimit(we, 0.0);
         r.pieceViscous = leapfrogLimit(we, 0.5 * beta * we);

@@ -58,43 +58,41 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
     PieceStepReport& r = stepReports_[i];
     if (stepReportDone_[i]) return r;
     const PieceInfo& p = pieces[i];
-    const Material& m = materials[p.material];
-    double lam = m.lambda(), mu = m.mu();
-    withLaw(m, [&](const auto& law) { law.lameAtRest(lam, mu); });  // as elementOmegaMax
+    // Each element's Lame constants at rest (as elementOmegaMax; a bonded
+    // piece's elements each with their own material).
+    auto lameAtRest = [&](int32_t e, double& lam, double& mu) {
+        const Material& m = tetMat(e);
+        lam = m.lambda(), mu = m.mu();
+        withLaw(m, [&](const auto& law) { law.lameAtRest(lam, mu); });
+    };
     const int32_t n = p.tetEnd - p.tetBegin;
     // Identical shapes (structured meshes) are solved once.
     // Selective mass scaling (MassScaling.cpp) adds mass per tet: the
     // element's own mass is rho V + added, its effective density below.
-    auto density = [&](int32_t e) { return m.density + tetAddedMass[e] / tetVol0[e]; };
-    std::map<std::array<double, 10>, double> solved;
+    auto density = [&](int32_t e) { return tetMat(e).density + tetAddedMass[e] / tetVol0[e]; };
+    std::map<std::array<double, 11>, double> solved;
     auto exact = [&](int32_t local) {
         const int32_t e = p.tetBegin + local;
-        std::array<double, 10> key;
+        std::array<double, 11> key;
         std::copy(&tetB[9 * e], &tetB[9 * e] + 9, key.begin());
         key[9] = tetAddedMass[e];
+        key[10] = tetMaterial[e];
         const auto it = solved.find(key);
         if (it != solved.end()) return it->second;
+        double lam, mu;
+        lameAtRest(e, lam, mu);
         const double w2 = restElementOmega2(&tetB[9 * e], tetVol0[e], lam, mu, density(e));
         solved.emplace(key, w2);
         return w2;
     };
-    // The median element: exact frequencies of every element up to kSample
-    // of them, else of kSample at an even stride (its step to well under 1 %).
-    constexpr int32_t kSample = 4096;
-    const int32_t ns = std::min(n, kSample);
-    std::vector<double> sample(ns);
-    for (int32_t k = 0; k < ns; ++k) sample[k] = exact(n <= kSample ? k : int32_t(int64_t(k) * n / kSample));
-    if (ns > 0) {
-        // The median step is the ns/2-th smallest step: the ns/2-th largest frequency.
-        std::nth_element(sample.begin(), sample.begin() + ns / 2, sample.end(), std::greater<double>());
-        r.omegaMedian = std::sqrt(sample[ns / 2]);
-    }
     // The stiffest elements: by the cheap upper bound (elementOmegaMax's)
     // first, exact frequencies for every element whose bound reaches a
     // quarter of the largest exact one found (omega within 2x).
-    const double c = 4.0 * (std::max(lam, 0.0) + 2 * mu);
     std::vector<double> bound(n);
     for (int32_t e = 0; e < n; ++e) {
+        double lam, mu;
+        lameAtRest(p.tetBegin + e, lam, mu);
+        const double c = 4.0 * (std::max(lam, 0.0) + 2 * mu);
         const Mat3 B = loadRowMajor(&tetB[9 * (p.tetBegin + e)]);
         bound[e] = c / density(p.tetBegin + e) * (B.squaredNorm() + (B.row(0) + B.row(1) + B.row(2)).squaredNorm());
     }
@@ -112,6 +110,26 @@ const PieceStepReport& World::pieceStepReport(std::size_t i) const {
     std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
         return a.first > b.first || (a.first == b.first && a.second < b.second);
     });
+    // The median element: exact frequencies of every element up to kSample
+    // of them, else of kSample at an even stride (its step to well under 1 %).
+    // In a bonded piece of several materials, of the elements of the
+    // stiffest one's material: the others' steps differ by their material,
+    // which is no defect of the mesh.
+    std::vector<int32_t> same;
+    if (p.materialCount > 1 && !near.empty())
+        for (int32_t e = 0; e < n; ++e)
+            if (tetMaterial[p.tetBegin + e] == tetMaterial[p.tetBegin + near.front().second]) same.push_back(e);
+    const auto nm = same.empty() ? n : static_cast<int32_t>(same.size());
+    auto member = [&](int32_t k) { return same.empty() ? k : same[k]; };
+    constexpr int32_t kSample = 4096;
+    const int32_t ns = std::min(nm, kSample);
+    std::vector<double> sample(ns);
+    for (int32_t k = 0; k < ns; ++k) sample[k] = exact(member(nm <= kSample ? k : int32_t(int64_t(k) * nm / kSample)));
+    if (ns > 0) {
+        // The median step is the ns/2-th smallest step: the ns/2-th largest frequency.
+        std::nth_element(sample.begin(), sample.begin() + ns / 2, sample.end(), std::greater<double>());
+        r.omegaMedian = std::sqrt(sample[ns / 2]);
+    }
     r.omegaMax = std::sqrt(best);
     r.nearLimit = static_cast<int64_t>(near.size());
     for (const auto& [w2, local] : near) {

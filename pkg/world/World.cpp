@@ -20,10 +20,27 @@ int World::addMaterial(const Material& m) {
     return static_cast<int>(materials.size()) - 1;
 }
 
-void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) const {
+void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_,
+                          const std::vector<int32_t>& tetMaterial_) const {
     if (material < 0 || material >= static_cast<int>(materials.size()))
         throw InputError(cat("addPiece: unknown material index ", material));
     checkMesh(mesh);
+    if (!tetMaterial_.empty()) {
+        if (tetMaterial_.size() != mesh.nTets())
+            throw InputError(cat("addPiece: tetMaterial has ", tetMaterial_.size(), " values for ", mesh.nTets(),
+                                 " tetrahedra (one material index per tetrahedron, or none)"));
+        for (std::size_t e = 0; e < tetMaterial_.size(); ++e) {
+            if (tetMaterial_[e] < 0 || tetMaterial_[e] >= static_cast<int32_t>(materials.size()))
+                throw InputError(cat("addPiece: tetMaterial[", e, "] = ", tetMaterial_[e], " is no material index (0 to ",
+                                     materials.size() - 1, ")"));
+            // One radius per surface: the nodes' contact reach is the piece's.
+            if (materials[tetMaterial_[e]].radius != materials[material].radius)
+                throw InputError(cat("addPiece: the materials of a bonded piece must share one contact radius; element ",
+                                     e, " has radius ", materials[tetMaterial_[e]].radius, " m, the piece's contact "
+                                     "material ", materials[material].radius, " m: give every region's QdemMat the "
+                                     "same radius"));
+        }
+    }
     if (!tetAddedMass_.empty()) {
         if (tetAddedMass_.size() != mesh.nTets())
             throw InputError(cat("addPiece: tetAddedMass has ", tetAddedMass_.size(), " values for ", mesh.nTets(),
@@ -34,7 +51,6 @@ void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<d
                                      ": added mass must be finite and >= 0 kg"));
     }
     checkOnePart(mesh);  // parts of one piece would pass through each other
-    const Material& mat = materials[material];
     // Every node needs mass: checked before anything changes, so that a
     // refused mesh leaves the world as it was (no hidden nodes).
     {
@@ -45,6 +61,7 @@ void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<d
                                         &mesh.nodes[3 * c[3]])
                                  .determinant() /
                              6.0;
+            const Material& mat = materials[tetMaterial_.empty() ? material : tetMaterial_[e]];
             for (int k = 0; k < 4; ++k) m[c[k]] += mat.density * V / 4.0;
         }
         std::vector<char> used(mesh.nNodes(), 0);
@@ -53,17 +70,30 @@ void World::checkNewPiece(const TetMesh& mesh, int material, const std::vector<d
             if (!used[i])
                 throw InputError(cat("addPiece: node ", i, " belongs to no tetrahedron (zero mass); remove unused nodes"));
             if (!(m[i] > 0) || !std::isfinite(m[i]))
-                throw InputError(cat("addPiece: node ", i, " gets mass ", m[i], " (density ", mat.density,
+                throw InputError(cat("addPiece: node ", i, " gets mass ", m[i], " (density ", materials[material].density,
                                      " times its tetrahedra's volume): coordinates or density out of floating "
                                      "point range; give the mesh in metres and the density in kg/m^3"));
         }
     }
 }
 
-int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_) {
-    checkNewPiece(mesh, material, tetAddedMass_);
+int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass_,
+                    const std::vector<int32_t>& tetMaterial_) {
+    checkNewPiece(mesh, material, tetAddedMass_, tetMaterial_);
     PieceInfo p;
     p.material = material;
+    std::vector<int32_t> tm = tetMaterial_.empty() ? std::vector<int32_t>(mesh.nTets(), material) : tetMaterial_;
+    {
+        std::vector<int32_t> distinct(tm);
+        std::sort(distinct.begin(), distinct.end());
+        distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+        p.materialCount = static_cast<int32_t>(distinct.size());
+        p.maxViscosity = materials[material].viscosity;
+        if (!tetMaterial_.empty()) {
+            p.maxViscosity = 0;
+            for (const int32_t k : distinct) p.maxViscosity = std::max(p.maxViscosity, materials[k].viscosity);
+        }
+    }
     const auto n0 = static_cast<int32_t>(nNodes());
     const auto t0 = static_cast<int32_t>(nTets());
     const auto nn = static_cast<int32_t>(mesh.nNodes());
@@ -76,7 +106,7 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
 
     // Surface first: it throws on a non-manifold mesh before anything changes.
     Surface s = extractSurface(mesh);
-    appendNodesAndTets(mesh, materials[material], pieceId, p);
+    appendNodesAndTets(mesh, tm, pieceId, p);
     if (!tetAddedMass_.empty()) addElementMass(mesh, tetAddedMass_, s, p);
     appendSurface(std::move(s), p);
 
@@ -92,7 +122,7 @@ int World::addPiece(const TetMesh& mesh, int material, const std::vector<double>
 
 // The piece's nodes and tets at the end of the world's arrays: reference
 // positions, inverse edge matrices, volumes and the lumped masses rho V / 4.
-void World::appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pieceId, PieceInfo& p) {
+void World::appendNodesAndTets(const TetMesh& mesh, const std::vector<int32_t>& tm, int pieceId, PieceInfo& p) {
     const int32_t n0 = p.nodeBegin, t0 = p.tetBegin;
     const int32_t nn = p.nodeEnd - p.nodeBegin, nt = p.tetEnd - p.tetBegin;
     const std::size_t N = n0 + nn, T = t0 + nt;
@@ -110,6 +140,8 @@ void World::appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pie
     tetB.resize(9 * T);
     tetVol0.resize(T);
     tetAddedMass.resize(T, 0.0);
+    tetMaterial.resize(T);
+    double pieceMass = 0;
 
     for (int32_t i = 0; i < nn; ++i)
         for (int d = 0; d < 3; ++d) {
@@ -126,11 +158,15 @@ void World::appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pie
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) tetB[9 * (t0 + e) + 3 * i + j] = B(i, j);
         tetVol0[t0 + e] = V;
+        tetMaterial[t0 + e] = tm[e];
+        const Material& mat = materials[tm[e]];
         const double m4 = mat.density * V / 4.0;  // lumped mass: a quarter to each node
         for (int k = 0; k < 4; ++k) mass[n0 + c[k]] += m4;
         p.volume += V;
+        pieceMass += mat.density * V;
     }
-    p.mass = mat.density * p.volume;
+    // (One material: rho times the summed volume, as the mass always was.)
+    p.mass = p.materialCount == 1 ? materials[tm[0]].density * p.volume : pieceMass;
 }
 
 // Selective mass scaling: each element's added mass lumped as its own,

@@ -108,7 +108,15 @@ public:
     // tetAddedMass (empty, or one value per tet, kg >= 0): mass added to each
     // element on top of rho V, a quarter to each of its nodes (selective mass
     // scaling, MassScaling.cpp); real mass, which gravity and contacts see.
-    int addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass = {});
+    //
+    // tetMaterial (empty, or one material index per tet): a bonded piece of
+    // several materials, each element taking its own (doc/meshes.md, "Regions
+    // and bimaterial parts"); `material` is then the piece's contact material
+    // (radius, friction, restitution and the contact stiffness of its surface
+    // nodes).  Tets of one material are best given contiguous: the element
+    // phase computes blocks of one material (ThreadBlocks.hpp).
+    int addPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass = {},
+                 const std::vector<int32_t>& tetMaterial = {});
     // Selective mass scaling (MassScaling.cpp, doc/meshes.md): per tet of
     // `mesh` (world coordinates, as addPiece takes it) the least mass to add
     // so that the element's own stable step, elastic and with the material's
@@ -144,6 +152,12 @@ public:
     // Throws StabilityError (naming the limit) when dt exceeds the stable step.
     void checkDt(double dt) const;
     StableDt stableDt() const;
+    // beta = eta / mu of piece i's elements for the stable step: its
+    // material's, or for a piece of several materials the largest damping
+    // rate of an element over the largest omega^2 (pieceRateMax_): the
+    // stiffest element's frequency with the most damped one's rate, which
+    // bounds both from above (StableDt.cpp).
+    double pieceBeta(std::size_t i) const;
     // The piece's smallest-step elements against its median one (StepReport.cpp);
     // computed once per piece, when first asked.
     const PieceStepReport& pieceStepReport(std::size_t piece) const;
@@ -270,6 +284,10 @@ public:
     // Mass added to each element by selective mass scaling [kg] (0 for most):
     // its nodes carry (rho V + added) / 4 from it, the stable step sees it.
     Column<double> tetAddedMass;
+    // Material index of each element (its piece's material unless the piece
+    // was added with tetMaterial): its law, Lame constants, viscosity and
+    // density.  Set-up data, like tetB: every rank holds all of it.
+    Column<int32_t> tetMaterial;
     Column<int32_t> surfNodes;      // global ids of the surface nodes of all pieces
     // Contact weight of each surface node (same index as surfNodes): its share
     // of the piece's surface area over the mean share, A_i / mean(A) with A_i
@@ -393,8 +411,9 @@ private:
     // addPiece's steps: the checks that refuse a mesh before anything
     // changes; its nodes and tets appended; the mass added to its elements
     // (selective mass scaling); its surface, with the contact weights.
-    void checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass) const;
-    void appendNodesAndTets(const TetMesh& mesh, const Material& mat, int pieceId, PieceInfo& p);
+    void checkNewPiece(const TetMesh& mesh, int material, const std::vector<double>& tetAddedMass,
+                       const std::vector<int32_t>& tetMaterial) const;
+    void appendNodesAndTets(const TetMesh& mesh, const std::vector<int32_t>& tetMaterial, int pieceId, PieceInfo& p);
     void addElementMass(const TetMesh& mesh, const std::vector<double>& tetAddedMass, const Surface& s,
                         PieceInfo& p);
     void appendSurface(Surface s, PieceInfo& p);
@@ -412,6 +431,8 @@ private:
     double elementNodeMass(int32_t tet, const Material& m) const {
         return (m.density * tetVol0[tet] + tetAddedMass[tet]) / 4.0;
     }
+    // The material of one element (tetMaterial).
+    const Material& tetMat(int32_t tet) const { return materials[tetMaterial[tet]]; }
     void beginPieceEnergy();
     void finishPieceEnergy();
     void contactMode(std::size_t piece, double& wc, double& xic) const;
@@ -429,6 +450,7 @@ private:
     std::vector<double> boxes_;  // pieceBoxes(), made at step boxesIter_
     long boxesIter_ = -1;
     mutable std::vector<double> omegaCache_;  // per piece, element omega_max
+    mutable std::vector<double> pieceRateMax_;  // per piece, largest beta_e omega_e^2 over its elements
     // The two smallest mean areas per surface node over the pieces, and the
     // piece with the smallest (contactMode: the finest other piece), for
     // shareCacheN_ pieces: once per piece added, not once per piece per call.

@@ -92,15 +92,18 @@ void bindWorld(py::module_& m) {
     world.def(py::init<>())
         .def(
             "addPiece",
-            [](World& w, const Nodes& nodes, const Tets& tets, int material, const std::vector<double>& added) {
+            [](World& w, const Nodes& nodes, const Tets& tets, int material, const std::vector<double>& added,
+               const std::vector<int32_t>& tetMaterial) {
                 TetMesh mesh;
                 mesh.nodes = flatten<double>(nodes, 3, "nodes");
                 mesh.tets = flatten<int32_t>(tets, 4, "tets");
-                return w.addPiece(mesh, material, added);
+                return w.addPiece(mesh, material, added, tetMaterial);
             },
             py::arg("nodes"), py::arg("tets"), py::arg("material"), py::arg("tetAddedMass") = std::vector<double>{},
+            py::arg("tetMaterial") = std::vector<int32_t>{},
             "Add a piece (world coordinates); tetAddedMass: mass added to each tet [kg] (selective mass "
-            "scaling, massScaling), a quarter to each of its nodes.")
+            "scaling, massScaling), a quarter to each of its nodes; tetMaterial: a material index per tet (a "
+            "bonded piece of several materials; material is then its contact material), or none.")
         .def(
             "massScaling",
             [](const World& w, const Nodes& nodes, const Tets& tets, int material, double targetDt) {
@@ -277,7 +280,7 @@ void bindWorld(py::module_& m) {
                  d["worstQuality"] = r.worstQuality;
                  // The steps they allow, undamped and with the material's
                  // Kelvin-Voigt damping (whether the engine's viscosity is on or not).
-                 const double beta = w.materials[p.material].beta();
+                 const double beta = w.pieceBeta(piece);
                  d["stepElastic"] = leapfrogLimit(r.omegaMax, 0.0);
                  d["stepViscous"] = leapfrogLimit(r.omegaMax, 0.5 * beta * r.omegaMax);
                  d["medianElastic"] = leapfrogLimit(r.omegaMedian, 0.0);
@@ -444,6 +447,9 @@ void bindWorld(py::module_& m) {
         .def_property_readonly(
             "tetAddedMass",
             [](World& w) { return columnView(w.tetAddedMass, 0, {py::ssize_t(w.nTets())}, false); })
+        .def_property_readonly(
+            "tetMaterial",
+            [](World& w) { return columnView(w.tetMaterial, 0, {py::ssize_t(w.nTets())}, false); })
         .def_property_readonly("tetVolume",
                                [](World& w) { return columnView(w.tetVol0, 0, {py::ssize_t(w.nTets())}, false); })
         .def(

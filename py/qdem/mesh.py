@@ -284,7 +284,9 @@ def splitMesh(mesh, by="part"):
 
     Pieces are joined only by contact, not bonded: where two regions share an
     interface, the two pieces start pressed into each other by their
-    contact reach (doc/meshes.md, "Regions and bimaterial parts").
+    contact reach (doc/meshes.md, "Regions and bimaterial parts").  For a
+    bonded part, add the whole mesh as one piece of several materials:
+    ``qdem.addPiece(mesh, regionMaterials={1: steel, 2: rubber})``.
 
     Every sub-mesh keeps the nodes' indices in the file (``Mesh.nodeIds``;
     for a mesh built in memory, its node indices) and the region labels, so

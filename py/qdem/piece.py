@@ -51,14 +51,30 @@ class Piece:
 
     def __init__(self, world, pid, material, originalNodeIds):
         self.world, self.id, self._material = world, pid, material
+        self._regionMaterials = None
         self.originalNodeIds = originalNodeIds
         n0, n1, t0, t1 = world.core.pieceRanges(pid)
         self.nodeSlice, self.tetSlice = slice(n0, n1), slice(t0, t1)
 
     @property
     def material(self):
-        """The QdemMat the piece was added with (fixed: the world has compiled it in)."""
+        """The QdemMat the piece was added with (fixed: the world has compiled it in).
+        For a bonded piece of several materials (addPiece's regionMaterials), its
+        contact material: the softest of the materials on its surface."""
         return self._material
+
+    @property
+    def regionMaterials(self):
+        """{region label: QdemMat} of a bonded piece of several materials
+        (addPiece's regionMaterials; doc/meshes.md, "Regions and bimaterial
+        parts"), None for a piece of one material."""
+        return None if self._regionMaterials is None else dict(self._regionMaterials)
+
+    @property
+    def tetMaterial(self):
+        """The QdemMat of each element, in solver order (a list as long as ``tets``)."""
+        byIndex = {i: m for m, i in self.world._materialIndex.values()}
+        return [byIndex[int(k)] for k in self.world.core.tetMaterial[self.tetSlice]]
 
     @material.setter
     def material(self, value):

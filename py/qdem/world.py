@@ -110,10 +110,21 @@ class World:
         return self._materialIndex[key][1]
 
     def addPiece(self, mesh, material=None, pos=(0, 0, 0), ori=None, vel=(0, 0, 0), angVel=(0, 0, 0),
-                 reorder=True, targetDt=None, maxAddedMass=0.01):
+                 reorder=True, targetDt=None, maxAddedMass=0.01, regionMaterials=None):
         """Add a deformable piece: ``mesh`` (Mesh, (nodes, tets) or file) is placed
         with its origin at ``pos`` and rotated by ``ori``; it starts with rigid
         velocity ``vel`` + ``angVel`` x (x - pos).  Returns a Piece.
+
+        ``regionMaterials`` ({region label: QdemMat}) makes one bonded piece of
+        several materials (doc/meshes.md, "Regions and bimaterial parts"): each
+        element takes the material of its label in ``mesh.regions`` (gmsh
+        physical groups, medit references), labels not listed take
+        ``material``.  Its elements, masses, viscosity and stable step are each
+        element's own; its surface contacts take one material, the softest
+        (smallest young) of those whose elements reach the surface - their
+        radius, friction and restitution too - and ``Piece.material`` is that
+        one.  All its materials must share one ``radius``.  Not with
+        ``targetDt``.
 
         ``targetDt`` [s] turns on selective mass scaling (doc/meshes.md,
         "Selective mass scaling"): the elements whose own stable step (elastic,
@@ -130,9 +141,17 @@ class World:
         # Every argument is checked before anything is added: a refused call
         # leaves the world (and the material) as they were.
         mesh = asMesh(mesh)
-        material = material if material is not None else QdemMat()
-        if not isinstance(material, QdemMat):
+        if material is not None and not isinstance(material, QdemMat):
             raise ValueError("addPiece: material must be a qdem.QdemMat, got %r" % type(material).__name__)
+        tetMats, regionMats = _regionMaterials(mesh, material, regionMaterials)
+        if tetMats is not None and targetDt is not None:
+            raise ValueError("addPiece: targetDt (selective mass scaling) is not available for a piece of several "
+                             "materials (regionMaterials); remove its slivers with qdem.improveMesh(mesh) instead")
+        if tetMats is not None:
+            material = _contactMaterial(mesh.tets, tetMats)
+        elif regionMats is not None:  # every region of one material: an ordinary piece
+            material = regionMats[int(mesh.regions[0])] if len(mesh.tets) else material
+        material = material if material is not None else QdemMat()
         R = rotationMatrix(ori)
         pos = _finiteVector("addPiece", "pos", pos)
         vel = _finiteVector("addPiece", "vel", vel)
@@ -151,26 +170,40 @@ class World:
         tetOldOf = None  # the mesh's own tet numbering (stableDt names its elements so)
         if reorder:
             nodes, tets, oldOf, tetOldOf = _core.hilbertReorder(nodes, tets, tetOrder=True)
+        if tetMats is not None:
+            # Elements of one material together (curve order kept within each):
+            # the element phase computes blocks of one material.
+            mine = tetMats if tetOldOf is None else [tetMats[t] for t in tetOldOf]
+            rank = {id(m): k for k, m in enumerate(_distinct(tetMats))}
+            order = np.argsort(np.array([rank[id(m)] for m in mine]), kind="stable")
+            tets = np.asarray(tets)[order]
+            tetOldOf = order if tetOldOf is None else np.asarray(tetOldOf)[order]
+            tetMats = [tetMats[t] for t in tetOldOf]
         x = nodes @ R.T + pos
         if not np.all(np.isfinite(x)):
             raise ValueError("addPiece: pos/ori give non-finite node coordinates")
         v = vel + np.cross(angVel, x - pos)
-        newMaterial = id(material) not in self._materialIndex
-        wasInUse = material.__dict__.get("_inUse", False)
-        index = self.materialIndex(material)
+        used = [material] + ([] if tetMats is None else _distinct(tetMats))
+        new = [m for m in _distinct(used) if id(m) not in self._materialIndex]
+        wasInUse = [m.__dict__.get("_inUse", False) for m in new]
         try:
+            index = self.materialIndex(material)
+            perTet = [] if tetMats is None else [self.materialIndex(m) for m in tetMats]
             added = []
             if targetDt is not None:
                 added = self.core.massScaling(x, tets, index, targetDt)
                 _refuseTooMuchMass(x, tets, material, added, targetDt, maxAddedMass)
-            pid = self.core.addPiece(x, tets, index, added)
+            pid = self.core.addPiece(x, tets, index, added, perTet)
         except BaseException:
-            if newMaterial:  # the material was registered for this piece alone: forget it
-                del self._materialIndex[id(material)]
-                self.core.removeLastMaterial()
-                material._inUse = wasInUse
+            # The materials registered for this piece alone: forgotten, last first.
+            for m, was in reversed(list(zip(new, wasInUse))):
+                if id(m) in self._materialIndex:
+                    del self._materialIndex[id(m)]
+                    self.core.removeLastMaterial()
+                m._inUse = was
             raise
         p = Piece(self, pid, material, mesh.originalIds(oldOf))  # file point indices for a loaded mesh
+        p._regionMaterials = regionMats if tetMats is not None else None
         p.vel[:] = v
         p.targetDt = targetDt
         self.pieces.append(p)
@@ -196,6 +229,68 @@ class World:
         medianFactorElastic / medianFactorViscous (those over the piece's limit) and
         elementLimit (all of it in one sentence)."""
         return self.core.stableDt()
+
+
+def _distinct(mats):
+    """The QdemMats of a list, each once, in order of first appearance."""
+    seen, out = set(), []
+    for m in mats:
+        if id(m) not in seen:
+            seen.add(id(m))
+            out.append(m)
+    return out
+
+
+def _regionMaterials(mesh, material, regionMaterials):
+    """(per-tet QdemMat list or None, {label: QdemMat} or None) of
+    addPiece's regionMaterials: None, None without it; the list is None too
+    when every element has the same material (an ordinary piece)."""
+    if regionMaterials is None:
+        return None, None
+    if not isinstance(regionMaterials, dict):
+        raise ValueError("addPiece: regionMaterials must be a dict {region label: QdemMat}, got %r"
+                         % type(regionMaterials).__name__)
+    if mesh.regions is None:
+        raise ValueError("addPiece: regionMaterials given, but the mesh has no regions (Mesh.regions is None): "
+                         "regions come from gmsh physical groups or medit references (qdem.loadMesh), a CAD file "
+                         "(qdem.meshCad), or Mesh(nodes, tets, regions=labels)")
+    labels = sorted(int(k) for k in np.unique(mesh.regions))
+    mats = {}
+    for k, m in regionMaterials.items():
+        if not isinstance(m, QdemMat):
+            raise ValueError("addPiece: regionMaterials[%r] must be a qdem.QdemMat, got %r" % (k, type(m).__name__))
+        if int(k) not in labels:
+            raise ValueError("addPiece: regionMaterials names region %r, which the mesh does not have (its regions: "
+                             "%s)" % (k, ", ".join(map(str, labels))))
+        mats[int(k)] = m
+    missing = [k for k in labels if k not in mats]
+    if missing and material is None:
+        raise ValueError("addPiece: regions %s have no material: list them in regionMaterials, or give material= "
+                         "for the regions not listed" % ", ".join(map(str, missing)))
+    for k in missing:
+        mats[k] = material
+    radii = {float(m.radius) for m in mats.values()}
+    if len(radii) > 1:
+        raise ValueError("addPiece: the materials of one bonded piece must share one contact radius (the surface "
+                         "particles' reach), got %s for regions %s: give every QdemMat the same radius"
+                         % (", ".join("%g m" % mats[k].radius for k in labels), ", ".join(map(str, labels))))
+    perTet = [mats[int(k)] for k in mesh.regions]
+    if len(_distinct(perTet)) == 1:
+        return None, mats
+    return perTet, mats
+
+
+def _contactMaterial(tets, tetMats):
+    """The contact material of a bonded piece: the softest (smallest young;
+    the first such in region order on a tie) of the materials whose elements
+    have a face on the surface."""
+    t = np.sort(np.asarray(tets), axis=1)
+    faces = np.concatenate([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]])
+    owner = np.tile(np.arange(len(t)), 4)
+    _, inverse, counts = np.unique(faces, axis=0, return_inverse=True, return_counts=True)
+    outer = np.unique(owner[counts[inverse.ravel()] == 1])
+    onSurface = _distinct([tetMats[e] for e in outer])
+    return min(onSurface, key=lambda m: m.young)
 
 
 def _tetVolumes(x, tets):
@@ -296,11 +391,12 @@ def reset():
 
 
 def addPiece(mesh, material=None, pos=(0, 0, 0), ori=None, vel=(0, 0, 0), angVel=(0, 0, 0), reorder=True,
-             world=None, targetDt=None, maxAddedMass=0.01):
+             world=None, targetDt=None, maxAddedMass=0.01, regionMaterials=None):
     """Add a deformable piece to the default world; see World.addPiece
-    (``targetDt``, ``maxAddedMass``: selective mass scaling)."""
+    (``targetDt``, ``maxAddedMass``: selective mass scaling; ``regionMaterials``:
+    one bonded piece of several materials, {region label: QdemMat})."""
     return (world or defaultWorld()).addPiece(mesh, material, pos, ori, vel, angVel, reorder, targetDt=targetDt,
-                                              maxAddedMass=maxAddedMass)
+                                              maxAddedMass=maxAddedMass, regionMaterials=regionMaterials)
 
 
 def stableDt(world=None):

@@ -95,6 +95,10 @@ def sceneBlob(world, O):
         arrays["addedMass%d" % i] = np.array(core.tetAddedMass[p.tetSlice])  # selective mass scaling
         meta["pieces"][-1]["targetDt"] = p.targetDt
         arrays["tetIds%d" % i] = np.asarray(core.tetIds(p.id), dtype=np.int32)
+        if p.regionMaterials is not None:  # a bonded piece: each element's material, each region's
+            arrays["tetMaterial%d" % i] = np.array(core.tetMaterial[p.tetSlice], dtype=np.int32)
+            meta["pieces"][-1]["regionMaterials"] = {str(k): world.materialIndex(m)
+                                                     for k, m in p.regionMaterials.items()}
     if core.mpiSize > 1:
         core.gatherState()  # collective: under mpiexec every rank runs O.save
     for name, data in core.saveState().items():
@@ -132,9 +136,19 @@ def _sameWorld(w, blob):
     for i, p in enumerate(w.pieces):
         if not (np.array_equal(np.asarray(p.refPos), data["refPos%d" % i])
                 and np.array_equal(np.asarray(p.tets, dtype=np.int32), data["tets%d" % i])
-                and np.array_equal(np.asarray(p.addedMassPerTet), _addedMass(data, i, len(p.addedMassPerTet)))):
+                and np.array_equal(np.asarray(p.addedMassPerTet), _addedMass(data, i, len(p.addedMassPerTet)))
+                and _sameTetMaterials(w, p, data, i)):
             return False
     return True
+
+
+def _sameTetMaterials(w, p, data, i):
+    """Does piece p have the per-element materials (a bonded piece's) that
+    the blob's piece i has?"""
+    key = "tetMaterial%d" % i
+    if (key in data.files) != (p.regionMaterials is not None):
+        return False
+    return key not in data.files or np.array_equal(np.asarray(w.core.tetMaterial[p.tetSlice]), data[key])
 
 
 def savedSettings(settings):
@@ -178,8 +192,14 @@ def restoreWorld(blob, into=None):
     for i, pm in enumerate(meta["pieces"]):
         mat = mats[pm["material"]]
         tets = data["tets%d" % i]
-        pid = w.core.addPiece(data["refPos%d" % i], tets, w.materialIndex(mat), _addedMass(data, i, len(tets)))
+        perTet = data["tetMaterial%d" % i].tolist() if "tetMaterial%d" % i in data.files else []
+        pid = w.core.addPiece(data["refPos%d" % i], tets, w.materialIndex(mat), _addedMass(data, i, len(tets)),
+                              perTet)
         w.pieces.append(Piece(w, pid, mat, np.array(data["oldOf%d" % i])))
+        if "regionMaterials" in pm:
+            w.pieces[-1]._regionMaterials = {int(k): mats[j] for k, j in pm["regionMaterials"].items()}
+            for m in w.pieces[-1]._regionMaterials.values():
+                m._inUse = True
         w.pieces[-1].targetDt = pm.get("targetDt")
         if "tetIds%d" % i in data.files:  # (scenes saved before elements kept their mesh's numbering: local)
             w.core.setTetIds(pid, data["tetIds%d" % i])
