@@ -67,7 +67,8 @@ void PieceContactPhase::surfaceSpins() {
     for (int32_t s = 0; s < ns; ++s) {
         const int32_t node = surfNodes[s];
         const int32_t p = nodePiece[node];
-        if (!active[p] || frozen_[p] || (cur && !cur[node])) continue;
+        // (a frozen piece's too: an awake piece's node may touch its triangles)
+        if (!active[p] || (cur && !cur[node])) continue;
         surfaceNodeSpin(w_.surface, s, node, X, V, cur, spin + 3 * s);
         ++done;
     }
