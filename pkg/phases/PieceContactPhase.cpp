@@ -43,7 +43,7 @@ unsigned PieceContactPhase::listsWanted() const {
 }
 
 // The spin of the surface at every surface node of a piece that may touch
-// another (SurfaceSpin.hpp): what the springs between pieces turn by.  With
+// another with friction (SurfaceSpin.hpp): what the springs between pieces turn by.  With
 // the spring law only (the regularised one has no spring, frictionless
 // contacts none either).  Each node from its own ring: any thread count
 // gives the same bits; under MPI only the current nodes, whose rings the
@@ -58,7 +58,17 @@ void PieceContactPhase::surfaceSpins() {
     const uint8_t* cur = dom ? dom->currentMask().data() : nullptr;
     const int32_t* surfNodes = w_.surfNodes.data();
     const int32_t* nodePiece = w_.nodePiece.data();
-    const uint8_t* active = st_.pieceActive.data();
+    // Only pieces with a friction partner near (the pair law's mu > 0).
+    const std::size_t np = w_.pieces.size();
+    st_.spinPiece.assign(np, 0);
+    bool any = false;
+    for (std::size_t p = 0; p < np; ++p) {
+        for (int32_t q = st_.nbrStart[p]; q < st_.nbrStart[p + 1] && !st_.spinPiece[p]; ++q)
+            st_.spinPiece[p] = st_.nbrLaw[q].mu > 0;
+        any = any || st_.spinPiece[p];
+    }
+    if (!any) return;
+    const uint8_t* active = st_.spinPiece.data();
     const double* X = w_.pos.data();
     const double* V = w_.vel.data();
     double* spin = st_.surfSpin.data();

@@ -39,6 +39,7 @@ struct PieceContactState {
     // SurfaceSpin.hpp), by which piece-piece springs turn; filled with
     // friction on, for the nodes of active pieces (under MPI the current ones).
     std::vector<double> surfSpin;
+    std::vector<uint8_t> spinPiece;  // per piece: its surface spins are computed this step
     std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
 
     // Verlet lists (default broad phase): per surface node, the triangles of

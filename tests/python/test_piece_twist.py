@@ -57,3 +57,22 @@ def test_a_spinning_contact_on_two_ranks_as_serially():
     assert d > 5e-3
     assert r["dx"] <= max(10 * r["dxThreads"], 1e-13 * d)
     assert r["dv"] <= max(10 * r["dvThreads"], 1e-11 * r["vmax"])
+
+
+def test_frictionless_pieces_compute_no_spin():
+    """The spins are computed only for pieces with a friction partner near
+    (frictionless springs have nothing to turn); with friction, for every
+    surface node of the pieces in reach of another."""
+    import qdem
+    counts = []
+    for mu in (0.0, 0.5):
+        mat = qdem.QdemMat(young=2e6, poisson=0.3, density=1000.0, viscosity=0.0, radius=0.004, restitution=0.5,
+                           frictionWall=0.5, frictionPiece=mu)
+        w = qdem.World()
+        a = w.addPiece(qdem.boxMesh((0.1, 0.1, 0.04), (4, 4, 1)), mat, pos=(0, 0, 0))
+        b = w.addPiece(qdem.boxMesh((0.04, 0.04, 0.04), (2, 2, 2)), mat, pos=(0, 0, 0.02 + 0.008 + 0.02 - 0.0005))
+        w.core.step(1e-5, 2)
+        assert w.core.contactCounts["pointPolygon"] > 0
+        counts.append((w.core.contactCounts["surfaceSpinNodes"], len(a.surface()["nodes"]) + len(b.surface()["nodes"])))
+    assert counts[0][0] == 0
+    assert counts[1][0] == counts[1][1]
