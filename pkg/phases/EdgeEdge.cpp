@@ -239,8 +239,19 @@ void PieceContactPhase::edgeEdge(double dt, double& eDamp, double& eSlip, long& 
                     // 30 degrees, test_crossed_bars_conserve_energy).
                     const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap, 0.0,
                                                   vRel.dot(n), dt);
+                    // Turned at the mean spin of the two edges at their
+                    // crossing points, each interpolated along its edge
+                    // (doc/formulation.md, "Twist").
+                    double spin = 0;
+                    if (Friction && law.mu > 0 && !regularized) {
+                        const double* om = st_.surfSpin.data();
+                        const int32_t* si = S.surfIndexOfNode.data();
+                        spin = 0.5 * ((1 - sp.s) * at(om, si[a0]) + sp.s * at(om, si[a1]) + (1 - sp.t) * at(om, si[b0]) +
+                                      sp.t * at(om, si[b1]))
+                                         .dot(n);
+                    }
                     const ContactResult r =
-                        lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
+                        lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                     // The spring's stiffness w aw kn varies with the geometry
                     // (the fades, the area weight), so kn w aw delta n alone is
                     // not the gradient of the energy 1/2 kn w aw delta^2 it

@@ -16,6 +16,7 @@
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
 #include "PieceContactPhase.hpp"
+#include "../contact/SurfaceSpin.hpp"
 
 namespace qdem {
 
@@ -41,9 +42,55 @@ unsigned PieceContactPhase::listsWanted() const {
     return lists;
 }
 
+// The spin of the surface at every surface node of a piece that may touch
+// another with friction (SurfaceSpin.hpp): what the springs between pieces turn by.  With
+// the spring law only (the regularised one has no spring, frictionless
+// contacts none either).  Each node from its own ring: any thread count
+// gives the same bits; under MPI only the current nodes, whose rings the
+// contact halo holds whole where a contact reads them.
+void PieceContactPhase::surfaceSpins() {
+    spinSeconds_ = 0, spinNodes_ = 0;
+    if (!w_.settings.frictionOn || w_.settings.frictionModel == FrictionModel::Regularized) return;
+    const double t0 = omp_get_wtime();
+    const auto ns = static_cast<int32_t>(w_.surfNodes.size());
+    st_.surfSpin.resize(3 * static_cast<std::size_t>(ns));
+    const Domain* dom = w_.domain.built();
+    const uint8_t* cur = dom ? dom->currentMask().data() : nullptr;
+    const int32_t* surfNodes = w_.surfNodes.data();
+    const int32_t* nodePiece = w_.nodePiece.data();
+    // Only pieces with a friction partner near (the pair law's mu > 0).
+    const std::size_t np = w_.pieces.size();
+    st_.spinPiece.assign(np, 0);
+    bool any = false;
+    for (std::size_t p = 0; p < np; ++p) {
+        for (int32_t q = st_.nbrStart[p]; q < st_.nbrStart[p + 1] && !st_.spinPiece[p]; ++q)
+            st_.spinPiece[p] = st_.nbrLaw[q].mu > 0;
+        any = any || st_.spinPiece[p];
+    }
+    if (!any) return;
+    const uint8_t* active = st_.spinPiece.data();
+    const double* X = w_.pos.data();
+    const double* V = w_.vel.data();
+    double* spin = st_.surfSpin.data();
+    long done = 0;
+#pragma omp parallel for schedule(static) reduction(+ : done)
+    for (int32_t s = 0; s < ns; ++s) {
+        const int32_t node = surfNodes[s];
+        const int32_t p = nodePiece[node];
+        // (a frozen piece's too: an awake piece's node may touch its triangles)
+        if (!active[p] || (cur && !cur[node])) continue;
+        surfaceNodeSpin(w_.surface, s, node, X, V, cur, spin + 3 * s);
+        ++done;
+    }
+    spinNodes_ = done;
+    spinSeconds_ = omp_get_wtime() - t0;
+}
+
 void PieceContactPhase::report(PhaseReport& r) const {
     // The sum of the thread buffers is booked to the first kind (point-polygon, the main user).
     r.seconds.push_back({"broadPhase", broadSeconds_});
+    r.seconds.push_back({"surfaceSpin", spinSeconds_});
+    r.counts.push_back({"surfaceSpinNodes", spinNodes_});
     for (std::size_t i = 0; i < kinds_.size(); ++i) {
         r.seconds.push_back({kinds_[i].row->name, kinds_[i].seconds + (i == 0 ? sumSeconds_ : 0.0)});
         r.counts.push_back({kinds_[i].row->name, kinds_[i].contacts});
@@ -588,6 +635,7 @@ void PieceContactPhase::run(double dt) {
     if (!verlet) st_.listValid = false;
 
     broadSeconds_ = omp_get_wtime() - t0;
+    surfaceSpins();
 
     beginStartCheck();
     threadDeep_.assign(omp_get_max_threads(), DeepContact{});  // (same size each step: no allocation)

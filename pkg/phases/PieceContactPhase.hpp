@@ -122,6 +122,10 @@ private:
     unsigned listsWanted() const;
 
     PieceContactState st_;
+    // Fills st_.surfSpin for this step (SurfaceSpin.hpp); its time and nodes.
+    void surfaceSpins();
+    double spinSeconds_ = 0;
+    long spinNodes_ = 0;
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0, maxDepthRatio_ = 0;
     std::vector<DeepContact> threadDeep_;  // per thread, sized once
     ContactStepLimit stepLimit_;

@@ -35,6 +35,11 @@ struct PieceContactState {
     double itemReach = 0;                       // largest bounding radius + contact reach
     // Per step, per triangle: unit outward normal (3), for the quick plane test.
     std::vector<double> triNormal;
+    // Per step, per surface node: the spin of the surface there (3, rad/s;
+    // SurfaceSpin.hpp), by which piece-piece springs turn; filled with
+    // friction on, for the nodes of active pieces (under MPI the current ones).
+    std::vector<double> surfSpin;
+    std::vector<uint8_t> spinPiece;  // per piece: its surface spins are computed this step
     std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
 
     // Verlet lists (default broad phase): per surface node, the triangles of

@@ -427,8 +427,20 @@ void PieceContactPhase::pointPolygon(double dt, double& eDamp, double& eSlip, lo
                 double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, overlap,
                                         split ? 0.0 : law.reach, vRel.dot(n), dt);
                 if (anyHanded && handed[i] > 0) r0 = handOverRef(overlap, r0, handed[i]);
+                // The spring turns with the contact about n at the mean spin
+                // of its two sides: the node's own, and the triangle's at the
+                // contact point, interpolated from its corners' (surface spins
+                // continuous over the surface: SurfaceSpin.hpp, doc/formulation.md
+                // "Twist").
+                double spin = 0;
+                if (Friction && law.mu > 0 && !regularized) {
+                    const double* om = st_.surfSpin.data();
+                    Vector3d wSum = at(om, s);
+                    for (int k = 0; k < 3; ++k) wSum += c.cp.w[k] * at(om, S.surfIndexOfNode[tn[k]]);
+                    spin = 0.5 * wSum.dot(n);
+                }
                 const ContactResult r =
-                    lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh);
+                    lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
                 // How deep the node is behind pb's surface (overlap - reach:
                 // > 0 behind it), against the reach: the per-step check.
                 noteDepth(deep, overlap - law.reach, law.reach, vRel.dot(n), node, pa, pb, false);

@@ -8,9 +8,9 @@ contact creeps at w |Ft| / kt to catch up (doc/formulation.md, "Twist"):
 the piece crept ahead of the table, its angle in the table's frame growing
 at m w^3 / Kt (Kt: the piece's total tangential stiffness on the table).
 Turned with the table's spin (a node is a point: the obstacle's spin; a
-YADE sphere against a piece's triangle: the sphere's), the stuck piece keeps
-its place on the table.  Between two pieces the spring is not turned yet
-(doc/formulation.md, "Twist"): a piece stuck on a spinning piece still creeps.
+YADE sphere against a piece's triangle: the sphere's; between two pieces the
+mean of the two surfaces' spins at the contact), the stuck piece keeps its
+place on the table.
 """
 import math
 
@@ -105,10 +105,15 @@ def test_a_piece_stuck_on_a_turntable_keeps_its_place(scene, kind, w, oldRate):
 def _slabTurn(w0=4.0):
     """A 0.8 m slab spinning freely at w0 on a frictionless floor, a cube stuck
     0.3 m off its axis by piece-piece friction: the cube's lead over the slab
-    (its rate [rad/s], fitted after 0.2 s of settling), the drift of the books
-    against the cube's kinetic energy, and of the total angular momentum about
-    the axis (floor, gravity and the contacts' normals exert no torque about z)
-    against its start."""
+    (its rate [rad/s], fitted over 3 s sampled every 0.01 s after 0.2 s of
+    settling), the drift of the books against the cube's kinetic energy, and
+    of the total angular momentum about the axis (floor, gravity and the
+    contacts' normals exert no torque about z) against its start.  The lead
+    is the cube's angle about the slab's centroid less the slab's own turn
+    (the least-squares rotation of all its nodes): the cube rocks on the slab
+    at 3.6 Hz by 3e-3 rad whatever the springs do, and the slab's corner
+    vibrates, so a short fit or coarse samples (0.05 s: aliased) read a
+    wrong rate."""
     from qdem import _core
     w = qdem.World()
     slabMat = qdem.QdemMat(young=1e5, poisson=0.3, density=1000, viscosity=20, radius=0.005, frictionWall=0,
@@ -128,27 +133,29 @@ def _slabTurn(w0=4.0):
     c.trackEnergy = True
     c.setObstacles([floor])
     dt = 0.8 * w.stableDt()["combined"]
-    corner = slab.nodeSlice.start  # a node at the slab's corner: the slab's angle
+    x0 = np.asarray(c.pos)[slab.nodeSlice]
+    x0 = x0 - x0.mean(axis=0)  # the slab's nodes about its centroid at the start
 
     def lz():
         return slab.angularMomentumAbout((0, 0, 0))[2] + cube.angularMomentumAbout((0, 0, 0))[2]
 
     def lead():
-        x, s, o = cube.centroid, np.asarray(c.pos)[corner], slab.centroid
+        x, o = cube.centroid, slab.centroid
         assert abs(math.hypot(x[0] - o[0], x[1] - o[1]) - R) < 0.03  # still on its circle
-        a = math.atan2(x[1] - o[1], x[0] - o[0]) - math.atan2(s[1] - o[1], s[0] - o[0])
-        return (a + math.pi) % (2 * math.pi) - math.pi
+        d = np.asarray(c.pos)[slab.nodeSlice] - o
+        turn = math.atan2(np.sum(x0[:, 0] * d[:, 1] - x0[:, 1] * d[:, 0]), np.sum(x0[:, 0] * d[:, 0] + x0[:, 1] * d[:, 1]))
+        return math.atan2(x[1] - o[1], x[0] - o[0]) - turn
 
     c.step(dt, int(0.2 / dt))
     e0, l0 = c.energy["total"], lz()
     t, a, time = [], [], 0.0
-    for _ in range(30):
-        n = int(0.05 / dt)
+    for _ in range(300):
+        n = int(0.01 / dt)
         c.step(dt, n)
         time += n * dt
         t.append(time)
         a.append(lead())
-    rate = np.polyfit(t, a, 1)[0]
+    rate = np.polyfit(t, np.unwrap(a), 1)[0]
     return (rate, (c.energy["total"] - e0) / (0.5 * cube.totalMass * (w0 * R) ** 2), abs(lz() - l0) / abs(l0))
 
 
@@ -164,21 +171,18 @@ def _slab():
 def test_a_piece_stuck_on_a_spinning_piece_balances_its_books():
     """A free slab with a cube stuck on it, turning on a frictionless floor:
     the total angular momentum about the axis is conserved (measured: to
-    3.6e-6 of it in 1.5 s), and the books drift by under 2.5 % of the cube's
-    kinetic energy (measured 0.15 %)."""
+    4.2e-6 of it in 3 s), and the books drift by under 2.5 % of the cube's
+    kinetic energy (measured 0.18 %; the twist stores nothing)."""
     rate, drift, dlz = _slab()
     assert abs(drift) < 0.025, drift
     assert dlz < 1e-5, dlz
 
 
-@pytest.mark.xfail(strict=True, reason="piece-piece springs are not turned: the spin of a piece's surface is "
-                   "piecewise constant per triangle and jumps at a hand-over (doc/formulation.md, 'Twist')")
 def test_a_piece_stuck_on_a_spinning_piece_keeps_its_place():
-    """Piece against piece the spring is not turned: the cube creeps ahead
-    of the slab at 9.5e-3 rad/s (m w^3 / Kt with the two pieces' springs in
-    series).  Turned with the slab's triangles' spin it crept at 1.8e-3, but
-    that spin jumps when a node hands over to the next triangle, and the
-    step of the hand-over is decided by rounding: 1 and 2 threads, or
-    serial and MPI runs, parted by 1e-5 m/s instead of 1e-13."""
+    """Between two pieces the spring turns with the mean of the two
+    surfaces' spins at the contact (each interpolated from its nodes' spins:
+    continuous over the surface, doc/formulation.md "Twist").  Not turned,
+    the cube crept ahead of the slab at 9.1e-3 rad/s (m w^3 / Kt with the two
+    pieces' springs in series); turned, measured 3.4e-5: under a tenth."""
     rate, drift, dlz = _slab()
-    assert abs(rate) < 0.1 * 5e-3, rate
+    assert abs(rate) < 0.1 * 9.1e-3, rate
