@@ -60,10 +60,14 @@ void PieceContactPhase::run(double dt) {
     for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0;
     maxOverlap_ = maxDepthRatio_ = 0;
     stepLimit_ = ContactStepLimit{};
-    loadsSummed_ = false;
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
+    // Under MPI the loads travel with the forces whenever contacts may be:
+    // decided alike on every rank (the messages' sizes depend on it), zero
+    // where this rank sums none.
+    loadsSummed_ = w_.domain.built() && np >= 2 && anyKindOn();
+    if (loadsSummed_) nodeLoad_.assign(2 * w_.surfNodes.size(), 0.0);
     noteSleepChanges();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) {  // no contacts: no overlap to refuse either
@@ -626,8 +630,7 @@ void PieceContactPhase::run(double dt) {
     const double* rateE = w_.pieceElementRate.data();
     ContactStepLimit best;
     // Under MPI the loads are kept for their owners (mpiNodeLoad) instead.
-    if (dom) nodeLoad_.resize(2 * w_.surfNodes.size());
-    double* const L = dom ? nodeLoad_.data() : nullptr;
+    double* const L = loadsSummed_ ? nodeLoad_.data() : nullptr;
 #pragma omp parallel num_threads(nth)
     {
         ContactStepLimit mine;
@@ -658,7 +661,6 @@ void PieceContactPhase::run(double dt) {
     // taken by the owners once the shares are summed (ownedStepLimit), the
     // stop by every rank at the step's end (World::step).
     stepLimit_ = dom ? ContactStepLimit{} : best;
-    loadsSummed_ = dom != nullptr;
     sumSeconds_ = omp_get_wtime() - tSum;
     if (stepLimit_.limit < dt) checkStepLimit(dt);
     maxOverlap_ = ks.maxOverlap;
