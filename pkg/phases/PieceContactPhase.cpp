@@ -645,7 +645,10 @@ void PieceContactPhase::run(double dt) {
                 k += tl[th][2 * s], c += tl[th][2 * s + 1];
             }
             if (L) {
-                L[2 * s] = k, L[2 * s + 1] = c;
+                // (A sleeping piece's rows are neither zeroed nor moved: serially
+                // only awake nodes are summed, so only theirs count here too.)
+                const bool awake = all || !w_.sleeping.asleep(static_cast<std::size_t>(nodePiece[node]));
+                L[2 * s] = awake ? k : 0.0, L[2 * s + 1] = awake ? c : 0.0;
                 continue;
             }
             if (!(k > 0) || !measure) continue;

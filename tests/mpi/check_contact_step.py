@@ -4,8 +4,11 @@ on a world split over the ranks, against the serial world: (a) two soft cubes
 pressed face to face report the same limit, node and piece on every rank as
 serially; (b) two soft cubes thrown at each other at 0.9 of the stable step
 before the run stop in the same step with the same message on every rank as
-serially (the contacts as they are lower the limit below O.dt).  Rank 0
-prints 'RESULT {json}'."""
+serially (the contacts as they are lower the limit below O.dt); (c) the
+sleeping scene of check_sleep.py, pieces falling asleep beside awake ones:
+the same limit as serially after 450 steps (a sleeping piece's rows are not
+cleared each step and were summed into its nodes' loads under MPI, which
+grew until the run stopped at step 399).  Rank 0 prints 'RESULT {json}'."""
 import json
 import os
 import sys
@@ -65,10 +68,29 @@ def stop(w, split):
     return {"stopped": False, "message": "", "iter": int(w.core.iter), "dt": dt}
 
 
-out = {"rank": comm.rank, "limit": limitReport(pressed(), True), "stop": stop(thrown(), True)}
+def sleeping(split):
+    sys.path.insert(0, HERE)
+    import scenes
+    w = scenes.withContacts()
+    w.core.sleepVelocity = 0.02
+    w.core.sleepTime = 0.005
+    w.core.localDamping = 0.3
+    dt = 0.5 * w.stableDt()["combined"]
+    if split:
+        w.core.setCommunicator(comm)
+    try:
+        w.core.step(dt, 450)
+    except qdem.StabilityError as e:
+        return {"stopped": int(w.core.iter), "message": str(e)}
+    d = w.stableDt()
+    return dict({k: d[k] for k in KEYS}, asleep=int(w.core.nAsleep))
+
+
+out = {"rank": comm.rank, "limit": limitReport(pressed(), True), "stop": stop(thrown(), True),
+       "sleeping": sleeping(True)}
 everything = comm.gather(out, root=0)
 if comm.rank == 0:
     from qdem import _core
     _core.setThreads(1)
-    serial = {"limit": limitReport(pressed(), False), "stop": stop(thrown(), False)}
+    serial = {"limit": limitReport(pressed(), False), "stop": stop(thrown(), False), "sleeping": sleeping(False)}
     print("RESULT " + json.dumps({"ranks": comm.size, "perRank": everything, "serial": serial}), flush=True)

@@ -37,3 +37,12 @@ def test_contact_step_limit_and_stop_as_serial(P):
         assert st["stopped"] and st["message"] == s["stop"]["message"], (st, s["stop"])
         # (Under MPI the stop comes at the end of that step, after its integration.)
         assert st["iter"] == s["stop"]["iter"] + 1
+    # (c) pieces asleep beside awake ones: their nodes' stale rows are not
+    # counted; the serial limit on every rank.
+    assert s["sleeping"]["asleep"] > 0 and math.isfinite(s["sleeping"]["pieceContact"]), s["sleeping"]
+    for rank in r["perRank"]:
+        d = rank["sleeping"]
+        assert "stopped" not in d, d
+        assert d["asleep"] == s["sleeping"]["asleep"]
+        assert d["pieceContact"] == pytest.approx(s["sleeping"]["pieceContact"], rel=1e-6)
+        assert d["pieceContactNode"] == s["sleeping"]["pieceContactNode"]
