@@ -57,7 +57,11 @@ public:
     // Partial forces on ghosts (element buffers of `layout`, plus contact
     // forces when `contacts`) to their owners; ghostForce() then holds, for
     // owned nodes, the sum of what the other ranks computed (0 elsewhere).
-    void returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts);
+    // With `contactLoad` (2 per surface node: the piece contacts' stiffness
+    // and dashpot on it, PieceContactPhase::mpiNodeLoad) the ghosts' loads go
+    // in the same messages and are added to the owners' rows.
+    void returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts,
+                           double* contactLoad = nullptr);
     const double* ghostForce() const { return ghostForce_.data(); }
     // Owned positions and velocities forward to the ghosts that read them.
     void sendStates();
@@ -135,8 +139,10 @@ public:
     // reads, restarts): one gather of the owned nodes.
     void gatherAll();
 
-    // The lowest failing rank's message on every rank ("" when none failed).
-    // Messages start with their kind: 'I' (InputError) or 'S' (any other).
+    // The failing ranks' earliest message on every rank ("" when none
+    // failed): of the lowest phase order, then of the lowest rank.  Messages
+    // start with their kind, 'I' (InputError) or 'S' (any other), then the
+    // order of the step phase that raised them ('0': outside the phases).
     std::string agree(const std::string& error);
 
     // Counted costs of the last step's halo (for doc/parallel.md).

@@ -110,6 +110,11 @@ void PieceContactPhase::run(double dt) {
     interiorFaceTests_ = interiorFaceNear_ = 0;  // (a step with no pieces near tests none)
     listedTriangles_ = 0;
     const std::size_t np = w_.pieces.size();
+    // Under MPI the loads travel with the forces whenever contacts may be:
+    // decided alike on every rank (the messages' sizes depend on it), zero
+    // where this rank sums none.
+    loadsSummed_ = w_.domain.built() && np >= 2 && anyKindOn();
+    if (loadsSummed_) nodeLoad_.assign(2 * w_.surfNodes.size(), 0.0);
     noteSleepChanges();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) {  // no contacts: no overlap to refuse either
@@ -672,6 +677,8 @@ void PieceContactPhase::run(double dt) {
     const double* w2e = w_.pieceElementW2.data();
     const double* rateE = w_.pieceElementRate.data();
     ContactStepLimit best;
+    // Under MPI the loads are kept for their owners (mpiNodeLoad) instead.
+    double* const L = loadsSummed_ ? nodeLoad_.data() : nullptr;
 #pragma omp parallel num_threads(nth)
     {
         ContactStepLimit mine;
@@ -685,6 +692,13 @@ void PieceContactPhase::run(double dt) {
                 for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
                 k += tl[th][2 * s], c += tl[th][2 * s + 1];
             }
+            if (L) {
+                // (A sleeping piece's rows are neither zeroed nor moved: serially
+                // only awake nodes are summed, so only theirs count here too.)
+                const bool awake = all || !w_.sleeping.asleep(static_cast<std::size_t>(nodePiece[node]));
+                L[2 * s] = awake ? k : 0.0, L[2 * s + 1] = awake ? c : 0.0;
+                continue;
+            }
             if (!(k > 0) || !measure) continue;
             const int32_t p = nodePiece[node];
             const double w2 = w2e[p] + k / M[node], w = std::sqrt(w2);
@@ -694,11 +708,9 @@ void PieceContactPhase::run(double dt) {
 #pragma omp critical(qdemContactStepLimit)
         if (mine.limit < best.limit || (mine.limit == best.limit && mine.node < best.node)) best = mine;
     }
-    // Under MPI a rank sees only its own nodes' share of each node's load
-    // (the rows of nodes another rank owns are not summed here), so ranks
-    // would judge alike neither the limit nor the stop, and a stop on one
-    // rank alone leaves the others waiting in the next exchange: checked
-    // serially only, for now (doc/formulation.md).
+    // Under MPI a rank holds only its share of a node's load: the limit is
+    // taken by the owners once the shares are summed (ownedStepLimit), the
+    // stop by every rank at the step's end (World::step).
     stepLimit_ = dom ? ContactStepLimit{} : best;
     sumSeconds_ = omp_get_wtime() - tSum;
     if (stepLimit_.limit < dt) checkStepLimit(dt);
@@ -729,11 +741,54 @@ void PieceContactPhase::stateColumns(StateColumns& c) {
     for (Kind& k : kinds_) k.kernel->stateColumns(c);
 }
 
+double PieceContactPhase::nodeStepLimit(int32_t node, double k, double c) const {
+    const std::size_t p = static_cast<std::size_t>(w_.nodePiece[node]);
+    if (w_.pieceElementW2.size() != w_.pieces.size() || w_.pieceElementRate.size() != w_.pieces.size())
+        return std::numeric_limits<double>::infinity();
+    const double w2 = w_.pieceElementW2[p] + k / w_.mass[node], w = std::sqrt(w2);
+    return leapfrogLimit(w, (w_.pieceElementRate[p] + c / w_.mass[node]) / (2 * w));
+}
+
+void PieceContactPhase::ownedStepLimit() {
+    stepLimit_ = ContactStepLimit{};
+    const Domain* dom = w_.domain.built();
+    if (!loadsSummed_ || !dom) return;
+    ContactStepLimit& best = stepLimit_;
+    for (const int32_t s : dom->currentSurf()) {
+        const int32_t node = w_.surfNodes[s];
+        const double k = nodeLoad_[2 * s], c = nodeLoad_[2 * s + 1];
+        if (!(k > 0) || !dom->owns(node)) continue;
+        const double limit = nodeStepLimit(node, k, c);
+        if (limit < best.limit || (limit == best.limit && node < best.node))
+            best = ContactStepLimit{limit, node, w_.nodePiece[node], k, c, w_.iter};
+    }
+}
+
+void PieceContactPhase::packStepLimit(double* v, int rank) const {
+    const ContactStepLimit& l = stepLimit_;
+    double* r = v + static_cast<std::ptrdiff_t>(kLimitValues) * rank;
+    r[0] = l.limit, r[1] = l.node, r[2] = l.piece, r[3] = l.stiffness, r[4] = l.dashpot;
+    r[5] = static_cast<double>(l.step);
+}
+
+void PieceContactPhase::unpackStepLimit(const double* v, int nRanks) {
+    // (Each rank wrote its own slots, the others zeros: the sums are the values.)
+    ContactStepLimit best;
+    for (int q = 0; q < nRanks; ++q) {
+        const double* r = v + static_cast<std::ptrdiff_t>(kLimitValues) * q;
+        const auto node = static_cast<int32_t>(r[1]);
+        if (node < 0 || !(r[0] <= best.limit)) continue;
+        if (r[0] < best.limit || node < best.node)
+            best = ContactStepLimit{r[0], node, static_cast<int32_t>(r[2]), r[3], r[4], static_cast<long>(r[5])};
+    }
+    stepLimit_ = best;
+}
+
 void PieceContactPhase::checkStepLimit(double dt) const {
     const ContactStepLimit& l = stepLimit_;
     const double m = w_.mass[l.node];
     throw StabilityError(cat(
-        "QDEM: during step ", w_.iter + 1, " the piece-piece contacts on node ", l.node - w_.pieces[l.piece].nodeBegin,
+        "QDEM: during step ", l.step + 1, " the piece-piece contacts on node ", l.node - w_.pieces[l.piece].nodeBegin,
         " of piece ", l.piece, " make its stable time step ", l.limit, " s, below O.dt = ", dt, " s by a factor ",
         dt / l.limit, ": the springs on it, as a node pressed on the other piece and as a corner of the faces the "
         "other piece's nodes press on, load it with ", l.stiffness, " N/m on its ", m, " kg (with its elements' ",

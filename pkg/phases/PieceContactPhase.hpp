@@ -46,6 +46,22 @@ public:
     // with its piece's elements (ContactLoad.hpp); infinite when none.  A step
     // whose contacts make it below dt stops the run (StabilityError).
     const ContactStepLimit& stepLimit() const { return stepLimit_; }
+    // Refuses the step when stepLimit() is below dt (StabilityError naming
+    // the node, its piece, its load and the fix).
+    void checkStepLimit(double dt) const;
+    // Under MPI a rank sums only the contacts it computed: its share of each
+    // current surface node's load.  This step's shares (2 per surface node:
+    // stiffness, dashpot; null when the contacts summed none) go with the
+    // forces to the nodes' owners (Domain::returnGhostForces), which add them
+    // to their rows; then ownedStepLimit() takes this rank's smallest limit
+    // over the nodes it owns, and the end-of-step reduction carries every
+    // rank's (packStepLimit, kLimitValues per rank, no message of its own),
+    // so every rank holds, reports and stops on the same node.
+    double* mpiNodeLoad() { return loadsSummed_ ? nodeLoad_.data() : nullptr; }
+    void ownedStepLimit();
+    static constexpr int kLimitValues = 6;
+    void packStepLimit(double* v, int rank) const;
+    void unpackStepLimit(const double* v, int nRanks);
     // Pieces placed pressed into each other, accepted by the start check:
     // the energy their springs hold and the speed it throws them apart at,
     // handed over once (QdemEngine warns).
@@ -129,9 +145,11 @@ private:
     double broadSeconds_ = 0, sumSeconds_ = 0, maxOverlap_ = 0, maxDepthRatio_ = 0;
     std::vector<DeepContact> threadDeep_;  // per thread, sized once
     ContactStepLimit stepLimit_;
-    // After the sum: refuses a step whose contacts, as they are, make the
-    // stable step of some node below dt (StabilityError naming it and the fix).
-    void checkStepLimit(double dt) const;
+    // The stable step of a node with contact load k [N/m], c [N s/m] and its
+    // piece's elements (infinite when the element modes are not measured).
+    double nodeStepLimit(int32_t node, double k, double c) const;
+    std::vector<double> nodeLoad_;  // under MPI: 2 per surface node (mpiNodeLoad)
+    bool loadsSummed_ = false;
     // Is a contact of pieces pa, pb past its reach judged by the per-step
     // check?  Not while the start check judges the pair (a new piece), nor
     // for a pair the start check accepted interpenetrated (startOverlap_):

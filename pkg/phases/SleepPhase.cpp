@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "../step/WorldState.hpp"
 #include "IntegrationPhase.hpp"
@@ -146,8 +147,13 @@ void SleepPhase::run(double dt) {
     // Largest node speed of each awake piece, from the integration (under
     // MPI the largest over the ranks: every rank then decides alike, as the
     // pieces' boxes, neighbours and obstacles are the global ones too).
-    for (std::size_t p = 0; p < np; ++p)
-        pieceSpeed2_[p] = w_.awake.asleep_[p] ? pieceSpeed2_[p] : w_.integration.maxSpeed2(p);
+    // (A speed that is not finite counts as infinite: the maximum of a NaN
+    // depends on the order the ranks meet in, and ranks must decide alike
+    // even in the step an error stops.)
+    for (std::size_t p = 0; p < np; ++p) {
+        const double s2 = w_.awake.asleep_[p] ? pieceSpeed2_[p] : w_.integration.maxSpeed2(p);
+        pieceSpeed2_[p] = std::isnan(s2) ? std::numeric_limits<double>::infinity() : s2;
+    }
     if (Domain* dom = w_.domain.built()) dom->comm().allreduceMax(pieceSpeed2_.data(), static_cast<int>(np));
     for (std::size_t p = 0; p < np; ++p) {
         if (w_.awake.asleep_[p]) continue;

@@ -396,17 +396,26 @@ void Domain::exchange(std::vector<std::vector<double>>& send, std::vector<std::v
     seconds += omp_get_wtime() - t0;
 }
 
-void Domain::returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts) {
+void Domain::returnGhostForces(const ThreadLayout& layout, const double* contactForce, bool contacts,
+                               double* contactLoad) {
     stepBytes = stepMessages = 0;
     seconds = 0;
+    // Per node: the force (3), then with contactLoad its contact load (2:
+    // stiffness, dashpot; zeros for nodes off the surface) in the same message.
+    const int32_t* surfIndex = w_.surfaceIndex().surfIndexOfNode.data();
+    const std::size_t stride = contactLoad ? 5 : 3;
+    const auto packLoad = [&](int32_t n, double* b) {
+        const int32_t s = surfIndex[n];
+        if (s >= 0) b[3] = contactLoad[2 * s], b[4] = contactLoad[2 * s + 1];
+    };
     const std::size_t nb = halo_.neighbours.size();
     for (std::size_t i = 0; i < nb; ++i) {
         const std::vector<int32_t>& ghosts = halo_.recv[i];
         std::vector<double>& b = sendBuf_[i];
-        b.assign(3 * ghosts.size(), 0.0);
+        b.assign(stride * ghosts.size(), 0.0);
         for (std::size_t j = 0; j < ghosts.size(); ++j) {
             const int32_t n = ghosts[j];
-            double* f = &b[3 * j];
+            double* f = &b[stride * j];
             // The buffers in thread order, as the owner's integration sums its own.
             for (int t = 0; t < layout.nThreads; ++t)
                 if (n >= layout.nodeLo[t] && n <= layout.nodeHi[t]) {
@@ -415,8 +424,9 @@ void Domain::returnGhostForces(const ThreadLayout& layout, const double* contact
                 }
             if (contacts)
                 for (int d = 0; d < 3; ++d) f[d] += contactForce[3 * n + d];
+            if (contactLoad) packLoad(n, f);
         }
-        recvBuf_[i].resize(3 * halo_.send[i].size());
+        recvBuf_[i].resize(stride * halo_.send[i].size());
     }
     exchange(sendBuf_, recvBuf_);
     // Contact ghosts: the contact force on each ghost received last time
@@ -427,14 +437,15 @@ void Domain::returnGhostForces(const ThreadLayout& layout, const double* contact
         const long b0 = comm_->bytesSent, m0 = comm_->messagesSent;
         for (std::size_t i = 0; i < nc; ++i) {
             std::vector<double>& b = cSendBuf_[i];
-            b.assign(3 * cRecv_[i].size(), 0.0);
+            b.assign(stride * cRecv_[i].size(), 0.0);
             if (contacts)
                 for (std::size_t j = 0; j < cRecv_[i].size(); ++j) {
                     const int32_t n = cRecv_[i][j];
-                    if (!elementGhost_[n])
-                        for (int d = 0; d < 3; ++d) b[3 * j + d] = contactForce[3 * n + d];
+                    if (elementGhost_[n]) continue;
+                    for (int d = 0; d < 3; ++d) b[stride * j + d] = contactForce[3 * n + d];
+                    if (contactLoad) packLoad(n, &b[stride * j]);
                 }
-            cRecvBuf_[i].resize(3 * cSend_[i].size());
+            cRecvBuf_[i].resize(stride * cSend_[i].size());
         }
         comm_->exchange(cNbr_, cSendBuf_, cRecvBuf_);
         stepBytes += comm_->bytesSent - b0;
@@ -443,14 +454,19 @@ void Domain::returnGhostForces(const ThreadLayout& layout, const double* contact
     }
     // Summed in neighbour (= rank) order, element halo first: the same on
     // every run.  What the last step wrote is cleared first (the contact
-    // halo's nodes change from step to step).
+    // halo's nodes change from step to step).  The loads are added to the
+    // owners' own rows.
     for (const int32_t n : ghostTouched_)
         for (int d = 0; d < 3; ++d) ghostForce_[3 * n + d] = 0.0;
     ghostTouched_.clear();
     const auto add = [&](const std::vector<int32_t>& mine, const std::vector<double>& f) {
         for (std::size_t j = 0; j < mine.size(); ++j) {
-            for (int d = 0; d < 3; ++d) ghostForce_[3 * mine[j] + d] += f[3 * j + d];
-            ghostTouched_.push_back(mine[j]);
+            const int32_t n = mine[j];
+            for (int d = 0; d < 3; ++d) ghostForce_[3 * n + d] += f[stride * j + d];
+            ghostTouched_.push_back(n);
+            if (!contactLoad || surfIndex[n] < 0) continue;
+            contactLoad[2 * surfIndex[n]] += f[stride * j + 3];
+            contactLoad[2 * surfIndex[n] + 1] += f[stride * j + 4];
         }
     };
     for (std::size_t i = 0; i < nb; ++i) add(halo_.send[i], recvBuf_[i]);
@@ -536,14 +552,20 @@ std::string Domain::agree(const std::string& error) {
     std::vector<uint8_t> mine(error.begin(), error.end()), all;
     std::vector<int> counts;
     comm_->allgatherv(mine, all, counts);
-    std::size_t at = 0;
+    // The error of the earliest phase (its order, the second character), of
+    // the lowest rank among equals: a later phase's error on another rank
+    // may only be a consequence of it.
+    int best = -1;
+    std::size_t bestAt = 0, at = 0;
     for (int r = 0; r < size(); ++r) {
-        if (counts[r] > 0)
-            return std::string(1, static_cast<char>(all[at])) + "QDEM rank " + std::to_string(r) + " of " +
-                   std::to_string(size()) + ": " + std::string(all.begin() + at + 1, all.begin() + at + counts[r]);
+        if (counts[r] >= 2 && (best < 0 || all[at + 1] < all[bestAt + 1])) best = r, bestAt = at;
         at += counts[r];
     }
-    return "SQDEM: a rank failed without a message";
+    if (best < 0) return "SQDEM: a rank failed without a message";
+    return std::string(1, static_cast<char>(all[bestAt])) + "QDEM rank " + std::to_string(best) + " of " +
+           std::to_string(size()) + ": " +
+           std::string(all.begin() + static_cast<std::ptrdiff_t>(bestAt) + 2,
+                       all.begin() + static_cast<std::ptrdiff_t>(bestAt) + counts[best]);
 }
 
 void Domain::finishStep(const std::string& error) {
@@ -553,7 +575,11 @@ void Domain::finishStep(const std::string& error) {
     // [failed, reactions (6 per obstacle), energies (10), sphere pairs, load]
     // of this rank.
     const std::size_t ne = energyOn ? 10 : 0, ns = w_.phases_->sphere.mpiValues();
-    const std::size_t nv = 1 + 6 * no + ne + ns + 1;
+    // Then each rank's run-time piece-contact limit in its own slots (zeros
+    // in the others': the sums are every rank's values, PieceContactPhase).
+    PieceContactPhase& pc = w_.phases_->pieceContact;
+    const std::size_t nl = static_cast<std::size_t>(PieceContactPhase::kLimitValues) * size();
+    const std::size_t nv = 1 + 6 * no + ne + ns + nl + 1;
     std::vector<double> v(nv);
     v[0] = error.empty() ? 0.0 : 1.0;
     v[nv - 1] = load();
@@ -571,6 +597,7 @@ void Domain::finishStep(const std::string& error) {
     // The sphere pairs this rank computed (zeros for the others'): their
     // sums are each pair's owner's force, torque and history.
     if (ns > 0) w_.phases_->sphere.packPairs(v.data() + 1 + 6 * no + ne);
+    pc.packStepLimit(v.data() + 1 + 6 * no + ne + ns, rank());
     // Summed (the load too, for its mean) and the load's maximum, in a tree
     // of fixed shape: the same bits on every rank and every run.
     v.push_back(v[nv - 1]);
@@ -593,6 +620,7 @@ void Domain::finishStep(const std::string& error) {
         w_.energyTotal_ = Energy{s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]};
     }
     if (ns > 0 || !w_.spheres.pairPiece.empty()) w_.phases_->sphere.unpackPairs(v.data() + 1 + 6 * no + ne, w_.iter - 1);
+    pc.unpackStepLimit(v.data() + 1 + 6 * no + ne + ns, size());
 }
 
 double Domain::load() const {

@@ -397,7 +397,7 @@ void World::agreeOnScriptEnd() const {
 
 std::string World::agreeOnError(const std::string& error) const {
     if (!domain_) return error;
-    const std::string m = domain_->agree(error.empty() ? error : "S" + error);
+    const std::string m = domain_->agree(error.empty() ? error : "S0" + error);
     return m.empty() ? m : m.substr(1);
 }
 

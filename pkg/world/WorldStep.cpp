@@ -51,19 +51,25 @@ void World::step(double dt) {
         domain_->agreeOnCall(Domain::Call::Step);
         prepareDomain(dt);
     }
-    // Under MPI a phase's error is kept and the step goes on through its
-    // exchanges, so every rank reaches the end-of-step agreement and throws
-    // the same error (Domain::finishStep) instead of waiting for the failed one.
+    // Under MPI a phase's error is kept and the step goes on through every
+    // later phase and exchange on that rank too: the phases after it hold
+    // collectives (the implicit solve's sums, the sleep phase's reductions)
+    // that the other ranks enter, and a rank that skipped them left those
+    // waiting until their timeout.  Every rank thus reaches the end-of-step
+    // reduction, whose error flag (a slot of it: no extra message) makes all
+    // throw the earliest phase's error (Domain::agree).  Errors of later
+    // phases on a failed rank (garbage in, garbage out) are dropped.
     std::string error;
+    char order = '0';
     const auto run = [&](Phase& p) {
-        if (!error.empty()) return;
+        ++order;
         if (!domain_) return runTimed(p, dt);
         try {
             runTimed(p, dt);
         } catch (const InputError& e) {
-            error = std::string("I") + e.what();  // the kind travels as the first character
+            if (error.empty()) error = std::string("I") + order + e.what();  // kind, phase order, message
         } catch (const std::exception& e) {
-            error = std::string("S") + e.what();
+            if (error.empty()) error = std::string("S") + order + e.what();
         }
     };
     // Set-up of the step: a loaded state's sleeping pieces checked against
@@ -85,7 +91,13 @@ void World::step(double dt) {
     run(ph.sphere);
     run(ph.element);
     // Under MPI: partial forces on ghosts to their owners.
-    if (domain_) domain_->returnGhostForces(ph.element.layout(), contactForces_.force.data(), contactForces_.active);
+    // The piece contacts' loads with them: the owners then hold each node's
+    // whole load and take their nodes' run-time stable step.
+    if (domain_) {
+        domain_->returnGhostForces(ph.element.layout(), contactForces_.force.data(), contactForces_.active,
+                                   ph.pieceContact.mpiNodeLoad());
+        ph.pieceContact.ownedStepLimit();
+    }
     // Motion, the energy states of the step, the clock.
     run(ph.integration);
     if (settings.trackEnergy && error.empty()) finishPieceEnergy();
@@ -100,6 +112,9 @@ void World::step(double dt) {
     run(ph.sleep);
     if (domain_) {
         domain_->finishStep(error);
+        // Every rank holds the smallest limit over the ranks (finishStep):
+        // all stop alike, naming the same node, after the step it was found in.
+        if (ph.pieceContact.stepLimit().limit < dt) ph.pieceContact.checkStepLimit(dt);
         // Every rank saw the same loads: they all split again, or none does.
         if (settings.rebalanceThreshold > 0 && domain_->loadImbalance > settings.rebalanceThreshold) rebalance();
     }
