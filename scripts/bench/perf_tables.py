@@ -8,6 +8,7 @@ JSON, so that the doc is refreshed by pasting, never by retyping figures.
     /usr/bin/python3.11 scripts/bench/perf_tables.py effects   bench/logs/effects_2026-11-28.json \
         [--doc doc/performance.md]   (the table written into the doc between its markers)
     /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
+    /usr/bin/python3.11 scripts/bench/perf_tables.py timeToSolution bench/logs/time_to_solution_2026-11-28.json
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
@@ -234,6 +235,60 @@ def effects(d):
             mins(e.get("on_cpu", {"all": {}})), mins(e["qdem"]), mins({"all": e["all"]})))
 
 
+def duration(seconds):
+    """A wall time for people: s, min or h."""
+    if seconds is None:
+        return "—"
+    if seconds < 120:
+        return "%.0f s" % seconds
+    if seconds < 7200:
+        return "%.0f min" % (seconds / 60)
+    return "%.1f h" % (seconds / 3600)
+
+
+def timeToSolution(d):
+    """The time-to-solution table (bench_time_to_solution.py's JSON): per
+    scene and scale, wall s per simulated s with each lever (median of the
+    interleaved rounds, the 1-minute load average beside it) and the whole
+    run's wall time, projected; then the whole runs, measured or projected."""
+    levers = list(d["levers"])
+    print("The seed's shogi scenes, Table 1's material, implicit viscosity, %d threads (%s). **Measured**: wall "
+          "(CPU) seconds per simulated second over a short window, median of %s interleaved rounds, each lever "
+          "over the same steps; CG: iterations of the viscous solve per step. **Projected**: the whole run's wall "
+          "time, that rate times the scene's simulated time to its end (at real size; the forty-piece line also "
+          "times 3 pieces awake in the 766× runs over those awake at the front). Load: 1-minute load average "
+          "during the rounds, min–median (2 cores, shared).\n"
+          % (d["threads"], d["date"], next(iter(d["scenes"].values()))["rounds"]))
+    print("| scene | scale | pieces (awake) | wall (CPU) s per simulated s: %s | CG its per step: %s | "
+          "projected whole run | load |" % (" / ".join(levers), " / ".join(levers)))
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+
+    def med(e, lever, key):
+        s = e["levers"].get(lever, {}).get("summary")
+        return s[key]["median"] if s and s.get(key) else None
+
+    def g(v, digits=3):
+        return "%.*g" % (digits, v) if v is not None else "—"
+
+    for name, e in d["scenes"].items():
+        rates = " / ".join("%s (%s)" % (g(med(e, v, "wall_s_per_simulated_s")), g(med(e, v, "cpu_s_per_simulated_s")))
+                           for v in levers)
+        cg = " / ".join(g(med(e, v, "cg_iterations_per_step")) for v in levers)
+        p = e["projected_full_run"]
+        load = "%.1f–%.1f" % (e["load1"]["min"], e["load1"]["median"]) if e.get("load1") else "—"
+        print("| %s | %s | %d (%s) | %s | %s | %s for %.3g s | %s |" % (
+            e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"], g(e["pieces_awake"]),
+            rates, cg, duration(p["wall_s"]), p["simulated_s"], load))
+    print("\nWhole runs at real size on the same machine:\n")
+    print("| run | wall time | status |")
+    print("| --- | --- | --- |")
+    for name, r in d["full_runs"].items():
+        if r["wall_s"] is not None:
+            print("| %s | **%s** | measured (%s) |" % (name, duration(r["wall_s"]), r.get("log", "")))
+        else:
+            print("| %s | %s | not run; projected |" % (name, duration(r.get("projected_wall_s"))))
+
+
 BEGIN, END = "<!-- perf_tables.py effects: begin -->", "<!-- perf_tables.py effects: end -->"
 
 
@@ -261,7 +316,8 @@ def main():
         roofline(d, *sys.argv[3:5])
     else:
         {"elements": elements, "cubes27": cubes27, "shogi": shogi, "effects": effects, "ops": ops,
-         "spheres": spheres, "glue": glue, "meshSurface": meshSurface}[kind](d)
+         "spheres": spheres, "glue": glue, "meshSurface": meshSurface,
+         "timeToSolution": timeToSolution}[kind](d)
 
 
 if __name__ == "__main__":
