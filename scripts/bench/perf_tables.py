@@ -271,22 +271,28 @@ def timeToSolution(d):
         return "%.*g" % (digits, v) if v is not None else "—"
 
     for name, e in d["scenes"].items():
+        if e.get("status") == "failed":
+            print("| %s | %s | %d | not measured: %s | — | — | — |" % (
+                e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"],
+                e["error"]))
+            continue
         rates = " / ".join("%s (%s)" % (g(med(e, v, "wall_s_per_simulated_s")), g(med(e, v, "cpu_s_per_simulated_s")))
                            for v in levers)
         cg = " / ".join(g(med(e, v, "cg_iterations_per_step")) for v in levers)
         p = e["projected_full_run"]
         load = "%.1f–%.1f" % (e["load1"]["min"], e["load1"]["median"]) if e.get("load1") else "—"
-        print("| %s | %s | %d (%s) | %s | %s | %s for %.3g s | %s |" % (
-            e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"], g(e["pieces_awake"]),
-            rates, cg, duration(p["wall_s"]), p["simulated_s"], load))
+        print("| %s | %s | %d (%s) | %s | %s | %s (CPU %s) for %.3g s | %s |" % (
+            e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"],
+            g(e["pieces_awake"]), rates, cg, duration(p["wall_s"]), duration(p.get("cpu_s")), p["simulated_s"], load))
     print("\nWhole runs at real size on the same machine:\n")
-    print("| run | wall time | status |")
+    print("| run | wall time (CPU time) | status |")
     print("| --- | --- | --- |")
     for name, r in d["full_runs"].items():
         if r["wall_s"] is not None:
             print("| %s | **%s** | measured (%s) |" % (name, duration(r["wall_s"]), r.get("log", "")))
         else:
-            print("| %s | %s | not run; projected |" % (name, duration(r.get("projected_wall_s"))))
+            print("| %s | %s (CPU %s) | not run; projected |" % (name, duration(r.get("projected_wall_s")),
+                                                                 duration(r.get("projected_cpu_s"))))
 
 
 BEGIN, END = "<!-- perf_tables.py effects: begin -->", "<!-- perf_tables.py effects: end -->"

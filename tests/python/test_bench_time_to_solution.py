@@ -83,7 +83,7 @@ def test_the_table_prints_measured_and_projected_figures(tmp_path):
                          capture_output=True, text=True, check=True).stdout
     row = [x for x in out.splitlines() if x.startswith("| forty_front | real size")][0]
     assert "20 (30) / 10 (15)" in row, row
-    assert "| forty_real_size_mu0.1 | 10.0 h | not run; projected |" in out, out
+    assert "| forty_real_size_mu0.1 | 10.0 h (CPU —) | not run; projected |" in out, out
 
 
 def test_the_doc_table_comes_from_the_newest_kept_log():
