@@ -31,7 +31,8 @@ core's phase timers, the load average before and after and the other
 processes' CPU during the run (benchutil.LoadProbe).  A lever whose
 attributes this build lacks is recorded as not available, not timed.
 
-Full runs: bench/logs/time_to_solution_full_<name>.json (written by
+Full runs (--refresh-full-runs JSON: only these, into a JSON already written):
+bench/logs/time_to_solution_full_<name>.json (written by
 scripts/shogi/time_to_solution_full.py: a scene at real size run to its
 end) are copied into "full_runs"; the forty-piece line at real size, never
 run whole, gets wall_s null, status "not run" and a projected wall time
@@ -246,7 +247,8 @@ def measured(name, scale, a, levers):
                       name, scale, r, n, rec["wall_s_per_simulated_s"], rec["cpu_s_per_simulated_s"],
                       rec["ms_per_step"], rec["cg_iterations_per_step"], rec["pieces_awake"], rec["load1"],
                       rec["other_cores"], " BUSY" if rec["busy"] else ""), flush=True)
-    entry = {"name": name, "scene": SCENES[name][0], "scale": scale, "pieces": w.core.nPieces, "tets": w.core.nTets, "dt": dt,
+    entry = {"name": name, "scene": SCENES[name][0], "scale": scale, "pieces": w.core.nPieces, "tets": w.core.nTets,
+             "dt": dt,
              "start": start, "steps": a.steps, "rounds": a.rounds, "threads": a.threads,
              "status": "measured", "levers": {}}
     for n in levers:
@@ -330,7 +332,17 @@ def main():
     ap.add_argument("--logs", default="bench/logs", help="where the kept whole-run logs are")
     ap.add_argument("--out", default="out/bench")
     ap.add_argument("--log", default=None, help="also keep the JSON here (bench/logs/time_to_solution_<date>.json)")
+    ap.add_argument("--refresh-full-runs", metavar="JSON", default=None,
+                    help="only re-read the kept whole-run logs into this JSON's full_runs (no timing)")
     a = ap.parse_args()
+    if a.refresh_full_runs:
+        d = json.load(open(a.refresh_full_runs))
+        d["full_runs"] = fullRuns(a.logs, d["scenes"].get("forty_front_real_size"))
+        with open(a.refresh_full_runs, "w") as f:
+            json.dump(d, f, indent=1)
+        print("time to solution: full runs of %s: %s" % (a.refresh_full_runs, {
+            k: r["status"] for k, r in d["full_runs"].items()}))
+        return
     if a.steps < 1 or a.rounds < 1:
         ap.error("--steps and --rounds must be at least 1")
     names = [s for s in a.scenes.split(",") if s]

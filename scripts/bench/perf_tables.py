@@ -259,31 +259,41 @@ def timeToSolution(d):
           "times 3 pieces awake in the 766× runs over those awake at the front). Load: 1-minute load average "
           "during the rounds, min–median (2 cores, shared).\n"
           % (d["threads"], d["date"], next(iter(d["scenes"].values()))["rounds"]))
-    print("| scene | scale | pieces (awake) | wall (CPU) s per simulated s: %s | CG its per step: %s | "
-          "projected whole run | load |" % (" / ".join(levers), " / ".join(levers)))
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | scale | pieces (awake) | wall (CPU) s per simulated s: %s | CPU, %s ÷ %s | CG its per step: %s | "
+          "projected whole run (%s) | load |" % (" / ".join(levers), levers[0], levers[-1], " / ".join(levers),
+                                                 levers[-1]))
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 
     def med(e, lever, key):
         s = e["levers"].get(lever, {}).get("summary")
         return s[key]["median"] if s and s.get(key) else None
 
     def g(v, digits=3):
-        return "%.*g" % (digits, v) if v is not None else "—"
+        """Three significant digits, thousands separated: 45,100, 18.3, 0.857."""
+        if v is None:
+            return "—"
+        r = float("%.*g" % (digits, v))
+        return "{:,.0f}".format(r) if abs(r) >= 1000 else "%.*g" % (digits, r)
+
+    def ratio(e):
+        old, new = med(e, levers[0], "cpu_s_per_simulated_s"), med(e, levers[-1], "cpu_s_per_simulated_s")
+        return "%.2f" % (old / new) if old and new else "—"
 
     for name, e in d["scenes"].items():
         if e.get("status") == "failed":
-            print("| %s | %s | %d | not measured: %s | — | — | — |" % (
-                e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"],
-                e["error"]))
+            print("| %s | %s | %d | not measured: the core stopped the run (StabilityError, `error` in the JSON) "
+                  "| — | — | — | — |" % (e.get("name", e["scene"]), "real size" if e["scale"] == 1 else
+                                         "%g×" % e["scale"], e["pieces"]))
             continue
         rates = " / ".join("%s (%s)" % (g(med(e, v, "wall_s_per_simulated_s")), g(med(e, v, "cpu_s_per_simulated_s")))
                            for v in levers)
         cg = " / ".join(g(med(e, v, "cg_iterations_per_step")) for v in levers)
         p = e["projected_full_run"]
         load = "%.1f–%.1f" % (e["load1"]["min"], e["load1"]["median"]) if e.get("load1") else "—"
-        print("| %s | %s | %d (%s) | %s | %s | %s (CPU %s) for %.3g s | %s |" % (
+        print("| %s | %s | %d (%s) | %s | %s | %s | %s (CPU %s) for %.3g s | %s |" % (
             e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"],
-            g(e["pieces_awake"]), rates, cg, duration(p["wall_s"]), duration(p.get("cpu_s")), p["simulated_s"], load))
+            g(e["pieces_awake"]), rates, ratio(e), cg, duration(p["wall_s"]), duration(p.get("cpu_s")),
+            p["simulated_s"], load))
     print("\nWhole runs at real size on the same machine:\n")
     print("| run | wall time (CPU time) | status |")
     print("| --- | --- | --- |")

@@ -82,7 +82,7 @@ def test_the_table_prints_measured_and_projected_figures(tmp_path):
     out = subprocess.run([PY, os.path.join(ROOT, "scripts", "bench", "perf_tables.py"), "timeToSolution", str(p)],
                          capture_output=True, text=True, check=True).stdout
     row = [x for x in out.splitlines() if x.startswith("| forty_front | real size")][0]
-    assert "20 (30) / 10 (15)" in row, row
+    assert "20 (30) / 10 (15) | 2.00 |" in row, row
     assert "| forty_real_size_mu0.1 | 10.0 h (CPU —) | not run; projected |" in out, out
 
 
