@@ -292,7 +292,7 @@ def fullRuns(logs, forty):
     out = {}
     for p in sorted(glob.glob(os.path.join(logs, "time_to_solution_full_*.json"))):
         d = json.load(open(p))
-        out[d["name"]] = {"wall_s": d["wall_s"], "status": "measured", "log": p,
+        out[d["name"]] = {"wall_s": d["wall_s"], "cpu_s": d.get("cpu_s"), "status": "measured", "log": p,
                           "simulated_s": d.get("simulated_s"), "threads": d.get("threads"),
                           "load1": d.get("load1"), "date": d.get("date"), "ended": d.get("ended")}
     rate = forty["wall_s_per_simulated_s"]["new"] if forty else None

@@ -299,7 +299,9 @@ def timeToSolution(d):
     print("| --- | --- | --- |")
     for name, r in d["full_runs"].items():
         if r["wall_s"] is not None:
-            print("| %s | **%s** | measured (%s) |" % (name, duration(r["wall_s"]), r.get("log", "")))
+            print("| %s | **%s** (CPU %s) | measured, %s, %s threads (`%s`) |" % (
+                name, duration(r["wall_s"]), duration(r.get("cpu_s")), r.get("ended") or "ended", r.get("threads"),
+                r.get("log", "")))
         else:
             print("| %s | %s (CPU %s) | not run; projected |" % (name, duration(r.get("projected_wall_s")),
                                                                  duration(r.get("projected_cpu_s"))))
