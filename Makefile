@@ -17,7 +17,7 @@ export OMP_NUM_THREADS ?= 2
 YADEPY   = $(shell sed -n "s/^sys\.path\.insert(1,'\(.*\)')$$/\1/p" $$(command -v yade 2>/dev/null) 2>/dev/null)
 
 .PHONY: deps configure build ext install demo doc test test-all test-cpp test-py fuzz bench bench-mpi accuracy \
-        compare-builds clean
+        compare-builds clean bench-tts
 
 deps:
 	@bash scripts/setup/deps.sh
@@ -99,6 +99,14 @@ fuzz: build
 bench: build
 	@mkdir -p out/bench
 	@PYTHONPATH=$(CURDIR)/$(BUILD)/python bash scripts/bench/run_all.sh
+
+# The time-to-solution step of make bench alone (doc/performance.md, "Time to
+# solution"): the shogi scenes at 766x and real size, each lever; 5-10 min.
+bench-tts: build
+	@mkdir -p out/bench
+	@PYTHONPATH=$(CURDIR)/$(BUILD)/python OMP_WAIT_POLICY=passive $(PY) scripts/bench/bench_time_to_solution.py \
+	  --out out/bench
+	@$(PY) scripts/bench/perf_tables.py timeToSolution out/bench/time_to_solution.json
 
 # MPI at scale (doc/parallel_scaling.md): ping-pong alpha/beta, the contact-free scene on 1-4
 # ranks, the partitioner to 128 ranks, the weak-scaling model to 16,384;

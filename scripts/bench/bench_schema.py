@@ -33,6 +33,15 @@ SCHEMA = {
                      "effects.[].paired.on_over_off.qdem", "effects.[].paired.zero_over_off.qdem",
                      "effects.[].paired.zero_over_off.whole", "effects.[].paired.zero_over_off.cpu",
                      "effects.[].on_cpu.all"],
+    "time_to_solution.json": (
+        ["benchmark", "date", "threads", "old", "new", "levers"]
+        + [("scenes", "%s_%s" % (n, x), k) for n in ("two_rooks", "king_and_pawns", "forty_front")
+           for x in ("766x", "real_size") for k in ("scale", "pieces")]
+        + ["scenes.[].%s.%s" % (k, v) for k in ("wall_s_per_simulated_s", "cpu_s_per_simulated_s",
+                                               "cg_iterations_per_step") for v in ("old", "new")]
+        + ["scenes.[].load1", "scenes.[].levers", "scenes.[].projected_full_run.wall_s"]
+        + [("full_runs", n, "wall_s") for n in ("forty_real_size_mu0.1", "forty_real_size_mu0.5")]
+        + ["full_runs.[].status"]),
     "spheres.json": ["benchmark", "date", "spheres", "near.coupling_ms_per_step", "near.yade_ms_per_step", "near.spheres_listed",
                      "far.coupling_ms_per_step", "far.yade_ms_per_step", "coupling_fraction_near",
                      "coupling_fraction_far", "per_listed_sphere_us", "fixed_cost_ms_per_step"],
@@ -42,8 +51,12 @@ ALSO_WRITTEN = ["element_parts.json", "yade_fem.json"]
 
 
 def missing(d, path):
-    """The first part of a dotted key path that d lacks, or None."""
-    head, _, rest = path.partition(".")
+    """The first part of a key path that d lacks, or None.  A path is dotted
+    ("a.b") or a tuple of keys (for keys holding a dot: ("a", "mu0.1"))."""
+    if isinstance(path, (tuple, list)):
+        head, rest = path[0], tuple(path[1:])
+    else:
+        head, _, rest = path.partition(".")
     if head == "[]":
         items = d.values() if isinstance(d, dict) else d if isinstance(d, list) else None
         if not items:
@@ -58,8 +71,9 @@ def missing(d, path):
     return missing(d[head], rest) if rest else None
 
 
-def checkFile(path, keys):
-    """Problems of one JSON file against its key paths (empty: fine)."""
+def checkFile(path, keys, name=None):
+    """Problems of one JSON file against its key paths and the RULES of
+    `name` (its SCHEMA name; the file's own name by default); empty: fine."""
     try:
         with open(path) as f:
             d = json.load(f)
@@ -71,15 +85,36 @@ def checkFile(path, keys):
     for k in keys:
         m = missing(d, k)
         if m is not None:
-            out.append("%s: lacks %s (at %s)" % (path, k, m))
+            out.append("%s: lacks %s (at %s)" % (path, k if isinstance(k, str) else ".".join(k), m))
+    for rule in RULES.get(name or os.path.basename(path), []):
+        out += ["%s: %s" % (path, p) for p in rule(d)]
     return out
+
+
+def fullRunsRule(d):
+    """A whole run's wall time is measured (status "measured") or null with
+    status "not run" and a projected_wall_s beside it: never a made-up figure."""
+    out = []
+    for name, r in (d.get("full_runs") or {}).items():
+        if not isinstance(r, dict):
+            out.append("full_runs.%s is not an object" % name)
+        elif r.get("wall_s") is None:
+            if r.get("status") != "not run" or "projected_wall_s" not in r:
+                out.append("full_runs.%s: wall_s null needs status 'not run' and projected_wall_s" % name)
+        elif r.get("status") != "measured":
+            out.append("full_runs.%s: a wall_s needs status 'measured' (a kept run's log)" % name)
+    return out
+
+
+# Checks beyond the keys' presence, per file.
+RULES = {"time_to_solution.json": [fullRunsRule]}
 
 
 # The "benchmark" field of each file above (kept logs are recognised by it),
 # and the keys a kept log need not hold (added to the file by a later script).
 BENCHMARK = {"roofline.json": "roofline", "omp_sync.json": "omp_sync", "elements_qdem.json": "bench_elements",
              "cubes27.json": "bench_cubes27", "shogi.json": "bench_shogi", "effects.json": "bench_effects",
-             "spheres.json": "bench_spheres"}
+             "spheres.json": "bench_spheres", "time_to_solution.json": "bench_time_to_solution"}
 LATER = {"shogi.json": ["scales.runs"]}
 # Keys a benchmark has written only since a date (ISO, compared with the
 # log's "date"): older kept logs are checked without them.
@@ -123,7 +158,7 @@ def checkLogs(folder):
             continue
         name = byBenchmark.get(d.get("benchmark")) if isinstance(d, dict) else None
         if name:
-            problems += checkFile(p, keysFor(name, d.get("date")))
+            problems += checkFile(p, keysFor(name, d.get("date")), name)
     return problems
 
 

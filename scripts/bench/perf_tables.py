@@ -12,6 +12,7 @@ GENERATORS[kind](json, *more json paths)), so no figure is retyped.
     /usr/bin/python3.11 scripts/bench/perf_tables.py ops       bench/logs/kernel_ops_2026-11-24.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py zoltan    bench/logs/mpi_zoltan.json bench/logs/mpi.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py mpiRanks  bench/logs/mpi.json     (and the other mpi* tables)
+    /usr/bin/python3.11 scripts/bench/perf_tables.py timeToSolution bench/logs/time_to_solution_2026-11-28.json
 
 A figure is "median (min-max)" over the runs taken on a quiet machine (no
 other process using CPU, load low: MachineLoad.hpp / benchutil.py), with
@@ -499,6 +500,76 @@ def mpiMpy(d):
             force = "%.1e" % v["floorForce"] + (" of %.0f N" % s["floorForceMax"] if i == 0 else "")
             print("| %s | %s | %.1e | %.1e | %s | %.1e |" % (label if i == 0 else "", p, v["dxOverDisp"],
                                                             v["sphereStates"], force, v["energy"]))
+def duration(seconds):
+    """A wall time for people: s, min or h."""
+    if seconds is None:
+        return "—"
+    if seconds < 120:
+        return "%.0f s" % seconds
+    if seconds < 7200:
+        return "%.0f min" % (seconds / 60)
+    return "%.1f h" % (seconds / 3600)
+
+
+def timeToSolution(d):
+    """The time-to-solution table (bench_time_to_solution.py's JSON): per
+    scene and scale, wall s per simulated s with each lever (median of the
+    interleaved rounds, the 1-minute load average beside it) and the whole
+    run's wall time, projected; then the whole runs, measured or projected."""
+    levers = list(d["levers"])
+    print("The seed's shogi scenes, Table 1's material, implicit viscosity, %d threads (%s). **Measured**: wall "
+          "(CPU) seconds per simulated second over a short window, median of %s interleaved rounds, each lever "
+          "over the same steps; CG: iterations of the viscous solve per step. **Projected**: the whole run's wall "
+          "time, that rate times the scene's simulated time to its end (at real size; the forty-piece line also "
+          "times 3 pieces awake in the 766× runs over those awake at the front). Load: 1-minute load average "
+          "during the rounds, min–median (2 cores, shared).\n"
+          % (d["threads"], d["date"], next(iter(d["scenes"].values()))["rounds"]))
+    print("| scene | scale | pieces (awake) | wall (CPU) s per simulated s: %s | CPU, %s ÷ %s | CG its per step: %s | "
+          "projected whole run (%s) | load |" % (" / ".join(levers), levers[0], levers[-1], " / ".join(levers),
+                                                 levers[-1]))
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+
+    def med(e, lever, key):
+        s = e["levers"].get(lever, {}).get("summary")
+        return s[key]["median"] if s and s.get(key) else None
+
+    def g(v, digits=3):
+        """Three significant digits, thousands separated: 45,100, 18.3, 0.857."""
+        if v is None:
+            return "—"
+        r = float("%.*g" % (digits, v))
+        return "{:,.0f}".format(r) if abs(r) >= 1000 else "%.*g" % (digits, r)
+
+    def ratio(e):
+        old, new = med(e, levers[0], "cpu_s_per_simulated_s"), med(e, levers[-1], "cpu_s_per_simulated_s")
+        return "%.2f" % (old / new) if old and new else "—"
+
+    for name, e in d["scenes"].items():
+        if e.get("status") == "failed":
+            print("| %s | %s | %d | not measured: the core stopped the run (StabilityError, `error` in the JSON) "
+                  "| — | — | — | — |" % (e.get("name", e["scene"]), "real size" if e["scale"] == 1 else
+                                         "%g×" % e["scale"], e["pieces"]))
+            continue
+        rates = " / ".join("%s (%s)" % (g(med(e, v, "wall_s_per_simulated_s")), g(med(e, v, "cpu_s_per_simulated_s")))
+                           for v in levers)
+        cg = " / ".join(g(med(e, v, "cg_iterations_per_step")) for v in levers)
+        p = e["projected_full_run"]
+        load = "%.1f–%.1f" % (e["load1"]["min"], e["load1"]["median"]) if e.get("load1") else "—"
+        print("| %s | %s | %d (%s) | %s | %s | %s | %s (CPU %s) for %.3g s | %s |" % (
+            e.get("name", e["scene"]), "real size" if e["scale"] == 1 else "%g×" % e["scale"], e["pieces"],
+            g(e["pieces_awake"]), rates, ratio(e), cg, duration(p["wall_s"]), duration(p.get("cpu_s")),
+            p["simulated_s"], load))
+    print("\nWhole runs at real size on the same machine:\n")
+    print("| run | wall time (CPU time) | status |")
+    print("| --- | --- | --- |")
+    for name, r in d["full_runs"].items():
+        if r["wall_s"] is not None:
+            print("| %s | **%s** (CPU %s) | measured, %s, %s threads (`%s`) |" % (
+                name, duration(r["wall_s"]), duration(r.get("cpu_s")), r.get("ended") or "ended", r.get("threads"),
+                r.get("log", "")))
+        else:
+            print("| %s | %s (CPU %s) | not run; projected |" % (name, duration(r.get("projected_wall_s")),
+                                                                 duration(r.get("projected_cpu_s"))))
 
 
 BEGIN, END = "<!-- perf_tables.py effects: begin -->", "<!-- perf_tables.py effects: end -->"
@@ -520,7 +591,7 @@ def intoDoc(doc, table, source):
 GENERATORS = {f.__name__: f for f in (
     elements, roofline, cubes27, shogi, effects, ops, spheres, glue, meshSurface, zoltan, zoltanByP,
     zoltanSlowNetwork, mpiPingpong, mpiRanks, mpiInputs, mpiEfficiency, mpiProjection, mpiPingpongCurve, mpiRerun,
-    mpiExtrapolation, mpiValidation, mpiMemory, mpiMpy)}
+    mpiExtrapolation, mpiValidation, mpiMemory, mpiMpy, timeToSolution)}
 
 
 def main():

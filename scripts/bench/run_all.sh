@@ -83,6 +83,13 @@ shogiScales() {
   OMP_NUM_THREADS=1 /usr/bin/python3.11 scripts/shogi/scales.py --steps "${QDEM_BENCH_SCALES_STEPS:-30}" --out out/bench
 }
 
+timeToSolution() {
+  OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_time_to_solution.py \
+    --steps "${QDEM_BENCH_TTS_STEPS:-200}" --rounds "${QDEM_BENCH_TTS_ROUNDS:-3}" --out out/bench \
+    > out/bench/time_to_solution.log 2>&1
+  /usr/bin/python3.11 scripts/bench/perf_tables.py timeToSolution out/bench/time_to_solution.json
+}
+
 effects() {
   OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_effects.py --steps "${QDEM_BENCH_EFFECT_STEPS:-60}" \
     --rounds "${QDEM_BENCH_EFFECT_ROUNDS:-5}" --out out/bench > out/bench/effects.log
@@ -108,6 +115,7 @@ step "27 cubes thrown (seed Figure 6 scene moving): ours amortised over its Verl
 step "the same without OMP_WAIT_POLICY (libgomp's default, what a YADE run gets), and its synchronisations per step" cubes27DefaultPolicy
 step "shogi scenes (seed Figures 7-10) through their first hits, QdemEngine in a YADE script" shogi
 step "the two rooks at 766, 100, 10 and 1x real size, explicit and implicit viscosity (key scales of shogi.json)" shogiScales
+step "time to solution: two rooks, king and pawns, the forty-piece line from its front; 766x and real size; each lever (viscous preconditioner jacobi / cholesky) interleaved" timeToSolution
 step "cost of each effect on, off and zero-valued" effects
 step "20,000 YADE spheres around one QDEM block: coupling cost, near and far" spheres
 step "accuracy against cost, short form (make accuracy for the full study and doc/accuracy.md)" accuracyShort
