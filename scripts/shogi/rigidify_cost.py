@@ -1,0 +1,134 @@
+"""What adaptive rigidity (QdemEngine.rigidify, doc/formulation.md section 6)
+gains and costs on a shogi domino line: the same scene run with and without
+it, CPU seconds per simulated second and the first hit and fall times of
+each piece (doc/accuracy.md, "Adaptive rigidity").
+
+    PYTHONPATH=build/python OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/shogi/rigidify_cost.py \
+        [--scene forty] [--count 4] [--material soft|table1] [--scale 766] [--duration 0.3] \
+        [--maxSteps 0] [--threads 2] [--sleep 1] [--rate 0.5] [--dwell 0.002] [--wake 0.1] \
+        [--log bench/logs/rigidify_<scene>_<material>.json]
+
+The scene is built as scripts/shogi/cost_in_run.py builds its scenes (bare
+core world, the floor as stiff as the pieces, gravity): 'soft' is
+domino.py's default material at real size (E = 1 MPa), 'table1' the seed's
+Table 1 at `--scale` times real size (766: the smallest at which its 6.4e-6 s
+step is stable, doc/shogi.md) with the particle radius scaled alike.  Both
+runs sleep pieces at rest (sleepVelocity = 1e-3 sqrt(g H)) unless --sleep 0,
+step at 0.8 of the stable step (6.4e-6 s for table1 at 766), and stop at
+`--duration` simulated seconds or `--maxSteps` steps.  A piece counts as hit
+when its speed first exceeds 0.02 sqrt(g H) (as domino.py's hits.json) and
+as fallen when its centre drops below 70 % of its height.  CPU time is the
+process's (both threads).
+"""
+import argparse
+import json
+import math
+import os
+import time
+
+import numpy as np
+
+import qdem
+from qdem import _core
+from qdem.scenes import shogi
+
+G = 9.80665
+TABLE1_SCALE = 766  # doc/shogi.md: shogi.stableScale(Table 1) rounded up
+
+
+def build(a, rigid):
+    w = qdem.World()
+    if a.material == "table1":
+        scale = a.scale
+        mat = qdem.QdemMat(frictionPiece=0.1, radius=qdem.QdemMat().radius * scale / TABLE1_SCALE)
+    else:
+        scale = 1.0
+        mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4, frictionPiece=0.1,
+                           frictionWall=0.5)
+    pieces = shogi.scene(a.scene, mat, scale, world=w, count=a.count or None)
+    floor = _core.Obstacle()
+    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
+    floor.young = max(1e7, mat.young)
+    w.core.setObstacles([floor])
+    w.core.setObstacleStates([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]])
+    w.core.gravity = (0, 0, -G)
+    H = max(shogi.KINDS[k][0] for k in shogi.SCENES[a.scene]["kinds"]) * scale * 1e-3
+    if a.sleep:
+        w.core.sleepVelocity = 1e-3 * math.sqrt(G * H)
+        w.core.sleepTime = 0.05 * math.sqrt(H / G)
+    w.core.rigidify = rigid
+    w.core.rigidStrainRate = a.rate
+    w.core.rigidTime = a.dwell
+    w.core.rigidWakeLoad = a.wake
+    dt = 0.8 * w.stableDt()["combined"]
+    if a.material == "table1" and scale == TABLE1_SCALE:
+        dt = min(dt, 6.4e-6)
+    return w, pieces, H, dt
+
+
+def run(a, rigid):
+    w, pieces, H, dt = build(a, rigid)
+    hitSpeed = 0.02 * math.sqrt(G * H)
+    z0 = [p.centroid[2] for p in pieces]
+    hits = [0.0] + [None] * (len(pieces) - 1)
+    fallen = [None] * len(pieces)
+    chunk = 50
+    steps, rigidSteps, nRigidMax = 0, 0, 0
+    cpu0, wall0 = time.process_time(), time.time()
+    while w.core.time < a.duration and (not a.maxSteps or steps < a.maxSteps):
+        w.core.step(dt, chunk)
+        steps += chunk
+        rigidSteps += chunk * w.core.nRigid
+        nRigidMax = max(nRigidMax, w.core.nRigid)
+        for i, p in enumerate(pieces):
+            if p.asleep:
+                continue
+            if hits[i] is None and np.linalg.norm(p.velocity) > hitSpeed:
+                hits[i] = w.core.time
+            if fallen[i] is None and p.centroid[2] < 0.7 * z0[i]:
+                fallen[i] = w.core.time
+    cpu, wall = time.process_time() - cpu0, time.time() - wall0
+    e = w.core.energy
+    return {"rigidify": rigid, "dt_s": dt, "steps": steps, "simulated_s": w.core.time, "cpu_s": cpu, "wall_s": wall,
+            "cpu_s_per_simulated_s": cpu / w.core.time, "cpu_ms_per_step": 1e3 * cpu / steps,
+            "firstHit_s": hits, "fallen_s": fallen, "rigidSwitches": w.core.rigidSwitches,
+            "rigidPieceSteps": rigidSteps, "maxRigidAtOnce": nRigidMax, "sleepCount": w.core.sleepCount,
+            "centroids_m": [list(map(float, p.centroid)) for p in pieces],
+            "energy_rigid_J": e["rigid"] if "rigid" in e else None}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scene", default="forty")
+    ap.add_argument("--count", type=int, default=4)
+    ap.add_argument("--material", default="soft", choices=["soft", "table1"])
+    ap.add_argument("--scale", type=float, default=TABLE1_SCALE)
+    ap.add_argument("--duration", type=float, default=0.3)
+    ap.add_argument("--maxSteps", type=int, default=0)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--sleep", type=int, default=1)
+    ap.add_argument("--rate", type=float, default=0.5)
+    ap.add_argument("--dwell", type=float, default=0.002)
+    ap.add_argument("--wake", type=float, default=0.1)
+    ap.add_argument("--log", default=None)
+    a = ap.parse_args()
+    _core.setThreads(a.threads)
+    out = {"args": vars(a), "load_before": os.getloadavg()}
+    for rigid in (False, True):
+        out["rigid" if rigid else "deformable"] = r = run(a, rigid)
+        print(json.dumps(r), flush=True)
+    out["load_after"] = os.getloadavg()
+    d, r = out["deformable"], out["rigid"]
+    out["speedup_cpu_per_simulated_s"] = d["cpu_s_per_simulated_s"] / r["cpu_s_per_simulated_s"]
+    out["hit_time_error_s"] = [None if x is None or y is None else y - x for x, y in zip(d["firstHit_s"], r["firstHit_s"])]
+    out["fall_time_error_s"] = [None if x is None or y is None else y - x for x, y in zip(d["fallen_s"], r["fallen_s"])]
+    log = a.log or "bench/logs/rigidify_%s_%s.json" % (a.scene, a.material)
+    os.makedirs(os.path.dirname(log), exist_ok=True)
+    with open(log, "w") as f:
+        json.dump(out, f, indent=1)
+    print("speed-up %.3g; hit time errors %s; fall time errors %s; written to %s"
+          % (out["speedup_cpu_per_simulated_s"], out["hit_time_error_s"], out["fall_time_error_s"], log))
+
+
+if __name__ == "__main__":
+    main()
