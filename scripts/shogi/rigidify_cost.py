@@ -10,7 +10,7 @@ each piece (doc/accuracy.md, "Adaptive rigidity").
 
 The scene is built as scripts/shogi/cost_in_run.py builds its scenes (bare
 core world, the floor as stiff as the pieces, gravity): 'soft' is
-domino.py's default material at real size (E = 1 MPa), 'table1' the seed's
+domino.py's default material at real size (E = 1 MPa; particle radius --radius, 1 mm: at domino.py's 0.5 mm the first hit sinks past the contact's reach), 'table1' the seed's
 Table 1 at `--scale` times real size (766: the smallest at which its 6.4e-6 s
 step is stable, doc/shogi.md) with the particle radius scaled alike.  Both
 runs sleep pieces at rest (sleepVelocity = 1e-3 sqrt(g H)) unless --sleep 0,
@@ -43,7 +43,7 @@ def build(a, rigid):
         mat = qdem.QdemMat(frictionPiece=0.1, radius=qdem.QdemMat().radius * scale / TABLE1_SCALE)
     else:
         scale = 1.0
-        mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=5e-4, frictionPiece=0.1,
+        mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=a.radius, frictionPiece=0.1,
                            frictionWall=0.5)
     pieces = shogi.scene(a.scene, mat, scale, world=w, count=a.count or None)
     floor = _core.Obstacle()
@@ -103,6 +103,7 @@ def main():
     ap.add_argument("--count", type=int, default=4)
     ap.add_argument("--material", default="soft", choices=["soft", "table1"])
     ap.add_argument("--scale", type=float, default=TABLE1_SCALE)
+    ap.add_argument("--radius", type=float, default=1e-3, help="soft: particle radius [m] (domino.py: 5e-4)")
     ap.add_argument("--duration", type=float, default=0.3)
     ap.add_argument("--maxSteps", type=int, default=0)
     ap.add_argument("--threads", type=int, default=2)

@@ -68,7 +68,12 @@ def test_resting_block_becomes_rigid_keeps_its_sag_and_carries_its_weight():
     b = _block(w, rubber(**MAT))
     _floor(w)
     dt = _dt(w)
-    e0 = None
+    # Settled first: dropped from its contact distance it bounces as a whole
+    # on the floor's contact for ~0.1 s, a rigid motion whose load swings by
+    # +-15 %: made rigid then, it deforms again when the swing exceeds rigidWakeLoad.
+    w.core.rigidify = False
+    w.core.step(dt, int(0.2 / dt))
+    w.core.rigidify = True
     assert _stepUntil(w, dt, lambda: b.rigid, 400), "a block at rest on the floor must become rigid"
     assert w.core.nRigid == 1 and w.core.rigidSwitches == 1
     # Its shape is the sagged one: relative node positions kept to rounding
@@ -78,11 +83,12 @@ def test_resting_block_becomes_rigid_keeps_its_sag_and_carries_its_weight():
     h = _height(b)
     e0 = w.core.energy["total"]
     w.core.step(dt, 2000)
-    assert b.rigid, "nothing changed its load: it stays rigid"
+    assert b.rigid and w.core.rigidSwitches == 1, "nothing changed its load: it stays rigid"
+    # (it may rock a little on the floor's contacts: compare the shape, not the orientation)
     rel2 = b._nodes("pos") - b._nodes("pos").mean(axis=0)
-    assert np.abs(rel2 - rel).max() < 1e-12
+    assert np.abs(rel2 @ rel2.T - rel @ rel.T).max() < 1e-15
     sag = 0.1 - h
-    assert sag > 0 and _height(b) == pytest.approx(h, abs=1e-13)
+    assert sag > 0
     # The same sag as the deformable block resting there.
     wd = _world(False)
     bd = _block(wd, rubber(**MAT))
