@@ -40,7 +40,7 @@ def build(a, rigid):
     w = qdem.World()
     if a.material == "table1":
         scale = a.scale
-        mat = qdem.QdemMat(frictionPiece=0.1, radius=qdem.QdemMat().radius * scale / TABLE1_SCALE)
+        mat = qdem.QdemMat(frictionPiece=0.1, radius=a.radiusFactor * qdem.QdemMat().radius * scale / TABLE1_SCALE)
     else:
         scale = 1.0
         mat = qdem.QdemMat(young=1e6, poisson=0.3, density=700, viscosity=0.0, radius=a.radius, frictionPiece=0.1,
@@ -72,6 +72,8 @@ def run(a, rigid):
     z0 = [p.centroid[2] for p in pieces]
     hits = [0.0] + [None] * (len(pieces) - 1)
     fallen = [None] * len(pieces)
+    DROPS = (0.99, 0.95, 0.9, 0.8)
+    drops = [[None] * len(DROPS) for _ in pieces]  # when each centre first drops below these fractions of its height
     chunk = 50
     steps, rigidSteps, nRigidMax = 0, 0, 0
     cpu0, wall0 = time.process_time(), time.time()
@@ -87,14 +89,50 @@ def run(a, rigid):
                 hits[i] = w.core.time
             if fallen[i] is None and p.centroid[2] < 0.7 * z0[i]:
                 fallen[i] = w.core.time
+            for k, f in enumerate(DROPS):
+                if drops[i][k] is None and p.centroid[2] < f * z0[i]:
+                    drops[i][k] = w.core.time
     cpu, wall = time.process_time() - cpu0, time.time() - wall0
     e = w.core.energy
     return {"rigidify": rigid, "dt_s": dt, "steps": steps, "simulated_s": w.core.time, "cpu_s": cpu, "wall_s": wall,
             "cpu_s_per_simulated_s": cpu / w.core.time, "cpu_ms_per_step": 1e3 * cpu / steps,
-            "firstHit_s": hits, "fallen_s": fallen, "rigidSwitches": w.core.rigidSwitches,
+            "firstHit_s": hits, "fallen_s": fallen,
+            "drop_fractions": DROPS, "drop_s": drops, "rigidSwitches": w.core.rigidSwitches,
             "rigidPieceSteps": rigidSteps, "maxRigidAtOnce": nRigidMax, "sleepCount": w.core.sleepCount,
             "centroids_m": [list(map(float, p.centroid)) for p in pieces],
             "energy_rigid_J": e["rigid"] if "rigid" in e else None}
+
+
+def section(logs):
+    """The "Adaptive rigidity" section of doc/accuracy.md from the logs this
+    script wrote (bench/logs/rigidify_*.json), for scripts/accuracy/report.py."""
+    text = ("## Adaptive rigidity\n\n"
+            "`scripts/shogi/rigidify_cost.py` (raw numbers: `bench/logs/rigidify_*.json`): a shogi domino line run "
+            "twice, all deformable and with `rigidify=True` (doc/formulation.md, section 6), sleeping on in both, "
+            "2 threads on a shared machine (CPU time of the process).  The error is the rigid run's first-hit and "
+            "fall times against the deformable run's, piece by piece (a hit: speed above 0.02 sqrt(g H); fallen: "
+            "centre below 70 % of its height).\n\n"
+            "| scene | material, scale | rigidStrainRate [1/s], rigidTime [s], rigidWakeLoad | steps | "
+            "CPU s per simulated s, deformable / rigid | speed-up | switches | rigid piece-steps / all | "
+            "hit time error [s] (piece 1, 2, ...) | fall time error [s] (piece 0, 1, ...) | "
+            "piece 0's centre at 99 / 95 / 90 / 80 % of its height: time [s], rigid - deformable [s] |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    for log in logs:
+        a, d, r = log["args"], log["deformable"], log["rigid"]
+        mat = ("Table 1, %gx, radius x%g" % (a["scale"], a.get("radiusFactor", 1)) if a["material"] == "table1"
+               else "soft (E = 1 MPa), real size")
+        n = len(d["firstHit_s"])
+        fmt = lambda v: "-" if v is None else "%+.3g" % v  # noqa: E731
+        drops = "-"
+        if "drop_s" in d:
+            drops = ", ".join("%s (%s)" % ("-" if t is None else "%.4g" % t, fmt(e))
+                              for t, e in zip(d["drop_s"][0], log["drop_time_error_s"][0]))
+        text += "| %s (%d pieces) | %s | %g, %g, %g | %d | %.3g / %.3g | x%.2f | %d | %.2f | %s | %s | %s |\n" % (
+            a["scene"], n, mat, a["rate"], a["dwell"], a["wake"], r["steps"], d["cpu_s_per_simulated_s"],
+            r["cpu_s_per_simulated_s"], log["speedup_cpu_per_simulated_s"], r["rigidSwitches"],
+            r["rigidPieceSteps"] / max(1, r["steps"] * n), ", ".join(fmt(v) for v in log["hit_time_error_s"][1:]),
+            ", ".join(fmt(v) for v in log["fall_time_error_s"]), drops)
+    return text + "\n"
 
 
 def main():
@@ -103,6 +141,8 @@ def main():
     ap.add_argument("--count", type=int, default=4)
     ap.add_argument("--material", default="soft", choices=["soft", "table1"])
     ap.add_argument("--scale", type=float, default=TABLE1_SCALE)
+    ap.add_argument("--radiusFactor", type=float, default=1.0,
+                    help="table1: the particle radius times this (2: the first hit stays within the contact's reach)")
     ap.add_argument("--radius", type=float, default=1e-3, help="soft: particle radius [m] (domino.py: 5e-4)")
     ap.add_argument("--duration", type=float, default=0.3)
     ap.add_argument("--maxSteps", type=int, default=0)
@@ -123,6 +163,8 @@ def main():
     out["speedup_cpu_per_simulated_s"] = d["cpu_s_per_simulated_s"] / r["cpu_s_per_simulated_s"]
     out["hit_time_error_s"] = [None if x is None or y is None else y - x for x, y in zip(d["firstHit_s"], r["firstHit_s"])]
     out["fall_time_error_s"] = [None if x is None or y is None else y - x for x, y in zip(d["fallen_s"], r["fallen_s"])]
+    out["drop_time_error_s"] = [[None if x is None or y is None else y - x for x, y in zip(dp, rp)]
+                                for dp, rp in zip(d["drop_s"], r["drop_s"])]
     log = a.log or "bench/logs/rigidify_%s_%s.json" % (a.scene, a.material)
     os.makedirs(os.path.dirname(log), exist_ok=True)
     with open(log, "w") as f:
