@@ -121,7 +121,7 @@ void CorotatedCholesky::prepare(double dt) {
     int32_t off = 0, maxNodes = 0;
     for (std::size_t p = 0; p < np; ++p) {
         const PieceInfo& pc = w_.pieces[p];
-        if (w_.sleeping.asleep(p) || !w_.settings.viscosityOn || !(pc.maxViscosity > 0)) continue;
+        if (!w_.sleeping.deformable(p) || !w_.settings.viscosityOn || !(pc.maxViscosity > 0)) continue;
         const auto piece = static_cast<int32_t>(p);
         maxNodes = std::max(maxNodes, pc.nodeEnd - pc.nodeBegin);
         if (!dom) {

@@ -172,6 +172,7 @@ void IntegrationPhase::run(double dt) {
             w_.energy.gravity += r[1];
             w_.energy.boundaryWork += r[2];
         }
+        advanceRigid(dt, energyOn, u.sleepOn);
         return;
     }
     // The update, compiled per combination of the implicit solve, local
@@ -193,6 +194,24 @@ void IntegrationPhase::run(double dt) {
         w_.energy.localDamping += e[2];
         w_.energy.boundaryWork += e[4];
     }
+    advanceRigid(dt, energyOn, u.sleepOn);
+}
+
+void IntegrationPhase::advanceRigid(double dt, bool energyOn, bool sleepOn) {
+    rigid_.forgetStale();
+    if (w_.sleeping.nRigid() > 0) {
+        const RigidBodies::StepSums r = rigid_.advance(dt, sleepOn ? threadSpeed2_[0].data() : nullptr);
+        if (!r.finite)
+            throw StabilityError(cat("QDEM: during step ", w_.iter + 1, " (t=", w_.time, " s) a rigid piece's state ",
+                                     "became not finite (settings.rigidify): keep O.dt below ",
+                                     "QdemEngine.stableTimeStep()"));
+        if (energyOn) {
+            w_.energy.kinetic += r.kinetic;
+            w_.energy.gravity += r.gravity;
+            w_.energy.boundaryWork += r.boundary;
+        }
+    }
+    rigid_.measure(dt);
 }
 
 template <bool EnergyOn>
@@ -348,6 +367,7 @@ void IntegrationPhase::stateColumns(StateColumns& c) {
 void IntegrationPhase::piecesAdded() {
     // The new nodes have no last velocity change; the others keep theirs.
     viscous_.warmStart().resize(3 * w_.mass.size(), 0.0);
+    rigid_.piecesAdded();
 }
 
 void IntegrationPhase::saveFields(WorldState& s) const {
@@ -355,15 +375,18 @@ void IntegrationPhase::saveFields(WorldState& s) const {
     s.put("viscousWarmStart", w.data(), w.size());
     const double meta[2] = {static_cast<double>(viscous_.warmIter), viscous_.warmDt};
     s.put("viscousWarmStep", meta, 2);
+    rigid_.saveFields(s);
 }
 
 void IntegrationPhase::checkFields(const WorldState& s) const {
+    rigid_.checkFields(s);
     if (s.fields.count("viscousWarmStart") == 0) return;
     s.check<double>("viscousWarmStart", viscous_.warmStart().size());
     s.check<double>("viscousWarmStep", 2);
 }
 
 void IntegrationPhase::loadFields(const WorldState& s) {
+    rigid_.loadFields(s);
     std::vector<double>& w = viscous_.warmStart();
     if (s.fields.count("viscousWarmStart") == 0) {
         std::fill(w.begin(), w.end(), 0.0);

@@ -15,6 +15,7 @@
 #include "../mesh/PieceInfo.hpp"
 #include "../step/Settings.hpp"
 #include "../step/AwakeSet.hpp"
+#include "RigidBodies.hpp"
 #include "ViscousSolve.hpp"
 
 namespace qdem {
@@ -44,7 +45,14 @@ public:
         const double& time;
         ViscousSolve::Data viscous;        // what the implicit viscous solve reads
     };
-    explicit IntegrationPhase(const Data& data) : w_(data), viscous_(data.viscous) {}
+    explicit IntegrationPhase(const Data& data)
+        : w_(data),
+          viscous_(data.viscous),
+          rigid_({.mass = data.mass, .extForce = data.extForce, .blocked = data.blocked,
+                  .refPos = data.viscous.refPos, .tetNodes = data.viscous.tetNodes, .pieces = data.pieces,
+                  .gravity = data.gravity, .settings = data.settings, .sleeping = data.sleeping,
+                  .contacts = data.contacts, .pos = data.pos, .vel = data.vel, .force = data.force,
+                  .energy = data.energy}) {}
     const char* name() const override { return "integrate"; }
     void run(double dt) override;
     // "integrate" without the implicit viscous solve, "viscousSolve", and its
@@ -61,6 +69,9 @@ public:
     void loadFields(const WorldState& s) override;
     // Largest squared node speed of a piece in the last run (sleeping on only).
     double maxSpeed2(std::size_t piece) const;
+    // The rigid pieces' motion and the indicators that switch them (settings.rigidify).
+    const RigidBodies& rigid() const { return rigid_; }
+    RigidBodies& rigid() { return rigid_; }
 
 private:
     // One step's node update: where the forces come from and which nodes
@@ -126,12 +137,16 @@ private:
     // is finite, else 0.
     template <bool EnergyOn>
     std::array<double, 4> advancePlain(double dt);
+    // The rigid pieces' step (their ledger terms added), then the strain-rate
+    // estimates of the deformable ones.
+    void advanceRigid(double dt, bool energyOn, bool sleepOn);
     // Throws StabilityError naming the first visited node whose new state or
     // force is not finite and what made it so (called when the update found one).
     [[noreturn]] void reportNotFinite(const int32_t* ids, bool all, int32_t count, const double* force) const;
 
     Data w_;
     ViscousSolve viscous_;  // settings.viscousIntegration = Implicit
+    RigidBodies rigid_;     // settings.rigidify
     std::vector<std::vector<double>> threadSpeed2_;  // per thread, per piece
     std::vector<const double*> bufPtr_;              // per thread: its element force buffer
     std::vector<int32_t> bufLo_, bufHi_;             // and the node range it covers

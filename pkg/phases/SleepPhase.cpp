@@ -26,8 +26,19 @@ void SleepPhase::awakeSetChanged() {
     w_.awake.awakeSurf_.clear();
     std::vector<int32_t> held;  // (built only when the awake set changes)
     w_.awake.nAsleep_ = 0;
+    w_.awake.nRigid_ = 0;
+    w_.awake.rigidPieces_.clear();
     const Domain* d = w_.domain.built();
     for (std::size_t p = 0; p < np; ++p) {
+        if (w_.awake.asleep_[p]) w_.awake.rigid_[p] = 0;
+        if (w_.awake.rigid_[p]) {
+            // Rigid (RigidBodies.hpp): its surface nodes carry contacts, its
+            // tets and nodes are not the element and node passes' (serial only).
+            ++w_.awake.nRigid_;
+            w_.awake.rigidPieces_.push_back(static_cast<int32_t>(p));
+            for (int32_t s = w_.pieces[p].surfBegin; s < w_.pieces[p].surfEnd; ++s) w_.awake.awakeSurf_.push_back(s);
+            continue;
+        }
         if (w_.awake.asleep_[p]) {
             ++w_.awake.nAsleep_;
             if (p < w_.awake.held_.size() && w_.awake.held_[p])
@@ -52,7 +63,7 @@ void SleepPhase::awakeSetChanged() {
     }
     w_.awake.obstacleSurf_.assign(w_.awake.awakeSurf_.begin(), w_.awake.awakeSurf_.end());
     w_.awake.obstacleSurf_.insert(w_.awake.obstacleSurf_.end(), held.begin(), held.end());
-    w_.awake.everything_ = w_.awake.nAsleep_ == 0 && !d;
+    w_.awake.everything_ = w_.awake.nAsleep_ == 0 && w_.awake.nRigid_ == 0 && !d;
 }
 
 void SleepPhase::wakeOne(std::size_t p) {
@@ -65,6 +76,12 @@ void SleepPhase::wakeOne(std::size_t p) {
 }
 
 void SleepPhase::wake(std::size_t p) {
+    if (p < w_.awake.rigid_.size() && w_.awake.rigid_[p]) {  // deformable: its state may be written from outside
+        w_.awake.rigid_[p] = 0;
+        ++rigidSwitches_;
+        awakeSetChanged();
+        return;
+    }
     if (p >= w_.awake.asleep_.size() || !w_.awake.asleep_[p] || w_.awake.held_[p]) return;
     wakeOne(p);
     awakeSetChanged();
@@ -133,13 +150,19 @@ void SleepPhase::putToSleep(std::size_t p) {
         }
     w_.awake.moved2_[p] = m2;
     w_.awake.asleep_[p] = 1;
+    if (w_.awake.rigid_[p]) {  // asleep, then deformable when woken
+        w_.awake.rigid_[p] = 0;
+        ++rigidSwitches_;
+    }
     ++w_.awake.changes_[p];
     ++sleepCount_;
 }
 
 void SleepPhase::run(double dt) {
     const std::size_t np = w_.pieces.size();
+    const bool rigidChanged = switchRigid();
     if (!(w_.settings.sleepVelocity > 0)) {
+        if (rigidChanged) awakeSetChanged();
         wakeAll();
         return;
     }
@@ -225,7 +248,7 @@ void SleepPhase::run(double dt) {
         // (1e-9 of the force magnitudes: the rounding of the internal forces' cancellation)
         return flag[1] == 0 && (flag[0] > 0 || net <= 0.5 * w_.pieces[p].mass * g + 1e-9 * sum[3]);
     };
-    bool changed = false;
+    bool changed = rigidChanged;
     for (std::size_t p = 0; p < np; ++p) {
         if (w_.awake.asleep_[p]) {
             if (!w_.awake.held_[p] && (fastNeighbour(p) || movingObstacle(p) || nearSphere(p))) {
@@ -270,6 +293,7 @@ void SleepPhase::piecesAdded() {
     w_.awake.changes_.resize(np, 0);
     w_.awake.held_.resize(np, 0);
     w_.awake.frozenReaction_.resize(np);
+    w_.awake.rigid_.resize(np, 0);
     awakeSetChanged();  // tet count changed: the thread layout is rebuilt at the next step
 }
 
@@ -293,6 +317,9 @@ void SleepPhase::saveFields(WorldState& s) const {
     s.put("obstacles", sig.data(), sig.size());
     s.put("gravity", w_.gravity.data(), 3);
     s.put("held", w_.awake.held_.data(), w_.awake.held_.size());
+    s.put("rigid", w_.awake.rigid_.data(), w_.awake.rigid_.size());
+    const int64_t switches = rigidSwitches_;
+    s.put("rigidSwitches", &switches, 1);
 }
 
 void SleepPhase::checkFields(const WorldState& s) const {
@@ -301,6 +328,12 @@ void SleepPhase::checkFields(const WorldState& s) const {
     if (fs.size() != w_.pieces.size() + 1 || fs.back() != static_cast<int64_t>(flat.size()))
         throw InputError("world state: field 'frozenStart' does not match the pieces");
     if (s.fields.count("held") > 0) s.check<uint8_t>("held", w_.awake.held_.size());
+    if (s.fields.count("rigid") > 0) {
+        s.check<uint8_t>("rigid", w_.awake.rigid_.size());
+        s.check<int64_t>("rigidSwitches", 1);
+        if (s.fields.count("rigidBody") == 0)
+            throw InputError("world state: field 'rigid' without 'rigidBody' (the rigid pieces' states)");
+    }
 }
 
 void SleepPhase::loadFields(const WorldState& s) {
@@ -311,6 +344,15 @@ void SleepPhase::loadFields(const WorldState& s) {
     // (files from before Piece.dynamic have no "held")
     if (s.fields.count("held") > 0) s.get("held", w_.awake.held_.data(), w_.awake.held_.size());
     else std::fill(w_.awake.held_.begin(), w_.awake.held_.end(), 0);
+    // (files from before adaptive rigidity: no piece rigid)
+    if (s.fields.count("rigid") > 0) {
+        s.get("rigid", w_.awake.rigid_.data(), w_.awake.rigid_.size());
+        int64_t switches = 0;
+        s.get("rigidSwitches", &switches, 1);
+        rigidSwitches_ = switches;
+    } else {
+        std::fill(w_.awake.rigid_.begin(), w_.awake.rigid_.end(), 0);
+    }
     // Sleeping pieces rest in the obstacles and gravity the state was saved
     // with (frozen reactions are by obstacle index): if this world gets others
     // (or the file predates these fields) they are woken at the next step.

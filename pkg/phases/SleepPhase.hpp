@@ -2,7 +2,8 @@
 // pieces fall asleep or wake, and writes the awake set every other phase
 // reads (AwakeSet.hpp: asleep flags, the awake pieces' tets, nodes and
 // surface nodes).  A piece at rest is left out of the step until something
-// near it moves; what it pushed on obstacles stays in their reactions.
+// near it moves; what it pushed on obstacles stays in their reactions.  It
+// also decides which pieces are rigid (settings.rigidify: RigidSwitch.cpp).
 #pragma once
 #include <Eigen/Core>
 #include <cstddef>
@@ -62,6 +63,8 @@ public:
     void piecesAdded() override;
 
     // ---- changes from outside -----------------------------------------------------
+    // Wakes a sleeping piece, or makes a rigid one deformable (its state is
+    // about to be written from outside).  wakeAll wakes sleeping pieces only.
     void wake(std::size_t piece);
     void wakeAll();
     void setDynamic(std::size_t piece, bool dynamic);
@@ -79,6 +82,7 @@ public:
     void awakeSetChanged();
 
     long sleepCount() const { return sleepCount_; }  // pieces put to sleep so far (diagnostics)
+    long rigidSwitches() const { return rigidSwitches_; }  // switches rigid <-> deformable so far
     long wakeCount() const { return wakeCount_; }    // and woken
     void setCounts(long sleeps, long wakes) { sleepCount_ = sleeps, wakeCount_ = wakes; }
 
@@ -86,6 +90,9 @@ private:
     Data w_;
     void putToSleep(std::size_t p);
     void wakeOne(std::size_t p);
+    // Adaptive rigidity (RigidSwitch.cpp): pieces made rigid or deformable
+    // by the integration's indicators; true if any changed.
+    bool switchRigid();
 
     std::vector<double> slowFor_;      // time all its nodes have been slower than sleepVelocity [s]
     std::vector<double> pieceSpeed2_;  // largest squared node speed in the last step
@@ -100,6 +107,7 @@ private:
     bool obstaclesPending_ = false;
     bool gravityPending_ = false;
     long sleepCount_ = 0, wakeCount_ = 0;
+    long rigidSwitches_ = 0;
 };
 
 }  // namespace qdem

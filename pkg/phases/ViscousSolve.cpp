@@ -34,7 +34,7 @@ bool ViscousSolve::active() const {
     // a viscous piece's tets, and every rank must take part in the solve's
     // reductions (the sleep decisions are the same on every rank).
     for (std::size_t p = 0; p < w_.pieces.size(); ++p)
-        if (!w_.sleeping.asleep(p) && w_.pieces[p].maxViscosity > 0) return true;
+        if (w_.sleeping.deformable(p) && w_.pieces[p].maxViscosity > 0) return true;
     return false;
 }
 

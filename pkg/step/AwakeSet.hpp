@@ -1,6 +1,7 @@
 // The awake set (doc/sleeping.md): which pieces sleep, and the awake
 // pieces' tets, nodes and surface nodes that the phases loop over.  Data,
-// written by one phase only (SleepPhase, the friend below) and read by every
+// written by one phase only (SleepPhase, the friend below; it also decides
+// which pieces are rigid) and read by every
 // other through a const reference: the obstacle, piece-contact, element and
 // integration phases, the viscous solve, the contact forces and the piece
 // boxes.
@@ -45,6 +46,15 @@ public:
     uint32_t changes(std::size_t piece) const { return changes_[piece]; }
     // (obstacle index, F, T) x 7 per obstacle a sleeping piece pushed on when it fell asleep.
     const std::vector<double>& frozenReaction(std::size_t piece) const { return frozenReaction_[piece]; }
+    // Adaptive rigidity (settings.rigidify): a rigid piece is awake for the
+    // contacts (its surface nodes are in awakeSurf and obstacleSurf) but has
+    // no tets in awakeTets and no nodes in awakeNodes: the integration moves
+    // it as a rigid body (RigidBodies.hpp).  Never asleep and rigid at once.
+    bool rigid(std::size_t piece) const { return piece < rigid_.size() && rigid_[piece]; }
+    // Awake and deformable: its elements and viscous forces are computed.
+    bool deformable(std::size_t piece) const { return !asleep(piece) && !rigid(piece); }
+    long nRigid() const { return nRigid_; }
+    const std::vector<int32_t>& rigidPieces() const { return rigidPieces_; }  // ids of the rigid pieces
 
 private:
     friend class SleepPhase;  // the one writer
@@ -53,6 +63,9 @@ private:
     std::vector<double> moved2_;
     std::vector<uint32_t> changes_;
     std::vector<std::vector<double>> frozenReaction_;
+    std::vector<uint8_t> rigid_;
+    std::vector<int32_t> rigidPieces_;
+    long nRigid_ = 0;
     long nAsleep_ = 0;
     bool everything_ = true;
     long version_ = 0;

@@ -18,10 +18,12 @@ struct Energy {
                                 //   blocked DOFs' constraints on the nodes)
     double localDamping = 0;    // accumulated: Cundall's non-viscous damping (when switched on)
     double sleep = 0;           // accumulated: kinetic energy zeroed when pieces fell asleep
+    double rigid = 0;           // accumulated: kinetic energy of the deformation modes removed when pieces
+                                //   were made rigid (settings.rigidify; their strain energy stays in elastic)
 
     double total() const {
         return kinetic + elastic + gravity + viscous + contactElastic + contactDamping + friction + boundaryWork +
-               localDamping + sleep;
+               localDamping + sleep + rigid;
     }
 };
 

@@ -137,7 +137,23 @@ inline SettingRange oneOf(std::vector<std::string> names) {
       "largest rank's load exceeds this multiple of the mean (load = owned tetrahedra + contactWork x contacts). " \
       "0 = never.  doc/parallel.md.")                                                                                \
     X(double, contactWork, "contactWork", 4.0, atLeast(0),                                                           \
-      "Under MPI: the work of one contact in units of one tetrahedron's, for the load that balances the ranks.")
+      "Under MPI: the work of one contact in units of one tetrahedron's, for the load that balances the ranks.")   \
+    X(bool, rigidify, "rigidify", false, anyValue(),                                                                 \
+      "Adaptive rigidity: a piece whose strain-rate estimate stays below rigidStrainRate for rigidTime moves as a "  \
+      "rigid body in its current deformed shape (6 DOF; its surface nodes keep their contacts; no element pass, no " \
+      "viscous solve) until the load on it changes by more than rigidWakeLoad.  Changes the physics: off by "       \
+      "default; doc/accuracy.md 'Adaptive rigidity' gives its error and gain.  Not under MPI.")                     \
+    X(double, rigidStrainRate, "rigidStrainRate", 0.1, positive(),                                                   \
+      "rigidify: the strain rate [1/s] below which a piece may become rigid; estimated as the largest deviation of " \
+      "its node velocities from their best rigid-body fit over its smallest reference edge (doc/formulation.md, "   \
+      "'Adaptive rigidity').")                                                                                        \
+    X(double, rigidTime, "rigidTime", 0.002, atLeast(0),                                                             \
+      "rigidify: how long [s] a piece's strain-rate estimate must stay below rigidStrainRate before it is made "    \
+      "rigid.")                                                                                                       \
+    X(double, rigidWakeLoad, "rigidWakeLoad", 0.1, positive(),                                                       \
+      "rigidify: a rigid piece becomes deformable again when the load deforming it (its nodes' forces less their "  \
+      "share of the rigid acceleration, in the body frame) differs from the one it was made rigid under by more "   \
+      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;

@@ -37,9 +37,10 @@ WorldState World::saveState() const {
     s.put("time", clock, 1);
     s.put("iter", steps, 3);
     const Energy& et = energyTotal();  // under MPI: the sums over the ranks
-    const double e[10] = {et.kinetic,        et.elastic,        et.gravity,  et.viscous,      et.contactElastic,
-                          et.contactDamping, et.friction,       et.boundaryWork, et.localDamping, et.sleep};
-    s.put("energy", e, 10);
+    const double e[11] = {et.kinetic,        et.elastic,        et.gravity,  et.viscous,      et.contactElastic,
+                          et.contactDamping, et.friction,       et.boundaryWork, et.localDamping, et.sleep,
+                          et.rigid};
+    s.put("energy", e, 11);
     // The mass added to each element (selective mass scaling): not state but
     // part of the scene, kept to refuse a load into a scene built without it
     // (its node masses, so its trajectories, would differ).
@@ -68,7 +69,9 @@ void World::loadState(const WorldState& s) {
     // Every size checked before anything changes: a wrong file leaves the world as it was.
     s.check<double>("time", 1);
     s.check<int64_t>("iter", 3);
-    s.check<double>("energy", 10);
+    // (files from before adaptive rigidity have 10 terms: no energy.rigid)
+    const std::size_t nEnergy = s.getAll<double>("energy").size() == 10 ? 10 : 11;
+    s.check<double>("energy", nEnergy);
     {
         // A state saved before mass scaling existed had none.
         std::vector<double> saved(nTets(), 0.0);
@@ -99,14 +102,14 @@ void World::loadState(const WorldState& s) {
         if (r.restart) s.getBytes(r.name, r.data, r.count, r.elemSize);
     double clock[1];
     int64_t steps[3];
-    double e[10];
+    double e[11] = {};
     s.get("time", clock, 1);
     s.get("iter", steps, 3);
-    s.get("energy", e, 10);
+    s.get("energy", e, nEnergy);
     time = clock[0];
     iter = steps[0];
     phases_->sleep.setCounts(steps[1], steps[2]);
-    energy = Energy{e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9]};
+    energy = Energy{e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10]};
     for (Phase* p : phases()) p->loadFields(s);
     if (domain_) {
         // Every rank loaded the whole state: split again from it at the next

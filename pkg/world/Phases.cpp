@@ -70,6 +70,9 @@ void World::computeStress(double* out) const {
 long World::sleepCount() const { return phases_->sleep.sleepCount(); }
 long World::wakeCount() const { return phases_->sleep.wakeCount(); }
 void World::wake(std::size_t piece) { phases_->sleep.wake(piece); }
+long World::rigidSwitches() const { return phases_->sleep.rigidSwitches(); }
+double World::strainRateEstimate(std::size_t piece) const { return phases_->integration.rigid().strainRate(piece); }
+double World::rigidLoadChange(std::size_t piece) const { return phases_->integration.rigid().loadChange(piece); }
 void World::wakeAll() { phases_->sleep.wakeAll(); }
 
 PhaseReport World::report() const {

@@ -24,7 +24,7 @@ void World::finishPieceEnergy() {
     for (std::size_t p = 0; p < pieces.size(); ++p) {
         for (int c = 0; c < 3; ++c) {
             // (obstacle contacts: also a held piece's, ObstaclePhase.cpp)
-            const bool computed = c == 0   ? !awake_.asleep(p)
+            const bool computed = c == 0   ? awake_.deformable(p)  // (a rigid piece keeps its strain)
                                   : c == 1 ? !awake_.asleep(p) || !awake_.dynamic(p)
                                            : !phases_->pieceContact.frozen(p);
             if (!computed) continue;

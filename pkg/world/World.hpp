@@ -332,6 +332,14 @@ public:
     // stays what it was.  Works with sleeping off too.
     bool dynamic(std::size_t piece) const { return awake_.dynamic(piece); }
     void setDynamic(std::size_t piece, bool dynamic);
+    // ---- adaptive rigidity (settings.rigidify; doc/formulation.md) ----------
+    // A piece slow to deform moves as a rigid body in its current shape until
+    // the load on it changes (RigidBodies.hpp).  Serial only (refused under MPI).
+    bool rigid(std::size_t piece) const { return awake_.rigid(piece); }
+    long nRigid() const { return awake_.nRigid(); }
+    long rigidSwitches() const;  // switches rigid <-> deformable so far
+    double strainRateEstimate(std::size_t piece) const;  // the last strain-rate estimate of a deformable piece [1/s]
+    double rigidLoadChange(std::size_t piece) const;  // a rigid piece's load change, over rigidWakeLoad's scale
     // The awake set (AwakeSet.hpp: written by the sleep phase, read by the others).
     const AwakeSet& awakeSet() const { return awake_; }
 

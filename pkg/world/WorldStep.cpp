@@ -47,6 +47,11 @@ void World::step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw StabilityError("QDEM: time step must be a positive finite number");
     checkBlockedBits();
     const ThreadScope threads;  // QDEM's thread count for this step, YADE's restored after
+    // (the same settings on every rank: they all refuse before any exchange)
+    if (domain_ && settings.rigidify)
+        throw InputError("QDEM: adaptive rigidity (QdemEngine.rigidify=True) is not available under MPI yet (a "
+                         "rigid piece split across ranks would need its force and torque summed over them): set "
+                         "rigidify=False, or run on one process");
     if (domain_) {
         domain_->agreeOnCall(Domain::Call::Step);
         prepareDomain(dt);

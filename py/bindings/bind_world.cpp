@@ -38,6 +38,7 @@ py::dict energyDict(const Energy& e) {
     d["boundaryWork"] = e.boundaryWork;
     d["localDamping"] = e.localDamping;
     d["sleep"] = e.sleep;
+    d["rigid"] = e.rigid;
     d["total"] = e.total();
     return d;
 }
@@ -334,6 +335,18 @@ void bindWorld(py::module_& m) {
         .def("asleep", [](const World& w, int i) { piece(w, i); return w.asleep(i); }, py::arg("piece"),
              "Is the piece asleep (left out of the step until something near it moves)?")
         .def_property_readonly("nAsleep", &World::nAsleep)
+        .def("rigid", [](const World& w, int i) { piece(w, i); return w.rigid(i); }, py::arg("piece"),
+             "Is the piece moving as a rigid body in its current shape (settings.rigidify)?")
+        .def_property_readonly("nRigid", &World::nRigid, "Pieces moving as rigid bodies now (settings.rigidify).")
+        .def_property_readonly("rigidSwitches", &World::rigidSwitches,
+                               "Switches of pieces between rigid and deformable so far (settings.rigidify).")
+        .def("strainRateEstimate", [](const World& w, int i) { piece(w, i); return w.strainRateEstimate(i); },
+             py::arg("piece"),
+             "The last strain-rate estimate [1/s] of a deformable piece (settings.rigidify): the largest "
+             "deviation of its node velocities from their best rigid-body fit over its smallest reference edge.")
+        .def("rigidLoadChange", [](const World& w, int i) { piece(w, i); return w.rigidLoadChange(i); },
+             py::arg("piece"),
+             "A rigid piece's load change since it was made rigid, over its scale (compared with rigidWakeLoad).")
         .def_property_readonly("sleepCount", &World::sleepCount, "Pieces put to sleep so far.")
         .def_property_readonly("wakeCount", &World::wakeCount, "Pieces woken so far.")
         .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),

@@ -113,9 +113,15 @@ class Piece:
             a = a.view(_HeldNodes)
             a._pieceId, a._name = self.id, name
             a.flags.writeable = False
-        elif core.nAsleep:
-            core.wake(self.id)
+        elif core.nAsleep or core.nRigid:
+            core.wake(self.id)  # (a rigid piece becomes deformable: its state is the nodes' again)
         return a
+
+    @property
+    def rigid(self):
+        """Is the piece moving as a rigid body in its current shape (adaptive
+        rigidity: QdemEngine.rigidify, doc/formulation.md)?"""
+        return self.world.core.rigid(self.id)
 
     @property
     def asleep(self):

@@ -1,5 +1,6 @@
 """Plots and doc/accuracy.md from out/accuracy/accuracy.json (run_accuracy.py
 calls this; `python3 report.py out/accuracy` redoes it from a saved JSON)."""
+import glob
 import json
 import os
 import shutil
@@ -309,6 +310,16 @@ precision throughout, as Debian's YADE.
             with open(ms) as f:
                 text += mass_scaling.section(json.load(f))
             break
+    # Adaptive rigidity on shogi lines (scripts/shogi/rigidify_cost.py; its committed logs).
+    rigidLogs = sorted(glob.glob(os.path.join(ROOT, "bench", "logs", "rigidify_*.json")))
+    if rigidLogs:
+        sys.path.insert(0, os.path.join(ROOT, "scripts", "shogi"))
+        import rigidify_cost
+        logs = []
+        for path in rigidLogs:
+            with open(path) as f:
+                logs.append(json.load(f))
+        text += rigidify_cost.section([log for log in logs if "rigid" in log and "deformable" in log])
     text += "## Set-ups (the scripts' docstrings)\n\n"
     sys.path.insert(0, HERE)
     import run_accuracy

@@ -33,7 +33,8 @@ _NO_SPHERES = [np.zeros(0, np.int32)] + [np.zeros(0)] * 6 + [np.zeros(1, np.int3
 ENERGY_KEYS = {"kinetic": "qdemKinetic", "elastic": "qdemElastic", "gravity": "qdemGravWork",
                "viscous": "qdemViscDissip", "contactElastic": "qdemContactElastic",
                "contactDamping": "qdemContactDamp", "friction": "qdemFrictDissip",
-               "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp", "sleep": "qdemSleep"}
+               "boundaryWork": "qdemBoundaryWork", "localDamping": "qdemNonviscDamp", "sleep": "qdemSleep",
+               "rigid": "qdemRigid"}
 
 
 def _shapeNames(v):
