@@ -7,6 +7,7 @@ thickness) and the pawn (27 x 22.5 x 7.75 mm) are the sizes the design brief
 gives; the kinds in between are interpolated linearly by rank.
 """
 import math
+import warnings
 
 import numpy as np
 
@@ -107,8 +108,13 @@ def stableScale(material, dt=6.4e-6, kinds=ORDER, margin=1.05):
     need = 1.0
     for k in kinds:
         w = World()
-        w.addPiece(mesh(k), material)
-        w.addPiece(mesh(k), material, pos=(1.0, 0, 0))   # two pieces: the contact limit counts too
+        # The probe's pieces are at real size with the material's radius as
+        # given (the scale is what is sought): addPiece's advice on a radius
+        # large against the piece is about this probe, not the user's scene.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            w.addPiece(mesh(k), material)
+            w.addPiece(mesh(k), material, pos=(1.0, 0, 0))   # two pieces: the contact limit counts too
         d = w.stableDt()
         for limit, power in ((d["viscous"], 2), (d["elastic"], 1), (d["contact"], 1)):
             need = max(need, (margin * dt / limit) ** (1.0 / power))
