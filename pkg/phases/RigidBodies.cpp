@@ -34,6 +34,37 @@ Eigen::Quaterniond rotation(const Vec3& theta) {
 
 constexpr int kFixedPointPasses = 4;  // |dt w| << 1: each pass gains that factor
 
+// The rigid motion that fits nodes [b, e) best in the mass-weighted least
+// squares sense: centre c, its velocity V, angular momentum L about c and
+// angular velocity w = I^-1 L (doc/formulation.md, "Adaptive rigidity").
+struct RigidFit {
+    double m = 0;
+    Vec3 c, V, L, w;
+    Mat3 Iinv;
+};
+
+RigidFit fitRigidMotion(const double* x, const double* v, const double* mass, int32_t b, int32_t e) {
+    RigidFit f;
+    Vec3 c = Vec3::Zero(), mv = Vec3::Zero();
+    for (int32_t n = b; n < e; ++n) {
+        f.m += mass[n];
+        c += mass[n] * Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]);
+        mv += mass[n] * Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]);
+    }
+    f.c = c / f.m;
+    f.V = mv / f.m;
+    Mat3 I = Mat3::Zero();
+    f.L = Vec3::Zero();
+    for (int32_t n = b; n < e; ++n) {
+        const Vec3 r = Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]) - f.c;
+        I += mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+        f.L += mass[n] * r.cross(Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]) - f.V);
+    }
+    f.Iinv = I.inverse();
+    f.w = f.Iinv * f.L;
+    return f;
+}
+
 }  // namespace
 
 void RigidBodies::piecesAdded() {
@@ -71,24 +102,10 @@ void RigidBodies::start(std::size_t p, double& removed) {
     const PieceInfo& P = w_.pieces[p];
     const double* x = w_.pos.data();
     double* v = w_.vel.data();
-    double m = 0;
-    Vec3 c = Vec3::Zero(), mv = Vec3::Zero();
-    for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
-        m += w_.mass[n];
-        c += w_.mass[n] * Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]);
-        mv += w_.mass[n] * Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]);
-    }
-    c /= m;
-    const Vec3 V = mv / m;
-    Mat3 I = Mat3::Zero();
-    Vec3 L = Vec3::Zero();
-    for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
-        const Vec3 r = Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]) - c;
-        I += w_.mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-        L += w_.mass[n] * r.cross(Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]) - V);
-    }
-    const Mat3 Iinv = I.inverse();
-    const Vec3 w = Iinv * L;
+    const RigidFit fit = fitRigidMotion(x, v, w_.mass.data(), P.nodeBegin, P.nodeEnd);
+    const double m = fit.m;
+    const Vec3 &c = fit.c, &V = fit.V, &L = fit.L, &w = fit.w;
+    const Mat3& Iinv = fit.Iinv;
     double ek = 0;
     for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
         const Vec3 r = Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]) - c;
@@ -263,30 +280,15 @@ void RigidBodies::measure(double dt) {
         const PieceInfo& P = w_.pieces[p];
         const double* x = w_.pos.data();
         const double* v = w_.vel.data();
-        double m = 0;
-        Vec3 c = Vec3::Zero(), mv = Vec3::Zero();
-        bool blocked = false;
-        for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
-            m += w_.mass[n];
-            c += w_.mass[n] * Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]);
-            mv += w_.mass[n] * Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]);
-            blocked = blocked || w_.blocked[n] != 0;
-        }
-        if (blocked) {  // moved through prescribed DOFs: never rigid
+        const uint8_t* blk = w_.blocked.data();
+        if (std::any_of(blk + P.nodeBegin, blk + P.nodeEnd, [](uint8_t d) { return d != 0; })) {
+            // moved through prescribed DOFs: never rigid
             rate_[p] = std::numeric_limits<double>::infinity();
             belowFor_[p] = 0;
             continue;
         }
-        c /= m;
-        const Vec3 V = mv / m;
-        Mat3 I = Mat3::Zero();
-        Vec3 L = Vec3::Zero();
-        for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
-            const Vec3 r = Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]) - c;
-            I += w_.mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-            L += w_.mass[n] * r.cross(Vec3(v[3 * n], v[3 * n + 1], v[3 * n + 2]) - V);
-        }
-        const Vec3 w = I.inverse() * L;
+        const RigidFit fit = fitRigidMotion(x, v, w_.mass.data(), P.nodeBegin, P.nodeEnd);
+        const Vec3 &c = fit.c, &V = fit.V, &w = fit.w;
         double dev2 = 0;
         for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
             const Vec3 r = Vec3(x[3 * n], x[3 * n + 1], x[3 * n + 2]) - c;
