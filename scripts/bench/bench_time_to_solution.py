@@ -60,7 +60,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "shogi"))
 import qdem  # noqa: E402
 from qdem import _core  # noqa: E402
 from qdem.scenes import shogi  # noqa: E402
-from benchutil import BUSY_RULE, LoadProbe  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
 
 G = 9.80665
 DT_FACTOR = 0.8            # as domino.py's dtFactor
@@ -112,12 +112,7 @@ def build(sceneName, scale):
     w = qdem.World()
     mat = qdem.QdemMat(frictionPiece=FRICTION, radius=qdem.QdemMat().radius * scale / TABLE1_SCALE)
     pieces = shogi.scene(sceneName, mat, float(scale), world=w)
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    floor.young = max(1e7, mat.young)                  # as domino.py's floor
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]])
-    w.core.gravity = (0, 0, -G)
+    floorAndGravity(w, G, young=max(1e7, mat.young))  # the floor as domino.py's
     w.core.viscousIntegration = 1                      # implicit viscosity
     w.core.viscousWarmStart = True
     H = max(shogi.KINDS[k][0] for k in shogi.SCENES[sceneName]["kinds"]) * scale * 1e-3

@@ -12,10 +12,13 @@ import numpy as np
 from qdem import _core
 
 
-def floorAndGravity(world, g=9.80665):
-    """A fixed floor wall at z = 0 (one-sided, facing +z) and gravity -g z."""
+def floorAndGravity(world, g=9.80665, young=None):
+    """A fixed floor wall at z = 0 (one-sided, facing +z) and gravity -g z;
+    `young`: the floor's Young modulus (None: the Obstacle's default)."""
     floor = _core.Obstacle()
     floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
+    if young is not None:
+        floor.young = young
     world.core.setObstacles([floor])
     world.core.setObstacleStates(np.array([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]]))
     world.core.gravity = (0, 0, -g)

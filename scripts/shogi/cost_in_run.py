@@ -28,19 +28,14 @@ from qdem import _core
 from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from scales import G, cpuMsPerStep, table1Scale  # noqa: E402
+from scales import G, cpuMsPerStep, floorAndGravity, table1Scale  # noqa: E402
 
 
 def build(run, stable, warm):
     w = qdem.World()
     mat = qdem.QdemMat(frictionPiece=run["frictionPiece"], radius=qdem.QdemMat().radius * run["scale"] / stable)
     shogi.scene("two_rooks", mat, run["scale"], world=w)
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    floor.young = max(1e7, mat.young)  # as domino.py's floor
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]])
-    w.core.gravity = (0, 0, -G)
+    floorAndGravity(w, G, young=max(1e7, mat.young))  # the floor as domino.py's
     w.core.viscousIntegration = 1
     w.core.viscousWarmStart = warm
     return w

@@ -28,7 +28,7 @@ from qdem import _core
 from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
-from benchutil import BUSY_RULE, LoadProbe  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
 
 G = 9.80665
 TABLE1_SCALE = 766  # scales.table1Scale() (bench/logs/time_to_solution_baseline.json)
@@ -39,12 +39,7 @@ def build():
     w = qdem.World()
     mat = qdem.QdemMat(frictionPiece=0.1, radius=qdem.QdemMat().radius / TABLE1_SCALE)
     shogi.scene("two_rooks", mat, 1.0, world=w)
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    floor.young = max(1e7, mat.young)
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]])
-    w.core.gravity = (0, 0, -G)
+    floorAndGravity(w, G, young=max(1e7, mat.young))  # the floor as domino.py's
     w.core.viscousIntegration = 1
     w.core.viscousWarmStart = True
     return w

@@ -48,7 +48,7 @@ from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from benchutil import BUSY_RULE, LoadProbe  # noqa: E402
+from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
 import scales  # noqa: E402  (scripts/shogi, this script's folder)
 
 G = 9.80665
@@ -87,12 +87,7 @@ def build(friction):
     # cost_in_run.py and domino.py scale it (0.04 m at 766x, 52 um here).
     mat = qdem.QdemMat(frictionPiece=friction, radius=qdem.QdemMat().radius / table1Scale())
     pieces = shogi.scene("forty", mat, 1.0, world=w)
-    floor = _core.Obstacle()
-    floor.kind, floor.bodyId, floor.axis, floor.sense = 0, 0, 2, 1
-    floor.young = max(1e7, mat.young)                   # as domino.py's floor
-    w.core.setObstacles([floor])
-    w.core.setObstacleStates([[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0.0]])
-    w.core.gravity = (0, 0, -G)
+    floorAndGravity(w, G, young=max(1e7, mat.young))  # the floor as domino.py's
     w.core.viscousIntegration = 1                        # implicit viscosity
     w.core.viscousWarmStart = True                      # the default: each solve from the last step's change
     H = max(shogi.KINDS[k][0] for k in shogi.SCENES["forty"]["kinds"]) * 1e-3
