@@ -60,7 +60,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "shogi"))
 import qdem  # noqa: E402
 from qdem import _core  # noqa: E402
 from qdem.scenes import shogi  # noqa: E402
-from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
+from benchutil import BUSY_RULE, floorAndGravity, timedWindow  # noqa: E402
 
 G = 9.80665
 DT_FACTOR = 0.8            # as domino.py's dtFactor
@@ -179,20 +179,10 @@ def timeLever(w, dt, state, settings, steps):
     for k, v in settings.items():
         setattr(w.core, k, v)
     w.core.step(dt, 3)                          # lists, layout and factors built anew after loading
-    its, phases = 0, {}
-    loadBefore = os.getloadavg()
-    probe = LoadProbe()
-    cpu0, t0 = time.process_time(), time.perf_counter()
-    for _ in range(steps):
-        w.core.step(dt, 1)
-        its += w.core.counts.get("viscousIterations", 0)
-        for k, v in w.core.timings.items():
-            phases[k] = phases.get(k, 0.0) + v
-    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
-    rec = probe.finish(wall)
+    rec, its, phases = timedWindow(w, dt, steps)
+    wall, cpu = rec["wall_s"], rec["cpu_s"]
     total = sum(phases.values()) or 1.0
-    rec.update(loadavg_before=list(loadBefore), loadavg_after=list(os.getloadavg()), wall_s=wall, cpu_s=cpu,
-               ms_per_step=1e3 * wall / steps, cpu_ms_per_step=1e3 * cpu / steps,
+    rec.update(ms_per_step=1e3 * wall / steps, cpu_ms_per_step=1e3 * cpu / steps,
                wall_s_per_simulated_s=wall / (steps * dt), cpu_s_per_simulated_s=cpu / (steps * dt),
                cg_iterations_per_step=its / steps, pieces_awake=awake(w),
                phase_shares={k: v / total for k, v in sorted(phases.items()) if v > 0})

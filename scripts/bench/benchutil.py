@@ -113,3 +113,23 @@ def best(summary, key, stat="median"):
     if summary["all"].get(key):
         return summary["all"][key][stat], "all runs (every run busy)"
     return None, "not measured"
+
+
+def timedWindow(world, dt, steps):
+    """`steps` core steps of `dt`, timed: a LoadProbe record with the wall and
+    CPU seconds and the load averages before and after, the viscous solve's
+    CG iterations summed over the steps, and each phase timer's seconds summed
+    (the shogi time-to-solution and preconditioner scripts' timed window)."""
+    its, phases = 0, {}
+    loadBefore = os.getloadavg()
+    probe = LoadProbe()
+    cpu0, t0 = time.process_time(), time.perf_counter()
+    for _ in range(steps):
+        world.core.step(dt, 1)
+        its += world.core.counts.get("viscousIterations", 0)
+        for k, v in world.core.timings.items():
+            phases[k] = phases.get(k, 0.0) + v
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    rec = probe.finish(wall)
+    rec.update(loadavg_before=list(loadBefore), loadavg_after=list(os.getloadavg()), wall_s=wall, cpu_s=cpu)
+    return rec, its, phases

@@ -28,7 +28,7 @@ from qdem import _core
 from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
-from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
+from benchutil import BUSY_RULE, floorAndGravity, timedWindow  # noqa: E402
 
 G = 9.80665
 TABLE1_SCALE = 766  # scales.table1Scale() (bench/logs/time_to_solution_baseline.json)
@@ -65,23 +65,14 @@ def main():
             w.core.loadState(state)
             w.core.viscousPreconditioner = pre
             w.core.step(dt, 3)  # lists, layout and (cholesky) factors built anew after loading
-            its, solve = 0, 0.0
-            loadBefore = os.getloadavg()
-            probe = LoadProbe()
-            cpu0, t0 = time.process_time(), time.perf_counter()
-            for _ in range(a.steps):
-                w.core.step(dt, 1)
-                its += w.core.counts.get("viscousIterations", 0)
-                solve += w.core.timings.get("viscousSolve", 0.0)
-            wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
-            rec = probe.finish(wall)
-            rec.update(loadavg_before=list(loadBefore), loadavg_after=list(os.getloadavg()), wall_s=wall, cpu_s=cpu,
-                       ms_per_step=1e3 * wall / a.steps, cpu_ms_per_step=1e3 * cpu / a.steps,
+            rec, its, phases = timedWindow(w, dt, a.steps)
+            wall, cpu, solve = rec["wall_s"], rec["cpu_s"], phases.get("viscousSolve", 0.0)
+            rec.update(ms_per_step=1e3 * wall / a.steps, cpu_ms_per_step=1e3 * cpu / a.steps,
                        solve_ms_per_step=1e3 * solve / a.steps, cg_iterations_per_step=its / a.steps)
             runs[pre].append(rec)
             print("round %d %-8s: %.2f ms/step wall (CPU %.2f), solve %.2f ms/step, %.2f CG its/step; load %.2f -> "
                   "%.2f, others %.2f%s" % (r, NAMES[pre], rec["ms_per_step"], rec["cpu_ms_per_step"],
-                                           rec["solve_ms_per_step"], rec["cg_iterations_per_step"], loadBefore[0],
+                                           rec["solve_ms_per_step"], rec["cg_iterations_per_step"], rec["loadavg_before"][0],
                                            rec["loadavg_after"][0], rec["other_cores"],
                                            " BUSY" if rec["busy"] else ""), flush=True)
 

@@ -48,7 +48,7 @@ from qdem.scenes import shogi
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from benchutil import BUSY_RULE, LoadProbe, floorAndGravity  # noqa: E402
+from benchutil import BUSY_RULE, floorAndGravity, timedWindow  # noqa: E402
 import scales  # noqa: E402  (scripts/shogi, this script's folder)
 
 G = 9.80665
@@ -207,19 +207,9 @@ def main():
     for r in range(a.rounds):
         w.core.loadState(state)
         w.core.step(dt, 3)                  # lists and thread layout built anew after loading
-        its, phases = 0, {}
-        loadBefore = os.getloadavg()
-        probe = LoadProbe()
-        cpu0, t0 = time.process_time(), time.perf_counter()
-        for _ in range(a.steps):
-            w.core.step(dt, 1)
-            its += w.core.counts.get("viscousIterations", 0)
-            for k, v in w.core.timings.items():
-                phases[k] = phases.get(k, 0.0) + v
-        wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
-        rec = probe.finish(wall)
-        rec.update(loadavg_before=list(loadBefore), loadavg_after=list(os.getloadavg()), wall_s=wall, cpu_s=cpu,
-                   ms_per_step=1e3 * wall / a.steps, steps_per_s=a.steps / wall,
+        rec, its, phases = timedWindow(w, dt, a.steps)
+        wall, cpu = rec["wall_s"], rec["cpu_s"]
+        rec.update(ms_per_step=1e3 * wall / a.steps, steps_per_s=a.steps / wall,
                    wall_s_per_simulated_s=wall / (a.steps * dt), cpu_s_per_simulated_s=cpu / (a.steps * dt),
                    cg_iterations_per_step=its / a.steps, pieces_awake=awake(w),
                    phases_ms_per_step={k: 1e3 * v / a.steps for k, v in phases.items()})
@@ -227,7 +217,7 @@ def main():
         print("round %d: %.2f ms/step wall, %.0f wall s / simulated s (CPU %.0f), %.1f CG its/step, %d awake; "
               "load %.2f -> %.2f, others %.2f%s" % (
                   r, rec["ms_per_step"], rec["wall_s_per_simulated_s"], rec["cpu_s_per_simulated_s"],
-                  rec["cg_iterations_per_step"], rec["pieces_awake"], loadBefore[0], rec["loadavg_after"][0],
+                  rec["cg_iterations_per_step"], rec["pieces_awake"], rec["loadavg_before"][0], rec["loadavg_after"][0],
                   rec["other_cores"], " BUSY" if rec["busy"] else ""), flush=True)
 
     def stat(key):
