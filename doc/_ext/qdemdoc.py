@@ -19,6 +19,9 @@ are generated from the package, so that they are never written twice.
     (scripts/bench/perf_tables.py, perf_plots.py).
 ``.. qdem-world-settings::``
     the world settings that are not engine attributes (set on ``World.core``).
+``{bench}`FILE:KEY|FORMAT```
+    a figure quoted in a sentence, read from kept JSON at build time
+    (scripts/bench/doc_figures.py): a missing file or key fails the build.
 
 ``publicNames()`` is what the reference must contain; the test
 ``tests/python/test_doc_site.py`` checks every one of them is in the built site."""
@@ -236,6 +239,23 @@ class BenchFigureDirective(SphinxDirective):
         return _parse(self, lines)
 
 
+def benchRole(name, rawtext, text, lineno, inliner, options=None, content=None):
+    """``{bench}`FILE:KEY|OP...```: the figure at KEY of kept JSON FILE
+    (bench/logs/), formatted (scripts/bench/doc_figures.py); a spec that
+    does not resolve is an error of the build, never a stale figure."""
+    import sys
+    sys.path.insert(0, os.path.join(ROOT, "scripts", "bench"))
+    import doc_figures
+    env = inliner.document.settings.env
+    try:
+        value, path = doc_figures.resolve(text)
+    except doc_figures.FigureError as e:
+        logger.warning("bench: %s" % e, location=(env.docname, lineno))
+        return [nodes.problematic(rawtext, rawtext)], []
+    env.note_dependency(path)
+    return [nodes.inline(rawtext, value, classes=["bench-figure"])], []
+
+
 def _parse(directive, lines):
     node = nodes.section()
     node.document = directive.state.document
@@ -276,6 +296,7 @@ def setup(app):
     app.add_directive("qdem-world-settings", WorldSettingsDirective)
     app.add_directive("bench-table", BenchTableDirective)
     app.add_directive("bench-figure", BenchFigureDirective)
+    app.add_role("bench", benchRole)
     app.connect("autodoc-process-docstring", _stripAttributeList)
     app.connect("autodoc-process-docstring", _plainText)
     app.connect("autodoc-process-docstring", _requireDocstring)

@@ -23,6 +23,8 @@ import io
 import json
 import sys
 
+from page_tables import PAGE_GENERATORS
+
 LAW = {"saintVenantKirchhoff": "SVK", "stableNeoHookean": "SNH (default)"}
 
 
@@ -592,6 +594,7 @@ GENERATORS = {f.__name__: f for f in (
     elements, roofline, cubes27, shogi, effects, ops, spheres, glue, meshSurface, zoltan, zoltanByP,
     zoltanSlowNetwork, mpiPingpong, mpiRanks, mpiInputs, mpiEfficiency, mpiProjection, mpiPingpongCurve, mpiRerun,
     mpiExtrapolation, mpiValidation, mpiMemory, mpiMpy, timeToSolution)}
+GENERATORS.update(PAGE_GENERATORS)  # doc/parallel.md's and doc/shogi.md's (page_tables.py)
 
 
 def main():

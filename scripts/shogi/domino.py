@@ -200,6 +200,8 @@ def results():
               "asleep_now": qdem.defaultWorld().core.nAsleep, "wall_s": wall,
               "wall_s_per_simulated_s": wall / max(core.time, 1e-12), "firstHit_s": hits, "fallen_s": fallen,
               "x0_m": [float(p.refPos[:, 0].mean()) for p in pieces]}
+    if stopped is not None:
+        result["error"], result["stopped_at_step"] = stopped, O.iter
     hit = [(x, t) for x, t in zip(result["x0_m"], hits) if t is not None]
     if len(hit) >= 3:
         slope = np.polyfit([t for _, t in hit[1:]], [x for x, _ in hit[1:]], 1)[0]
@@ -213,9 +215,15 @@ def results():
     return result, hit, wall
 
 
+stopped = None  # the message of a StabilityError that stopped the run (kept in hits.json as 'error')
 while len(frames) < P.frames:
     tNext = tPush + (len(frames) + 1) * P.duration / P.frames
-    O.run(max(1, int(round((tNext - core.time) / O.dt))), True)
+    try:
+        O.run(max(1, int(round((tNext - core.time) / O.dt))), True)
+    except qdem.StabilityError as e:
+        stopped = str(e)
+        results()
+        raise
     frame()
     results()
     if P.restart:
