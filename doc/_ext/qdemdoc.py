@@ -205,6 +205,11 @@ class BenchTableDirective(SphinxDirective):
                            % (kind, ", ".join(sorted(perf_tables.GENERATORS))),
                            location=(self.env.docname, self.lineno))
             return []
+        missing = [a for a, p in zip(self.arguments[1:], paths) if not os.path.isfile(p)]
+        if missing:
+            logger.warning("bench-table %s: %s not kept (bench/logs/)" % (kind, ", ".join(missing)),
+                           location=(self.env.docname, self.lineno))
+            return []
         for p in paths:
             self.env.note_dependency(p)
         out = io.StringIO()

@@ -9,9 +9,11 @@ A spec is ``FILE:KEY[|OP...]``:
   when it holds a '/');
 - KEY: a dotted path (``scales.766.first_mode_damping_ratio``); ``[i]``
   indexes a list (``runs[0].steps``); a ``*`` in a part takes every
-  matching key of a dict (``spheres.drop.P*.dxOverDisp``: a list);
+  matching key of a dict (``spheres.drop.P*.dxOverDisp``: a list), a part
+  ``*`` every item of a list (the items without the rest of the path
+  are left out);
 - OPs, applied left to right: ``flat`` (a list of lists as one list),
-  ``min``, ``max``, ``sum``, ``len``, ``abs``;
+  ``min``, ``max``, ``sum``, ``len``, ``abs``, ``inv`` (1/x);
   ``*X`` / ``/X`` / ``+X`` / ``-X`` (X a number or ``@KEY``, another value of
   the same file); then a format: ``%...`` (printf), ``{...}`` (str.format),
   ``sig2`` / ``sig3`` (two or three significant digits, thousands
@@ -51,6 +53,9 @@ def lookup(data, key):
                 if not isinstance(v, list) or int(index) >= len(v):
                     raise FigureError("no item [%s] at %r" % (index, key))
                 nxt.append(v[int(index)])
+            elif name == "*" and isinstance(v, list):
+                nxt += v
+                star = True
             elif "*" in name:
                 if not isinstance(v, dict):
                     raise FigureError("%r: a '*' needs a dict" % key)
@@ -61,8 +66,12 @@ def lookup(data, key):
                 star = True
             else:
                 if not isinstance(v, dict) or name not in v:
+                    if star:
+                        continue  # after a '*', the items without the rest of the path are left out
                     raise FigureError("no key %r (of %r)" % (name, key))
                 nxt.append(v[name])
+        if not nxt:
+            raise FigureError("nothing matches %r" % key)
         values = nxt
     return values if star else values[0]
 
@@ -99,8 +108,9 @@ def apply(value, ops, data):
             value = [y for x in value for y in (x if isinstance(x, list) else [x])]
         elif op in _REDUCE:
             value = _REDUCE[op](value)
-        elif op == "abs":
-            value = [abs(x) for x in value] if isinstance(value, list) else abs(value)
+        elif op in ("abs", "inv"):
+            f = abs if op == "abs" else (lambda x: 1.0 / x)
+            value = [f(x) for x in value] if isinstance(value, list) else f(value)
         elif op[:1] in _ARITH and len(op) > 1:
             b = lookup(data, op[2:]) if op[1] == "@" else float(op[1:])
             f = _ARITH[op[0]]
@@ -110,7 +120,7 @@ def apply(value, ops, data):
                 return ", ".join(_format(x, op) for x in value)
             return _format(value, op)
         else:
-            raise FigureError("unknown op %r (flat, min, max, sum, len, abs, *X, /X, +X, -X, %%..., {...}, sigN)" % op)
+            raise FigureError("unknown op %r (flat, min, max, sum, len, abs, inv, *X, /X, +X, -X, %%..., {...}, sigN)" % op)
     return ", ".join(map(str, value)) if isinstance(value, list) else str(value)
 
 

@@ -2,7 +2,8 @@
 benchmark JSON kept in bench/logs/ (the ``bench-table`` directive of
 doc/_ext/qdemdoc.py, generators in scripts/bench/perf_tables.py), never
 typed by hand: every directive's generator runs on its kept JSON, and the
-page of MPI at scale holds no Markdown table row with a figure outside one.
+pages of MPI (at scale and the user guide) and of the shogi scenes hold no
+Markdown table row with a figure outside one (tables of pictures aside).
 
 Runs in a second: no Sphinx build (test_doc_site.py builds the site)."""
 import contextlib
@@ -24,6 +25,8 @@ import perf_tables  # noqa: E402
 DIRECTIVE = re.compile(r"^\s*```\{bench-table\}\s+(\S+)\s+(.+?)\s*$")
 # Pages where no table row may carry a figure unless a generator prints it.
 GENERATED_ONLY = ["doc/parallel_scaling.md"]
+# ... and pages whose tables are all printed, beside committed pictures.
+TABLES_GENERATED = GENERATED_ONLY + ["doc/parallel.md", "doc/shogi.md"]
 
 
 def benchTables():
@@ -46,11 +49,31 @@ def run(kind, paths):
     return buf.getvalue()
 
 
+def pictureRow(row):
+    """Every cell of a table row that holds a digit holds an image (whose path may hold digits)."""
+    return all("![" in c for c in row.strip().strip("|").split("|") if re.search(r"\d", c))
+
+
 def handTypedRows(text):
     """Markdown table rows holding a digit outside a bench-table directive
-    (whose content is printed, not typed): (line number, line)."""
-    return [(i, line.rstrip()) for i, line in enumerate(text.splitlines(), 1)
-            if line.lstrip().startswith("|") and re.search(r"\d", line)]
+    (whose content is printed, not typed): (line number, line).  A table of
+    pictures (below its rule, every cell with a digit holds an image) is no
+    table of figures: its header labels the pictures (friction 0.1, 0.6 s)."""
+    lines = text.splitlines()
+    rows, i = [], 0
+    while i < len(lines):
+        if not lines[i].lstrip().startswith("|"):
+            i += 1
+            continue
+        j = i
+        while j < len(lines) and lines[j].lstrip().startswith("|"):
+            j += 1
+        table = list(enumerate(lines[i:j], i + 1))
+        body = [x for _, x in table[2:]]
+        if not (body and all(pictureRow(x) for x in body)):
+            rows += [(k, x.rstrip()) for k, x in table if re.search(r"\d", x)]
+        i = j
+    return rows
 
 
 def test_the_mpi_pages_print_their_tables():
@@ -77,7 +100,7 @@ def test_every_bench_table_prints_from_its_kept_json(page, line, kind, paths):
     assert not any("nan" in r.lower().split("|") for r in rows)
 
 
-@pytest.mark.parametrize("page", GENERATED_ONLY)
+@pytest.mark.parametrize("page", TABLES_GENERATED)
 def test_no_hand_typed_table_of_figures(page):
     """A table of figures on these pages comes from a generator: a
     hand-typed row (a line starting with '|' with a digit) is refused."""
@@ -103,10 +126,22 @@ def test_the_plots_are_drawn_from_the_kept_json(page, tmp_path):
 
 def test_hand_typed_check_catches_a_table():
     """The check itself: a typed row with figures is caught, a directive and
-    prose with figures are not."""
+    prose with figures are not, nor the labels of a table of pictures."""
     text = ("Text with 1.46 µs.\n\n| P | step |\n|---|---|\n| 2 | 0.79 |\n\n"
-            "```{bench-table} mpiValidation x.json\n```\n")
-    assert [i for i, _ in handTypedRows(text)] == [5]
+            "```{bench-table} mpiValidation x.json\n```\n\n"
+            "| friction 0.1 | friction 0.5 |\n| --- | --- |\n| ![](a.png) | ![](b.png) |\n\n"
+            "| friction 0.1 | 14 hit |\n| --- | --- |\n| ![](a.png) | 0.54 m/s |\n")
+    assert [i for i, _ in handTypedRows(text)] == [5, 14, 16]
+
+
+def test_the_parallel_and_shogi_pages_print_their_tables():
+    """parallel.md's equal-to-serial table and shogi.md's tables are
+    generated (a lost directive would leave a page without its figures)."""
+    kinds = {(page, kind) for page, _, kind, _ in benchTables()}
+    assert ("doc/parallel.md", "equalToSerial") in kinds
+    for kind in ("shogiPieces", "shogiSoft", "shogi", "shogiScales", "shogiScaleCost", "shogiCostInRun",
+                 "shogiFirstHitCost", "shogiScaleRuns"):
+        assert ("doc/shogi.md", kind) in kinds, kind
 
 
 def test_step_over_work_is_the_stated_formula():
