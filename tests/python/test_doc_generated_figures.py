@@ -41,6 +41,14 @@ QUOTED = {
         "mpi_mpy.json:*.mpy*ranks.layerSecondsPerStep",
         "omp_sync_s12_2026-11-24.json:summary.passive.*.*.median_of_rounds",
     ],
+    "doc/parallel_scaling.md": [
+        "mpi.json:model.inputs.alpha_s",
+        "mpi.json:model.inputs.beta_s_per_byte",
+        "mpi.json:model.inputs.ns_per_tet",
+        "mpi_rerun.json:model.inputs.alpha_s",
+        "mpi_rerun.json:model.inputs.ns_per_tet",
+        "mpi_partition_512.json:rows[38].partition_seconds",
+    ],
     "doc/shogi.md": [
         "shogi_scales_2026-11-24.json:table1_scale",
         "shogi_scales_2026-11-24.json:scales.1.stable_dt_explicit",
