@@ -215,7 +215,7 @@ def shogiCostInRun(d, scalesJson):
 def shogiSoft(d, *more):
     """The soft material's short scenes (domino.py's hits.json of each run,
     gathered in shogi_soft.json): first hits and falls per piece."""
-    print("| scene | piece friction | simulated | pieces hit | first hits [s] | fallen (70 %% height) [s] | "
+    print("| scene | piece friction | simulated | pieces hit | first hits [s] | fallen (70 % height) [s] | "
           "wall s per simulated s |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for name, r in d["runs"].items():
