@@ -7,7 +7,8 @@ A spec is ``FILE:KEY[|OP...]``:
 
 - FILE: a JSON file under bench/logs/ (or a path from the repository's root
   when it holds a '/');
-- KEY: a dotted path (``scales.766.first_mode_damping_ratio``); ``[i]``
+- KEY: a dotted path (``scales.766.first_mode_damping_ratio``; a key
+  that holds dots is found too: ``runs.two_rooks_mu0.1_soft.dt``); ``[i]``
   indexes a list (``runs[0].steps``); a ``*`` in a part takes every
   matching key of a dict (``spheres.drop.P*.dxOverDisp``: a list), a part
   ``*`` every item of a list (the items without the rest of the path
@@ -43,10 +44,23 @@ def path(fileSpec):
 _PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 
 
+def _parts(key):
+    """(name, index) parts of a key; a run of names kept joined when a dict
+    holds the dotted name ('runs.two_rooks_mu0.1_soft.dt')."""
+    return _PART.findall(key)
+
+
 def lookup(data, key):
     """The value at a dotted key (see the module's docstring)."""
     values, star = [data], False
-    for name, index in _PART.findall(key):
+    parts = _parts(key)
+    while parts:
+        name, index = parts.pop(0)
+        # a key holding dots (a run named 'two_rooks_mu0.1_soft'): join the next parts while it is longer
+        while (name and "*" not in name and parts and parts[0][0] and
+               any(isinstance(v, dict) and name not in v and any(k.startswith(name + ".") for k in v)
+                   for v in values)):
+            name += "." + parts.pop(0)[0]
         nxt = []
         for v in values:
             if index:
