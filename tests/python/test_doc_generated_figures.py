@@ -51,6 +51,7 @@ QUOTED = {
     ],
     "doc/shogi.md": [
         "shogi_scales_2026-11-24.json:table1_scale",
+        "shogi_table1_scale.json:scale",
         "shogi_scales_2026-11-24.json:scales.1.stable_dt_explicit",
         "shogi_scales_2026-11-24.json:scales.1.elastic_dt",
         "shogi_scales_2026-11-24.json:scales.766.first_mode_damping_ratio",
