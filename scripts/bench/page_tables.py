@@ -33,7 +33,9 @@ def _ranks(part):
 
 
 def _its(s):
-    return "%d" % s["min"] if s["min"] == s["max"] else "%d-%d" % (s["min"], s["max"])
+    """'3 CG iterations', '1 CG iteration', '0-1 CG iterations' (min-max over the steps)."""
+    n = "%d" % s["min"] if s["min"] == s["max"] else "%d-%d" % (s["min"], s["max"])
+    return "%s CG iteration%s" % (n, "" if n == "1" else "s")
 
 
 def equalToSerial(d, spheresJson):
@@ -57,8 +59,9 @@ def equalToSerial(d, spheresJson):
                                                       _range([x["threads2"] for x in r])))
     rb = d["rebalance"]
     _, rbRows = _ranks(rb)
-    row("the same, rebalanced mid-run (%s nodes move, contacts open)" % ", ".join(
-        str(x["movedNodes"]) for x in rbRows), rb, lambda r: _range([x["dxOverDisp"] for x in r]))
+    row("the same, rebalanced mid-run (%s nodes move on %s ranks, contacts open)" % (
+        " and ".join(str(x["movedNodes"]) for x in rbRows), _ranks(rb)[0].replace(", ", " and ")), rb,
+        lambda r: _range([x["dxOverDisp"] for x in r]))
     row("the same, saved on 3 ranks, loaded on 3, continued (`check_restart.py`)", d["restart"],
         lambda r: "%s against the uninterrupted run" % _e(r[0]["restartVsContOverDisp"]))
     sl = d["sleep"]
@@ -81,18 +84,19 @@ def equalToSerial(d, spheresJson):
         if all(x["sameIterationsEveryRank"] and (x["sameIterationsAsSerial"] or not serial) for x in rows)
         else "; iteration counts differ between ranks")
     row("implicit viscosity (%s preconditioner): the falling pieces, %d steps at 0.5 of the elastic limit (%.0f "
-        "times the explicit viscous one), every solve from zero (`viscousWarmStart=False`), %s CG iterations per "
-        "step (`check_implicit_viscosity.py`)" % (imRows[0]["preconditioner"], im["steps"],
+        "times the explicit viscous one), every solve from zero (`viscousWarmStart=False`), %s per step "
+        "(`check_implicit_viscosity.py`)" % (imRows[0]["preconditioner"], im["steps"],
                                                  imRows[0]["dtOverExplicitLimit"],
                                                  _its(imRows[0]["iterations"])), im,
         lambda r: "%s (serial 1 vs 2 threads: %s)%s" % (_range([x["dxOverDisp"] for x in r]),
                                                          _range([x["threads2"] for x in r]), same(r)))
-    row("the same warm-started (the default: each solve from the last step's change), %s CG iterations per step "
-        "(median %g), with a rebalance forced half-way (every piece split along the curve then: %s nodes move; "
+    iwRanks, _ = _ranks(iw)
+    row("the same warm-started (the default: each solve from the last step's change), %s per step (median %g), "
+        "with a rebalance forced half-way (every piece split along the curve then: %s nodes move on %s ranks; "
         "their last changes move with them, and the next solve takes %s iterations) (`... warm`)" % (
             _its(iwRows[-1]["iterations"]), iwRows[-1]["iterations"]["median"],
-            ", ".join(str(x["movedNodes"]) for x in iwRows),
-            ", ".join(str(x["iterations"]["afterRebalance"]) for x in iwRows)), iw,
+            " and ".join(str(x["movedNodes"]) for x in iwRows), iwRanks.replace(", ", " and "),
+            " and ".join(str(x["iterations"]["afterRebalance"]) for x in iwRows)), iw,
         lambda r: "%s (serial 1 vs 2 threads: %s: the warm start carries each step's solve error into the next, so "
                   "rounding differences grow within the tolerance, doc/formulation.md 2.1)%s" % (
                       ", ".join(_e(x["dxOverDisp"]) for x in r), _range([x["threads2"] for x in r]),
