@@ -12,7 +12,8 @@ A spec is ``FILE:KEY[|OP...]``:
   indexes a list (``runs[0].steps``); a ``*`` in a part takes every
   matching key of a dict (``spheres.drop.P*.dxOverDisp``: a list), a part
   ``*`` every item of a list (the items without the rest of the path
-  are left out);
+  are left out); a part may be a glob (``[pe][od]*``: pointPolygon and
+  edgeEdge);
 - OPs, applied left to right: ``flat`` (a list of lists as one list),
   ``min``, ``max``, ``sum``, ``len``, ``abs``, ``inv`` (1/x);
   ``*X`` / ``/X`` / ``+X`` / ``-X`` (X a number or ``@KEY``, another value of
@@ -41,7 +42,8 @@ def path(fileSpec):
     return os.path.join(ROOT, fileSpec) if "/" in fileSpec else os.path.join(LOGS, fileSpec)
 
 
-_PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+# a name may hold a glob class ('[pe][od]*': pointPolygon, edgeEdge); '[digits]' is an index
+_PART = re.compile(r"((?:[^.\[\]]|\[[^\]\d][^\]]*\])+)|\[(\d+)\]")
 
 
 def _parts(key):
@@ -75,6 +77,8 @@ def lookup(data, key):
                     raise FigureError("%r: a '*' needs a dict" % key)
                 hits = sorted((k for k in v if fnmatch.fnmatchcase(k, name)), key=_natural)
                 if not hits:
+                    if star:
+                        continue  # after a '*', a dict without a match is left out too
                     raise FigureError("no key matches %r in %r" % (name, key))
                 nxt += [v[k] for k in hits]
                 star = True
