@@ -7,6 +7,8 @@ join perf_tables.GENERATORS, so the ``bench-table`` directive prints them:
     /usr/bin/python3.11 scripts/bench/perf_tables.py shogiPieces bench/logs/shogi_pieces.json
     /usr/bin/python3.11 scripts/bench/perf_tables.py shogiScales bench/logs/shogi_scales_2026-11-24.json
     (and shogiScaleCost, shogiFirstHitCost, shogiScaleRuns, shogiCostInRun, shogiSoft, shogiStart)
+    /usr/bin/python3.11 scripts/bench/perf_tables.py precond bench/logs/precond_two_rooks_1thread.json \
+        bench/logs/precond_two_rooks_2threads.json            (doc/performance.md)
 
 A figure printed here is never typed: scene descriptions are words, and
 every number in a row comes from the JSON."""
@@ -230,6 +232,21 @@ def shogiSoft(d, *more):
             " / ".join("—" if t is None else sig(t, 3) for t in r["fallen_s"]), sig(r["wall_s_per_simulated_s"], 2)))
 
 
+def precond(d, *more):
+    """The implicit viscous solve's preconditioners on the two rooks
+    (scripts/shogi/precond_bench.py: one JSON per thread count): CG
+    iterations and CPU and wall ms per step, min / median over the rounds."""
+    print("| preconditioner | threads | CG iterations per step | CPU ms per step, min / median | "
+          "wall ms per step, min / median |")
+    print("| --- | --- | --- | --- | --- |")
+    for run in [d] + [json.load(open(p)) for p in more]:
+        for name, s in run["summary"].items():
+            print("| %s | %d | %s | %s / %s | %s / %s |" % (
+                name, run["threads"], sig(s["cg_iterations_per_step"]["median"], 4),
+                sig(s["cpu_ms_per_step"]["min"], 3), sig(s["cpu_ms_per_step"]["median"], 3),
+                sig(s["ms_per_step"]["min"], 3), sig(s["ms_per_step"]["median"], 3)))
+
+
 PAGE_GENERATORS = {f.__name__: f for f in (
     equalToSerial, shogiPieces, shogiScales, shogiScaleCost, shogiFirstHitCost, shogiScaleRuns, shogiCostInRun,
-    shogiSoft)}
+    shogiSoft, precond)}
