@@ -6,9 +6,13 @@ median ns per node per step (wall; and on the CPU: wall times this
 process's CPU time over the round's wall time, for a shared machine), its
 share of the contact kernels' time, and the load average.
 
-    /usr/bin/python3.11 scripts/bench/bench_surface_spin.py [--steps 100] [--rounds 5]
+    /usr/bin/python3.11 scripts/bench/bench_surface_spin.py [--steps 100] [--rounds 5] [--json OUT.json]
+
+With --json the rounds and their summary are written as JSON (kept in
+bench/logs/ for doc/performance.md, "Surface spin of piece-piece contacts").
 """
 import argparse
+import json
 import os
 import resource
 import statistics
@@ -25,6 +29,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--json", help="write the rounds and their summary to this file")
     a = ap.parse_args()
     _core.setThreads(1)
     w = bench_cubes27.scene(throw=1.0)
@@ -51,6 +56,18 @@ def main():
           "%.1f %% of point-polygon + edge-edge (median); load average %.1f -> %.1f" % (
               nodes / a.steps, min(perNode), statistics.median(perNode), min(onCpu), statistics.median(onCpu),
               100 * statistics.median(share), load0, os.getloadavg()[0]))
+    if a.json:
+        summary = {"min": min(perNode), "median": statistics.median(perNode)}
+        with open(a.json, "w") as f:
+            json.dump({"benchmark": "bench_surface_spin", "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                       "scene": "27-cube pile (bench_cubes27.scene), thrown at 1 m/s", "threads": 1,
+                       "steps": a.steps, "rounds": a.rounds, "surface_nodes": nodes / a.steps,
+                       "load1": {"before": load0, "after": os.getloadavg()[0]},
+                       "ns_per_node_step": dict(summary, rounds=perNode),
+                       "ns_per_node_step_on_cpu": {"min": min(onCpu), "median": statistics.median(onCpu),
+                                                   "rounds": onCpu},
+                       "share_of_point_polygon_edge_edge": {"median": statistics.median(share), "rounds": share}},
+                      f, indent=1)
 
 
 if __name__ == "__main__":
