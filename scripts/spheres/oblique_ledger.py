@@ -1,7 +1,7 @@
 # A YADE sphere thrown obliquely onto a held QDEM slab: friction work and the
 # energy ledger (doc/spheres.md, "Energy").
 #
-#   yade -n -x scripts/spheres/oblique_ledger.py [dtFactor] [friction]
+#   yade -n -x scripts/spheres/oblique_ledger.py [dtFactor] [friction] [scale=S] [json=OUT.json]
 #
 # A sphere (R 1 cm, 2500 kg/m3) thrown at (1, 0.2, 0) m/s from 1 cm above a
 # held soft slab (E 1 MPa, mu 0.5) bounces, slides and ends up rolling.
@@ -11,8 +11,13 @@
 # and the end state's rolling ratio |w| R / |v| (1 when rolling).
 # dtFactor (default 0.5) is O.dt over QdemEngine.stableTimeStep() (also
 # capped at 0.3 of YADE's PWaveTimeStep); friction 0 makes the contact
-# frictionless.
+# frictionless. scale=S multiplies the step so chosen (0.5, 0.25: the
+# ledger's order in dt); json=OUT.json adds this run's figures to OUT.json
+# under "dt<dtFactor>_mu<friction>_x<scale>" (kept in bench/logs/ for
+# doc/spheres.md).
+import json
 import math
+import os
 import sys
 
 import qdem
@@ -20,7 +25,9 @@ from yade import (O, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere
                   InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom_FrictPhys_CundallStrack,
                   NewtonIntegrator, utils)
 
-args = [a for a in sys.argv[1:] if not a.startswith("-")]
+kwargs = dict(a.split("=", 1) for a in sys.argv[1:] if "=" in a)
+args = [a for a in sys.argv[1:] if not a.startswith("-") and "=" not in a]
+scale = float(kwargs.get("scale", 1.0))
 dtFactor = float(args[0]) if args else 0.5
 mu = float(args[1]) if len(args) > 1 else 0.5
 mat = qdem.QdemMat(young=1e6, poisson=0.3, density=1000, viscosity=50, radius=0.002, frictionPiece=mu)
@@ -34,7 +41,7 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
              InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
                              [Law2_ScGeom_FrictPhys_CundallStrack()]),
              qdem.QdemEngine(label="qe"), NewtonIntegrator(gravity=(0, 0, -9.81), damping=0.0)]
-O.dt = min(0.3 * utils.PWaveTimeStep(), dtFactor * qe.stableTimeStep())  # noqa: F821 (qe: YADE label)
+O.dt = scale * min(0.3 * utils.PWaveTimeStep(), dtFactor * qe.stableTimeStep())  # noqa: F821 (qe: YADE label)
 O.trackEnergy = True
 kin0 = 0.5 * O.bodies[sid].state.mass * (1.0 ** 2 + 0.2 ** 2)
 last, falls, start, drift = 0.0, [], None, 0.0
@@ -53,3 +60,13 @@ print("friction work %.3e J, %d steps at which it fell" % (last, len(falls)))
 print("largest ledger drift %.3e J = %.2f %% of the kinetic energy thrown in (%.3e J)"
       % (drift, 100 * drift / kin0, kin0))
 print("end: |w| R / |v| = %.3f" % (s.angVel.norm() * R / math.hypot(s.vel[0], s.vel[1])))
+if "json" in kwargs:
+    runs = json.load(open(kwargs["json"])) if os.path.exists(kwargs["json"]) else {
+        "source": "scripts/spheres/oblique_ledger.py", "runs": {}}
+    runs["runs"]["dt%g_mu%g_x%g" % (dtFactor, mu, scale)] = {
+        "dtFactor": dtFactor, "friction": mu, "scale": scale, "dt": O.dt,
+        "dt_over_pwave": O.dt / utils.PWaveTimeStep(), "friction_work_J": last, "friction_falls": len(falls),
+        "drift_J": drift, "kinetic_J": kin0, "drift_over_kinetic": drift / kin0,
+        "rolling_ratio": s.angVel.norm() * R / math.hypot(s.vel[0], s.vel[1])}
+    with open(kwargs["json"], "w") as f:
+        json.dump(runs, f, indent=1)
