@@ -247,6 +247,38 @@ def precond(d, *more):
                 sig(s["ms_per_step"]["min"], 3), sig(s["ms_per_step"]["median"], 3)))
 
 
+ARCH_SCENES = ("cubes27", "shogi", "spheres", "restart")
+
+
+def archCompare(index):
+    """Old build against new of each step of the restructuring
+    (doc/architecture.md; arch_compare_index.json names each change's
+    compare_builds.py JSON): max |dx| over the largest displacement D per
+    scene and thread count, the restart with the old build's state file
+    resumed by the new build, and the licence (one build at 1 against 2
+    threads, over D) of each scene."""
+    import os
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+    print("| change | threads | %s | old state resumed by new | 1 vs 2 threads (licence: %s) | JSON |"
+          % (" | ".join(ARCH_SCENES), " / ".join(ARCH_SCENES)))
+    print("|%s" % ("---|" * (len(ARCH_SCENES) + 5)))
+    for row in index["rows"]:
+        d = json.load(open(os.path.join(root, row["json"])))
+        sc = d["scenes"]
+        for i, t in enumerate(d["threads"]):
+            cells = []
+            for name in ARCH_SCENES:
+                r = sc.get(name, {}).get("old_vs_new", {}).get(str(t))
+                cells.append("" if r is None else _e(r["ratio"]))
+            across = sc.get("restart", {}).get("restart_across_builds", {}).get(str(t))
+            resumed = "" if across is None else _e(across["max_dx_old_state_resumed_by_new_vs_by_old"] /
+                                                     sc["restart"]["largest_displacement"])
+            licence = " / ".join("" if name not in sc else _e(sc[name]["licence_ratio"]) for name in ARCH_SCENES) \
+                if t > 1 else ""
+            print("| %s | %d | %s | %s | %s | %s |" % (row["change"] if i == 0 else "", t, " | ".join(cells),
+                                                       resumed, licence, "`%s`" % row["json"] if i == 0 else ""))
+
+
 PAGE_GENERATORS = {f.__name__: f for f in (
     equalToSerial, shogiPieces, shogiScales, shogiScaleCost, shogiFirstHitCost, shogiScaleRuns, shogiCostInRun,
-    shogiSoft, precond)}
+    shogiSoft, precond, archCompare)}
