@@ -2,8 +2,9 @@
 benchmark JSON kept in bench/logs/ (the ``bench-table`` directive of
 doc/_ext/qdemdoc.py, generators in scripts/bench/perf_tables.py), never
 typed by hand: every directive's generator runs on its kept JSON, and the
-pages of MPI (at scale and the user guide) and of the shogi scenes hold no
-Markdown table row with a figure outside one (tables of pictures aside).
+pages of MPI (at scale and the user guide), of the shogi scenes and of
+performance hold no Markdown table row with a figure outside one (tables of
+pictures aside).
 
 Runs in a second: no Sphinx build (test_doc_site.py builds the site)."""
 import contextlib
@@ -26,7 +27,7 @@ DIRECTIVE = re.compile(r"^\s*```\{bench-table\}\s+(\S+)\s+(.+?)\s*$")
 # Pages where no table row may carry a figure unless a generator prints it.
 GENERATED_ONLY = ["doc/parallel_scaling.md"]
 # ... and pages whose tables are all printed, beside committed pictures.
-TABLES_GENERATED = GENERATED_ONLY + ["doc/parallel.md", "doc/shogi.md"]
+TABLES_GENERATED = GENERATED_ONLY + ["doc/parallel.md", "doc/shogi.md", "doc/performance.md"]
 
 
 def benchTables():
@@ -169,3 +170,13 @@ def test_the_zoltan_table_matches_the_figures_the_text_quotes():
     slow = run("zoltanSlowNetwork", ["bench/logs/mpi_zoltan.json", "bench/logs/mpi.json"])
     mixed = [r for r in slow.splitlines() if r.startswith("| mixed |")][0].split("|")
     assert [c.strip() for c in mixed[2:6]] == ["1.35", "1.30", "1.18", "1.29"]
+
+
+def test_the_performance_and_architecture_pages_print_their_tables():
+    """performance.md's tables of measured figures and architecture.md's
+    old-against-new table are generated (a lost directive would leave a page
+    without its figures, or a typed copy in its place)."""
+    kinds = {(page, kind) for page, _, kind, _ in benchTables()}
+    for kind in ("timeToSolution", "roofline", "cubes27", "glue", "spheres", "effects", "precond", "shogi"):
+        assert ("doc/performance.md", kind) in kinds, kind
+    assert ("doc/architecture.md", "archCompare") in kinds
