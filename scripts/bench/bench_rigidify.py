@@ -7,6 +7,7 @@ over the same simulated interval, interleaved, several rounds.
     PYTHONPATH=build/python OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/bench_rigidify.py \\
         [--scenes two_rooks,forty_front] [--scales 1] [--prep 6000] [--steps 300] [--rounds 3] \\
         [--rate 1] [--dwell 0.0005] [--wakeStrain 1e-5] [--log bench/logs/rigidify_gain_<date>.json]
+    ... scripts/bench/bench_rigidify.py --table bench/logs/rigidify_gain_<date>.json   (its Markdown table)
 
 Each scene starts as bench_time_to_solution.prepare makes it (two_rooks:
 --warmup steps from the set-up; forty_front: the checkpoint at the front,
@@ -86,7 +87,31 @@ def scene(name, scale, a):
                                                    "max": max(loads)}, "runs": runs}
 
 
+def table(log):
+    """The Markdown table of a log this script wrote (doc/dev/performance_notebook.md)."""
+    d = json.load(open(log))
+    a = d["args"]
+    text = ("| scene | dt [s] | pieces rigid after %d steps (on) | ms/step off, median | ms/step on, median | "
+            "speed-up min / median | switches in the windows | load1 |\n|---|---|---|---|---|---|---|---|\n"
+            % a["prep"])
+    for key, e in d["scenes"].items():
+        med = lambda rs, k: statistics.median(x[k] for x in rs)  # noqa: E731
+        g = e["speedup_off_over_on"]["ms_per_step"]
+        text += "| %s (%d pieces) | %.3g | %d | %.3g | %.3g | %.2f / %.2f | %d | %.1f-%.1f |\n" % (
+            key, e["pieces"], e["dt"], e["prep"]["on"]["rigid"], med(e["runs"]["off"], "ms_per_step"),
+            med(e["runs"]["on"], "ms_per_step"), g["min"], g["median"],
+            sum(x["switches_in_window"] for x in e["runs"]["on"]), e["load1"]["min"], e["load1"]["max"])
+    text += ("\n(`%s`, %s: %d threads, rigidStrainRate %g /s, rigidTime %g s, rigidWakeStrain %g, rigidWakeLoad %g; "
+             "%d steps a window, %d rounds, off and on interleaved)\n" % (
+                 log, d["date"], a["threads"], a["rate"], a["dwell"], a["wakeStrain"], a["wakeLoad"], a["steps"],
+                 a["rounds"]))
+    return text
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--table":
+        print(table(sys.argv[2]))
+        return
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", default="two_rooks,forty_front")
     ap.add_argument("--scales", default="1")
