@@ -7,6 +7,7 @@ the falls, the front speed, the switches and the CPU time.
     PYTHONPATH=build/python OMP_WAIT_POLICY=passive /usr/bin/python3.11 scripts/bench/rigidify_dominoes.py \\
         [--count 5] [--cells 2,6,12] [--young 1e8] [--duration 1.5] [--threads 2] [--rate 0.5] [--dwell 0.005] \\
         [--wakeStrains 0,1e-5,1e-4] [--log bench/logs/rigidify_dominoes_<date>.json]
+    ... scripts/bench/rigidify_dominoes.py --table bench/logs/rigidify_dominoes_<date>.json   (its Markdown table)
 
 Bricks 2 x 6 x 12 cm (thickness, width, height; --cells, 6 tets a cell), density
 1000 kg/m^3, Poisson 0.3, no viscosity, restitution 0.5, particle radius
@@ -75,7 +76,30 @@ def run(a, rigid, wakeStrain):
             "centroids_m": [list(map(float, p.centroid)) for p in bricks]}
 
 
+def table(log):
+    """The Markdown table of a log this script wrote (doc/dev/performance_notebook.md)."""
+    d = json.load(open(log))
+    ref = d["deformable"]
+    fmt = lambda v: "-" if v is None else "%.3f" % v  # noqa: E731
+    text = ("| run | switches | rigid share | fall times [s] (brick 0, 1, ...) | fall order | front speed [m/s] | "
+            "CPU s | speed-up |\n|---|---|---|---|---|---|---|---|\n")
+    text += "| deformable | 0 | 0 | %s | %s | %s | %.1f | 1 |\n" % (
+        ", ".join(fmt(v) for v in ref["fallen_s"]), ref["fall_order"], fmt(ref["front_speed_m_s"]), ref["cpu_s"])
+    for r in d["rigid"]:
+        text += "| rigidify, rigidWakeStrain %g | %d | %.2f | %s | %s | %s | %.1f | %.2f |\n" % (
+            r["rigidWakeStrain"], r["rigidSwitches"], r["rigid_share"], ", ".join(fmt(v) for v in r["fallen_s"]),
+            r["fall_order"], fmt(r["front_speed_m_s"]), r["cpu_s"], r["speedup_cpu"])
+    a = d["args"]
+    text += ("\n(`%s`, %s: %d bricks, cells %s, E %g Pa, rigidStrainRate %g /s, rigidTime %g s, %d threads, "
+             "load %.1f before, %.1f after)\n" % (log, d["date"], a["count"], a["cells"], a["young"], a["rate"],
+                                                  a["dwell"], a["threads"], d["load_before"][0], d["load_after"][0]))
+    return text
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--table":
+        print(table(sys.argv[2]))
+        return
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=5)
     ap.add_argument("--cells", default="2,6,12", help="cells of a brick's mesh (thickness, width, height)")
