@@ -49,7 +49,8 @@ public:
         : w_(data),
           viscous_(data.viscous),
           rigid_({.mass = data.mass, .extForce = data.extForce, .blocked = data.blocked,
-                  .refPos = data.viscous.refPos, .tetNodes = data.viscous.tetNodes, .pieces = data.pieces,
+                  .refPos = data.viscous.refPos, .tetNodes = data.viscous.tetNodes,
+                  .tetMaterial = data.viscous.tetMaterial, .materials = data.viscous.materials, .pieces = data.pieces,
                   .gravity = data.gravity, .settings = data.settings, .sleeping = data.sleeping,
                   .contacts = data.contacts, .pos = data.pos, .vel = data.vel, .force = data.force,
                   .energy = data.energy}) {}

@@ -65,6 +65,26 @@ RigidFit fitRigidMotion(const double* x, const double* v, const double* mass, in
     return f;
 }
 
+// The load over the strain it makes, 2 E A (doc/formulation.md, "Adaptive
+// rigidity"): a bar of section A loaded by +-P at its ends strains by
+// P / (E A) while its nodes' loads sum to 2P in magnitude.  A = V / l, the
+// piece's volume over its largest reference extent (the section of the bar
+// of its volume along its length); E the softest of its elements' moduli
+// (the larger strain).
+double wakeStiffness(const PieceInfo& P, const double* ref, const Column<int32_t>& tetMaterial,
+                     const std::vector<Material>& materials) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int32_t n = P.nodeBegin; n < P.nodeEnd; ++n) {
+        const Vec3 x(ref[3 * n], ref[3 * n + 1], ref[3 * n + 2]);
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+    }
+    double young = std::numeric_limits<double>::infinity();
+    for (int32_t t = P.tetBegin; t < P.tetEnd; ++t) young = std::min(young, materials[tetMaterial[t]].young);
+    const double extent = (hi - lo).maxCoeff();
+    return extent > 0 && std::isfinite(young) ? 2 * young * P.volume / extent : 0.0;
+}
+
 }  // namespace
 
 void RigidBodies::piecesAdded() {
@@ -76,10 +96,13 @@ void RigidBodies::piecesAdded() {
     belowFor_.resize(np, 0.0);
     rate_.resize(np, 0.0);
     loadChange_.resize(np, 0.0);
+    loadStrain_.resize(np, 0.0);
     wake_.resize(np, 0);
     const std::size_t known = minEdge_.size();
     minEdge_.resize(np, 0.0);
+    wakeStiffness_.resize(np, 0.0);
     for (std::size_t p = known; p < np; ++p) {
+        wakeStiffness_[p] = wakeStiffness(w_.pieces[p], w_.refPos.data(), w_.tetMaterial, w_.materials);
         double e2 = std::numeric_limits<double>::infinity();
         for (int32_t t = w_.pieces[p].tetBegin; t < w_.pieces[p].tetEnd; ++t)
             for (int i = 0; i < 4; ++i)
@@ -126,6 +149,7 @@ void RigidBodies::start(std::size_t p, double& removed) {
     b[kOn] = 1;
     loadSet_[p] = 0;
     loadChange_[p] = 0;
+    loadStrain_[p] = 0;
     wake_[p] = 0;
 }
 
@@ -187,10 +211,15 @@ void RigidBodies::wakeTest(std::size_t p, const double* b, const Mat3& R, const 
         bw[kScale] = std::max(sum, m * w_.gravity.norm());
         loadSet_[p] = 1;
         loadChange_[p] = 0;
+        loadStrain_[p] = 0;
         return;
     }
     loadChange_[p] = bw[kScale] > 0 ? sum / bw[kScale] : (sum > 0 ? std::numeric_limits<double>::infinity() : 0.0);
-    if (loadChange_[p] > w_.settings.rigidWakeLoad) wake_[p] = 1;
+    // Both: a large change for the load it carries, and one that strains it
+    // (a piece rocking on its support shifts its weight, a large relative
+    // change that hardly strains it).
+    loadStrain_[p] = wakeStiffness_[p] > 0 ? sum / wakeStiffness_[p] : std::numeric_limits<double>::infinity();
+    if (loadChange_[p] > w_.settings.rigidWakeLoad && loadStrain_[p] > w_.settings.rigidWakeStrain) wake_[p] = 1;
 }
 
 void RigidBodies::forgetStale() {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../core/Column.hpp"
+#include "../material/Material.hpp"
 #include "../mesh/PieceInfo.hpp"
 #include "../step/AwakeSet.hpp"
 #include "../step/ContactForces.hpp"
@@ -37,6 +38,8 @@ public:
         const Column<uint8_t>& blocked;
         const Column<double>& refPos;      // the smallest reference edge of each piece
         const Column<int32_t>& tetNodes;
+        const Column<int32_t>& tetMaterial;  // the softest material of a piece sets its wake stiffness
+        const std::vector<Material>& materials;
         const std::vector<PieceInfo>& pieces;
         const Eigen::Vector3d& gravity;
         const Settings& settings;
@@ -73,6 +76,7 @@ public:
     void forgetStale();
     double strainRate(std::size_t p) const { return rate_[p]; }      // last estimate [1/s]
     double loadChange(std::size_t p) const { return loadChange_[p]; }  // rigid: relative change of its load
+    double loadStrain(std::size_t p) const { return loadStrain_[p]; }  // rigid: the strain that change would make
 
     void piecesAdded();
     // Restarts: optional fields (files from before it load with no piece rigid).
@@ -101,8 +105,10 @@ private:
     std::vector<double> belowFor_;  // per piece: time the estimate has been below the threshold [s]
     std::vector<double> rate_;      // per piece: last strain-rate estimate [1/s]
     std::vector<double> loadChange_;
+    std::vector<double> loadStrain_;
     std::vector<uint8_t> wake_;     // per piece: its load changed, back to deformable
     std::vector<double> minEdge_;   // per piece: smallest reference edge [m]
+    std::vector<double> wakeStiffness_;  // per piece: 2 E A, the load over the strain it makes [N]
     std::vector<StepSums> sums_;    // per piece, summed in piece order (same bits at any thread count)
 };
 

@@ -141,7 +141,8 @@ inline SettingRange oneOf(std::vector<std::string> names) {
     X(bool, rigidify, "rigidify", false, anyValue(),                                                                 \
       "Adaptive rigidity: a piece whose strain-rate estimate stays below rigidStrainRate for rigidTime moves as a "  \
       "rigid body in its current deformed shape (6 DOF; its surface nodes keep their contacts; no element pass, no " \
-      "viscous solve) until the load on it changes by more than rigidWakeLoad.  Changes the physics: off by "       \
+      "viscous solve) until a change of the load on it would strain it (rigidWakeLoad, rigidWakeStrain).  Changes " \
+      "the physics: off by "                                                                                         \
       "default; doc/accuracy.md 'Adaptive rigidity' gives its error and gain.  Not under MPI.")                     \
     X(double, rigidStrainRate, "rigidStrainRate", 0.1, positive(),                                                   \
       "rigidify: the strain rate [1/s] below which a piece may become rigid; estimated as the largest deviation of " \
@@ -153,7 +154,14 @@ inline SettingRange oneOf(std::vector<std::string> names) {
     X(double, rigidWakeLoad, "rigidWakeLoad", 0.1, positive(),                                                       \
       "rigidify: a rigid piece becomes deformable again when the load deforming it (its nodes' forces less their "  \
       "share of the rigid acceleration, in the body frame) differs from the one it was made rigid under by more "   \
-      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")
+      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless), and that change "   \
+      "would strain it by more than rigidWakeStrain.")                                                             \
+    X(double, rigidWakeStrain, "rigidWakeStrain", 1e-5, atLeast(0),                                                  \
+      "rigidify: a rigid piece becomes deformable again only when the change of the load deforming it would "      \
+      "strain it by more than this (dimensionless): the change summed over its nodes, over 2 E A (E its softest "   \
+      "Young modulus, A its volume over its largest extent).  A piece rocking on its support shifts about its "     \
+      "weight (strain ~ rho g l / E) and stays rigid; a hit at speed v strains it far more.  0 = the load test "   \
+      "alone (doc/formulation.md, 'Adaptive rigidity').")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;

@@ -73,6 +73,7 @@ void World::wake(std::size_t piece) { phases_->sleep.wake(piece); }
 long World::rigidSwitches() const { return phases_->sleep.rigidSwitches(); }
 double World::strainRateEstimate(std::size_t piece) const { return phases_->integration.rigid().strainRate(piece); }
 double World::rigidLoadChange(std::size_t piece) const { return phases_->integration.rigid().loadChange(piece); }
+double World::rigidLoadStrain(std::size_t piece) const { return phases_->integration.rigid().loadStrain(piece); }
 void World::wakeAll() { phases_->sleep.wakeAll(); }
 
 PhaseReport World::report() const {

@@ -340,6 +340,7 @@ public:
     long rigidSwitches() const;  // switches rigid <-> deformable so far
     double strainRateEstimate(std::size_t piece) const;  // the last strain-rate estimate of a deformable piece [1/s]
     double rigidLoadChange(std::size_t piece) const;  // a rigid piece's load change, over rigidWakeLoad's scale
+    double rigidLoadStrain(std::size_t piece) const;  // the strain that change would make (rigidWakeStrain's)
     // The awake set (AwakeSet.hpp: written by the sleep phase, read by the others).
     const AwakeSet& awakeSet() const { return awake_; }
 

@@ -347,6 +347,10 @@ void bindWorld(py::module_& m) {
         .def("rigidLoadChange", [](const World& w, int i) { piece(w, i); return w.rigidLoadChange(i); },
              py::arg("piece"),
              "A rigid piece's load change since it was made rigid, over its scale (compared with rigidWakeLoad).")
+        .def("rigidLoadStrain", [](const World& w, int i) { piece(w, i); return w.rigidLoadStrain(i); },
+             py::arg("piece"),
+             "The strain a rigid piece's load change since it was made rigid would make if it were deformable: "
+             "the change summed over its nodes over 2 E A (compared with rigidWakeStrain).")
         .def_property_readonly("sleepCount", &World::sleepCount, "Pieces put to sleep so far.")
         .def_property_readonly("wakeCount", &World::wakeCount, "Pieces woken so far.")
         .def("wake", [](World& w, int i) { piece(w, i); w.wake(i); }, py::arg("piece"),
