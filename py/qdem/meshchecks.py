@@ -74,15 +74,15 @@ def warnSlivers(world, pid, nodes=None, tets=None, materialIndex=None, density=N
     if nodes is not None and materialIndex is not None and density:
         median = min(r["medianElastic"], r["medianViscous"])
         if math.isfinite(median) and median > 0:
-            target = median / ADVISED_FACTOR
+            target = float(_roundUp(median / ADVISED_FACTOR, 4))  # as printed: at least median / 3
             added = np.asarray(world.core.massScaling(nodes, tets, materialIndex, target))
             x = np.asarray(nodes, dtype=float)[np.asarray(tets)]
             own = density * float(np.abs(np.einsum("ij,ij->i", x[:, 1] - x[:, 0], np.cross(
                 x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]))).sum()) / 6.0
             frac = float(added.sum()) / own
-            advice = (" qdem.addPiece(..., targetDt=%.4g%s) brings its step to %.3g x below the median element's "
+            advice = (" qdem.addPiece(..., targetDt=%s%s) brings its step to %.3g x below the median element's "
                       "by adding %.3g kg, %.3g %% of its mass, to the %d elements that need it;"
-                      % (target, ", maxAddedMass=%s" % _roundUp(1.05 * frac) if frac > 0.01 else "", ADVISED_FACTOR,
+                      % (_roundUp(target, 4), ", maxAddedMass=%s" % _roundUp(1.05 * frac) if frac > 0.01 else "", ADVISED_FACTOR,
                          float(added.sum()), 100 * frac, int(np.count_nonzero(added))))
     warnings.warn(
         "qdem.addPiece: piece %d's worst elements cut its stable step %.3g x below what its median element "
