@@ -43,11 +43,26 @@ def stepFactors(report):
             ratio(report["medianViscous"], report["stepViscous"]))
 
 
-def warnSlivers(world, pid):
+#: The step the advice of warnSlivers aims at: this factor below the median
+#: element's (what good CGAL meshes give, doc/meshes.md).
+ADVISED_FACTOR = 3.0
+
+
+def _roundUp(v, digits=2):
+    """v rounded up to ``digits`` significant digits, as text."""
+    e = math.floor(math.log10(v)) - digits + 1
+    return "%.*f" % (max(0, -e), math.ceil(v / 10.0 ** e) * 10.0 ** e)
+
+
+def warnSlivers(world, pid, nodes=None, tets=None, materialIndex=None, density=None):
     """RuntimeWarning when piece ``pid``'s worst elements cut its stable step
     more than SLIVER_FACTOR below its median element's (undamped steps, the
     shape's measure; with viscosity the cut is up to its square, both are
-    named); returns World.pieceStepReport's dict."""
+    named); returns World.pieceStepReport's dict.  Given the piece's placed
+    ``nodes``, ``tets``, its material's index and ``density``, the warning
+    names the ``targetDt`` that brings the step within ADVISED_FACTOR of the
+    median element's and the mass it adds (thin parts: their elements are
+    small, not misshapen, and improveMesh does not enlarge them)."""
     r = world.core.pieceStepReport(pid)
     fe, fv = stepFactors(r)
     if not fe > SLIVER_FACTOR:
@@ -55,15 +70,29 @@ def warnSlivers(world, pid):
     n = int(r["elementsNearLimit"])
     ids = ", ".join(str(i) for i in r["elements"]) + (", ..." if n > len(r["elements"]) else "")
     viscous = r["stepViscous"] < r["stepElastic"]
+    advice = ""
+    if nodes is not None and materialIndex is not None and density:
+        median = min(r["medianElastic"], r["medianViscous"])
+        if math.isfinite(median) and median > 0:
+            target = float(_roundUp(median / ADVISED_FACTOR, 4))  # as printed: at least median / 3
+            added = np.asarray(world.core.massScaling(nodes, tets, materialIndex, target))
+            x = np.asarray(nodes, dtype=float)[np.asarray(tets)]
+            own = density * float(np.abs(np.einsum("ij,ij->i", x[:, 1] - x[:, 0], np.cross(
+                x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]))).sum()) / 6.0
+            frac = float(added.sum()) / own
+            advice = (" qdem.addPiece(..., targetDt=%s%s) brings its step to %.3g x below the median element's "
+                      "by adding %.3g kg, %.3g %% of its mass, to the %d elements that need it;"
+                      % (_roundUp(target, 4), ", maxAddedMass=%s" % _roundUp(1.05 * frac) if frac > 0.01 else "", ADVISED_FACTOR,
+                         float(added.sum()), 100 * frac, int(np.count_nonzero(added))))
     warnings.warn(
         "qdem.addPiece: piece %d's worst elements cut its stable step %.3g x below what its median element "
         "allows: %.3g s instead of %.3g s%s. %d element%s within 2x of that step (tetrahedra %s of the mesh, "
         "smallest step first), the worst of shape quality %.3g (min height / longest edge; a regular "
-        "tetrahedron has 0.816). Remedies: %s."
+        "tetrahedron has 0.816). Remedies:%s %s."
         % (pid, fe, r["stepElastic"], r["medianElastic"],
            " (with the material's viscosity %.3g x: %.3g s instead of %.3g s)" % (fv, r["stepViscous"],
                                                                              r["medianViscous"]) if viscous else "",
-           n, " lies" if n == 1 else "s lie", ids, r["worstQuality"], _REMEDIES),
+           n, " lies" if n == 1 else "s lie", ids, r["worstQuality"], advice, _REMEDIES),
         RuntimeWarning, stacklevel=_userStacklevel())
     return r
 

@@ -212,7 +212,8 @@ class World:
         if tetOldOf is not None:
             self.core.setTetIds(pid, tetOldOf)
         # What the mesh's shape and size say (doc/meshes.md, "What the checks say").
-        meshchecks.warnSlivers(self, pid)
+        meshchecks.warnSlivers(self, pid, x, tets, index if tetMats is None and targetDt is None else None,
+                               material.density)
         p._unitsNote = meshchecks.warnUnits(self, pid, x, tets, material)
         if not p._unitsNote[0]:  # (a mesh in millimetres is named as such, not as a small radius)
             meshchecks.warnRadius(pid, x, tets, material)
