@@ -153,7 +153,11 @@ inline SettingRange oneOf(std::vector<std::string> names) {
     X(double, rigidWakeLoad, "rigidWakeLoad", 0.1, positive(),                                                       \
       "rigidify: a rigid piece becomes deformable again when the load deforming it (its nodes' forces less their "  \
       "share of the rigid acceleration, in the body frame) differs from the one it was made rigid under by more "   \
-      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")
+      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")                \
+    X(bool, nodeSpringTestOn, "nodeSpringTest", false, anyValue(),                                                   \
+      "A test-only contact kind between pieces (doc/architecture.md, 'Add a contact kind'): surface nodes of "      \
+      "different pieces closer than r_a + r_b bond at their distance then, with a spring k = E r / 10 [N/m] that "  \
+      "breaks when stretched to r_a + r_b. Not a physical model: it proves a kind with history is one file.")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;
