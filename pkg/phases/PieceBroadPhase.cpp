@@ -204,19 +204,19 @@ PieceBroadPhase::Plan PieceBroadPhase::plan(unsigned lists) {
     return p;
 }
 
-void PieceBroadPhase::registerElements(Plan& p) {
+void PieceBroadPhase::registerElements(Plan& pl) {
     const SurfaceIndex& S = w_.surface;
     const double* X = w_.pos.data();
-    const auto np = p.np;
-    const auto triLists = p.triLists;
-    const auto edgeLists = p.edgeLists;
-    const auto tetItems = p.tetItems;
-    const auto allTets = p.allTets;
-    const auto grow = p.grow;
-    const auto cur = p.cur;
-    const auto rebuild = p.rebuild;
-    const auto edgeRebuild = p.edgeRebuild;
-    const auto registerNow = p.registerNow;
+    const auto np = pl.np;
+    const auto triLists = pl.triLists;
+    const auto edgeLists = pl.edgeLists;
+    const auto tetItems = pl.tetItems;
+    const auto allTets = pl.allTets;
+    const auto grow = pl.grow;
+    const auto cur = pl.cur;
+    const auto rebuild = pl.rebuild;
+    const auto edgeRebuild = pl.edgeRebuild;
+    const auto registerNow = pl.registerNow;
     // Piece ip's candidate items: a range of ids (its triangles; its tets or
     // surface tets in the seed's cases A/B/C); the ones registered are
     // written from the start of that range, then packed.
@@ -309,21 +309,21 @@ void PieceBroadPhase::registerElements(Plan& p) {
             st_.edgeStart[ip + 1] = static_cast<int32_t>(k - S.pieceEdgeStart[ip]);
         }
     }
-    p.itemR = itemR, p.edgeR = edgeR;
+    pl.itemR = itemR, pl.edgeR = edgeR;
 }
 
-void PieceBroadPhase::packAndGrid(const Plan& p, unsigned lists) {
+void PieceBroadPhase::packAndGrid(const Plan& pl, unsigned lists) {
     const SurfaceIndex& S = w_.surface;
-    const auto np = p.np;
-    const auto tetItems = p.tetItems;
-    const auto allTets = p.allTets;
-    const auto rMax = p.rMax;
-    const auto grow = p.grow;
-    const auto rebuild = p.rebuild;
-    const auto edgeRebuild = p.edgeRebuild;
-    const auto registerNow = p.registerNow;
-    const auto itemR = p.itemR;
-    const auto edgeR = p.edgeR;
+    const auto np = pl.np;
+    const auto tetItems = pl.tetItems;
+    const auto allTets = pl.allTets;
+    const auto rMax = pl.rMax;
+    const auto grow = pl.grow;
+    const auto rebuild = pl.rebuild;
+    const auto edgeRebuild = pl.edgeRebuild;
+    const auto registerNow = pl.registerNow;
+    const auto itemR = pl.itemR;
+    const auto edgeR = pl.edgeR;
     const auto npi = static_cast<int32_t>(np);
     // Pack the pieces' stretches (each moves down or stays: order kept).
     if (rebuild) {
@@ -366,13 +366,13 @@ void PieceBroadPhase::packAndGrid(const Plan& p, unsigned lists) {
     }
 }
 
-void PieceBroadPhase::buffersAndNormals(const Plan& p) {
+void PieceBroadPhase::buffersAndNormals(const Plan& pl) {
     const SurfaceIndex& S = w_.surface;
     const double* X = w_.pos.data();
-    const auto np = p.np;
-    const auto tetItems = p.tetItems;
-    const auto rebuild = p.rebuild;
-    const auto windowStart = p.windowStart;
+    const auto np = pl.np;
+    const auto tetItems = pl.tetItems;
+    const auto rebuild = pl.rebuild;
+    const auto windowStart = pl.windowStart;
     // Thread force buffers, one per thread, 3 per surface node.
     const int nth = omp_get_max_threads();
     if (static_cast<int>(st_.threadForce.size()) != nth) st_.threadForce.assign(nth, {});
@@ -427,18 +427,19 @@ void PieceBroadPhase::buffersAndNormals(const Plan& p) {
     for (std::size_t ip = 0; ip < np && w_.sleeping.nAsleep() > 0; ++ip) normalsFresh_[ip] = w_.sleeping.asleep(ip) && st_.pieceActive[ip];
 }
 
-void PieceBroadPhase::nodeLists(const Plan& p) {
+void PieceBroadPhase::nodeLists(const Plan& pl) {
+    const SurfaceIndex& S = w_.surface;
     const double* X = w_.pos.data();
-    const auto np = p.np;
-    const auto triLists = p.triLists;
-    const auto verlet = p.verlet;
-    const auto skin = p.skin;
-    const auto dom = p.dom;
-    const auto spread = p.spread;
-    const auto rebuild = p.rebuild;
-    const auto windowStart = p.windowStart;
-    const auto finishWindow = p.finishWindow;
-    const auto movedNow = p.movedNow;
+    const auto np = pl.np;
+    const auto triLists = pl.triLists;
+    const auto verlet = pl.verlet;
+    const auto skin = pl.skin;
+    const auto dom = pl.dom;
+    const auto spread = pl.spread;
+    const auto rebuild = pl.rebuild;
+    const auto windowStart = pl.windowStart;
+    const auto finishWindow = pl.finishWindow;
+    const auto movedNow = pl.movedNow;
     if (verlet && triLists && (rebuild || st_.windowNext >= 0)) {
         // Each surface node's candidate triangles: bounding sphere grown by
         // reach + skin holds the node.
@@ -560,12 +561,12 @@ void PieceBroadPhase::nodeLists(const Plan& p) {
     }
 }
 
-void PieceBroadPhase::edgeLists(const Plan& p) {
+void PieceBroadPhase::edgeLists(const Plan& pl) {
     const SurfaceIndex& S = w_.surface;
-    const auto verlet = p.verlet;
-    const auto grow = p.grow;
-    const auto edgeRebuild = p.edgeRebuild;
-    const auto edgeLists = p.edgeLists;
+    const auto verlet = pl.verlet;
+    const auto grow = pl.grow;
+    const auto edgeRebuild = pl.edgeRebuild;
+    const auto edgeLists = pl.edgeLists;
     if (verlet && edgeRebuild && edgeLists) {
         // Each registered edge's candidate edges of higher pieces (each pair once).
         const int32_t ne = st_.registeredEdges();

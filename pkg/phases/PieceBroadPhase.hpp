@@ -58,11 +58,11 @@ private:
     };
     void pairLaws();
     Plan plan(unsigned lists);
-    void registerElements(Plan& p);
-    void packAndGrid(const Plan& p, unsigned lists);
-    void buffersAndNormals(const Plan& p);
-    void nodeLists(const Plan& p);
-    void edgeLists(const Plan& p);
+    void registerElements(Plan& pl);
+    void packAndGrid(const Plan& pl, unsigned lists);
+    void buffersAndNormals(const Plan& pl);
+    void nodeLists(const Plan& pl);
+    void edgeLists(const Plan& pl);
 
     PieceContactData w_;
     PieceContactState& st_;
