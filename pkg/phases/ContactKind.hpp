@@ -61,6 +61,8 @@ public:
     virtual void checkFields(const WorldState&) const {}
     virtual void loadFields(const WorldState&, const PieceContactData&) {}
     virtual void report(PhaseReport&) const {}
+    // Every step, before any kind runs (or none does): its own counters zeroed.
+    virtual void newStep() {}
     // Under MPI, the halo it needs [m]: every node a contact reads lies
     // within this distance of the node whose owner computes the contact.
     // rMax: the largest particle radius; hMax: the longest surface edge.

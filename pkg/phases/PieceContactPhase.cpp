@@ -94,7 +94,7 @@ void PieceContactPhase::report(PhaseReport& r) const {
     for (std::size_t i = 0; i < kinds_.size(); ++i) {
         r.seconds.push_back({kinds_[i].row->name, kinds_[i].seconds + (i == 0 ? sumSeconds_ : 0.0)});
         r.counts.push_back({kinds_[i].row->name, kinds_[i].contacts});
-        if (kinds_[i].ran) kinds_[i].kernel->report(r);  // (its own counters: of the last step it ran)
+        kinds_[i].kernel->report(r);
     }
 }
 
@@ -124,7 +124,7 @@ void PieceContactPhase::addLoadWeights(double* perNode, double work) const {
 
 void PieceContactPhase::run(double dt) {
     broadSeconds_ = sumSeconds_ = 0;
-    for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0, k.ran = false;  // (a step with no pieces near runs none)
+    for (Kind& k : kinds_) k.seconds = 0, k.contacts = 0, k.kernel->newStep();  // (a step with no pieces near runs none)
     maxOverlap_ = maxDepthRatio_ = 0;
     stepLimit_ = ContactStepLimit{};
     const std::size_t np = w_.pieces.size();
@@ -160,7 +160,6 @@ void PieceContactPhase::run(double dt) {
         const double tk = omp_get_wtime();
         k.contacts = k.kernel->run(ks);
         k.seconds = omp_get_wtime() - tk;
-        k.ran = true;
     }
     finishStartCheck();
     for (const DeepContact& d : threadDeep_) maxDepthRatio_ = std::max(maxDepthRatio_, d.ratio);

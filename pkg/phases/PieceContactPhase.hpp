@@ -153,7 +153,6 @@ private:
         std::unique_ptr<ContactKind> kernel;
         double seconds = 0;
         long contacts = 0;
-        bool ran = false;  // in the last step
     };
     std::vector<Kind> kinds_;  // in table order
     bool kindOn(const Kind& k) const;

@@ -26,6 +26,7 @@ public:
     // Cases A/B: interior faces tested for nothing, and of them those within
     // reach; triangles read from the Verlet lists.
     void report(PhaseReport& r) const override;
+    void newStep() override { interiorTests_ = interiorNear_ = listed_ = 0; }
     // A contact is the owner's of its node; the triangle's corners lie
     // within reach r_a + r_b <= 2 rMax of the node's closest point on it, and
     // within hMax of that point.
