@@ -27,7 +27,7 @@ def build():
     c = w.core
     c.pointPolygonOn = False
     c.edgeEdgeOn = False
-    c.nodeSpringTest = True
+    c.nodeSpringTestOn = True
     c.gravity = (0, 0, 0)
     return w
 
