@@ -4,17 +4,20 @@
 // as its rest length, pulling or pushing f = k (d - d0) along the line of
 // centres, k = E_min r_min / 10, until stretched to R (it breaks).  Its
 // history - the other node (piece, surface node within that piece) and d0 -
-// is keyed by stable ids, kept per surface node, saved in restarts and moved
-// with its node between MPI ranks.  It is switched off by default
+// is keyed by stable ids, kept per surface node, saved in restarts (as
+// fields: older files load with no bonds) and moved with its node between
+// MPI ranks.  It is switched off by default
 // (QdemEngine.nodeSpringTest): it exists to prove that a kind with history
 // is one file, one row and one switch line (tests/arch/check_kind_files.py,
 // tests/cpp/test_contact_kind_history.cpp, tests/python/test_mpi_contact_kind_history.py).
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
 
 #include "../core/Column.hpp"
 #include "../parallel/Domain.hpp"
+#include "../step/WorldState.hpp"
 #include "ContactKind.hpp"
 #include "PieceContactPhase.hpp"
 
@@ -94,11 +97,37 @@ public:
         piece_.resize(kSlots * ns, -1);
         rest_.resize(kSlots * ns, 0.0);
     }
+    // Migrated with their nodes (columns), saved in restarts as fields: a
+    // state saved without this kind (an older file) loads with no bonds.
     void stateColumns(StateColumns& c) override {
-        c.add("nsOther", other_, Rows::SurfaceNode);
-        c.add("nsPiece", piece_, Rows::SurfaceNode);
-        c.add("nsRest", rest_, Rows::SurfaceNode);
-        c.add("nsStamp", stamp_, Rows::SurfaceNode);
+        c.add("nsOther", other_, Rows::SurfaceNode, false);
+        c.add("nsPiece", piece_, Rows::SurfaceNode, false);
+        c.add("nsRest", rest_, Rows::SurfaceNode, false);
+        c.add("nsStamp", stamp_, Rows::SurfaceNode, false);
+    }
+    void saveFields(WorldState& s) const override {
+        s.put("nsOther", other_.data(), other_.size());
+        s.put("nsPiece", piece_.data(), piece_.size());
+        s.put("nsRest", rest_.data(), rest_.size());
+        s.put("nsStamp", stamp_.data(), stamp_.size());
+    }
+    void checkFields(const WorldState& s) const override {
+        if (s.fields.count("nsOther") == 0) return;
+        s.check<int32_t>("nsOther", other_.size());
+        s.check<int32_t>("nsPiece", piece_.size());
+        s.check<double>("nsRest", rest_.size());
+        s.check<long>("nsStamp", stamp_.size());
+    }
+    void loadFields(const WorldState& s, const PieceContactData&) override {
+        if (s.fields.count("nsOther") == 0) {
+            other_.fill(-1);
+            std::fill(stamp_.begin(), stamp_.end(), -2);
+            return;
+        }
+        s.get("nsOther", other_.data(), other_.size());
+        s.get("nsPiece", piece_.data(), piece_.size());
+        s.get("nsRest", rest_.data(), rest_.size());
+        s.get("nsStamp", stamp_.data(), stamp_.size());
     }
     // The other node lies within R <= 2 rMax of the querying one.
     double haloReach(double rMax, double /*hMax*/) const override { return 2 * rMax; }
