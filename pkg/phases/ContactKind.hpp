@@ -6,10 +6,13 @@
 // in table order, after the broad phase (neighbour pieces, their boxes and
 // the Verlet/cell lists of the seed's two kinds).  A kind adds its forces on
 // surface nodes into the per-thread buffers of KindStep and its energies and
-// contact count into the step's tallies; it declares its own restart columns
-// and counters.  Adding a kind: one file with its ContactKind class, and one
-// row (addContactKind, or a line in ContactKinds.cpp) - doc/architecture.md;
-// tests/cpp/test_contact_kind_table.cpp adds a test-only kind that way.
+// contact count into the step's tallies; it owns its history (restart
+// columns and fields), its counters, and declares its halo reach under MPI
+// and its share of the load weights.  Adding a kind: one file with its
+// ContactKind class (pkg/phases/*Kind.cpp), one row in ContactKinds.cpp (or
+// addContactKind) and its switch line in QDEM_SETTINGS - doc/architecture.md;
+// NodeSpringKind.cpp is a test-only kind with history added that way
+// (tests/arch/check_kind_files.py counts the files).
 #pragma once
 #include <cstdint>
 #include <memory>

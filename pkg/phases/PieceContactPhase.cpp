@@ -1,7 +1,8 @@
-// Piece-piece surface contacts (seed paper §3-4): which pieces can touch,
-// registration in cell lists, Verlet lists, and the phase driver.  The two
-// contact kinds are in PointPolygon.cpp and EdgeEdge.cpp.  Derivations and
-// the rules that keep forces continuous: doc/contacts.md.
+// Piece-piece surface contacts (seed paper §3-4): the loop over the contact
+// kinds (ContactKind.hpp) after the broad phase (PieceBroadPhase.cpp), and
+// its bookkeeping: surface spins, the start and depth checks, the sum of the
+// thread buffers with the run-time step limit.  Derivations and the rules
+// that keep forces continuous: doc/contacts.md.
 #include <omp.h>
 
 #include <algorithm>

@@ -1,8 +1,9 @@
-// Piece-piece surface contacts (seed paper §3-4): which pieces can touch
-// (sweep and prune on their boxes), registration of surface elements in cell
-// lists, Verlet lists, then the contact kinds: point-polygon
-// (PointPolygon.cpp) and edge-edge (EdgeEdge.cpp).  Owns the lists and the
-// contact histories.  Derivations and rules: doc/contacts.md.
+// Piece-piece surface contacts (seed paper §3-4): its broad phase
+// (PieceBroadPhase: which pieces can touch, cell lists, Verlet lists), then
+// the contact kinds of the table (ContactKind.hpp), each a class owning its
+// history: point-polygon (PointPolygonKind), edge-edge (EdgeEdgeKind); then
+// their per-thread forces summed into the nodes.  Derivations and rules:
+// doc/contacts.md.
 #pragma once
 #include <cstddef>
 #include <cstdint>
