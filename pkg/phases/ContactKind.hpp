@@ -11,7 +11,7 @@
 // and its share of the load weights.  Adding a kind: one file with its
 // ContactKind class (pkg/phases/*Kind.cpp), one row in ContactKinds.cpp (or
 // addContactKind) and its switch line in QDEM_SETTINGS - doc/architecture.md;
-// NodeSpringKind.cpp is a test-only kind with history added that way
+// a test-only kind with history is added that way
 // (tests/arch/check_kind_files.py counts the files).
 #pragma once
 #include <cstdint>
