@@ -6,10 +6,13 @@
 // in table order, after the broad phase (neighbour pieces, their boxes and
 // the Verlet/cell lists of the seed's two kinds).  A kind adds its forces on
 // surface nodes into the per-thread buffers of KindStep and its energies and
-// contact count into the step's tallies; it declares its own restart columns
-// and counters.  Adding a kind: one file with its ContactKind class, and one
-// row (addContactKind, or a line in ContactKinds.cpp) - doc/architecture.md;
-// tests/cpp/test_contact_kind_table.cpp adds a test-only kind that way.
+// contact count into the step's tallies; it owns its history (restart
+// columns and fields), its counters, and declares its halo reach under MPI
+// and its share of the load weights.  Adding a kind: one file with its
+// ContactKind class (pkg/phases/*Kind.cpp), one row in ContactKinds.cpp (or
+// addContactKind) and its switch line in QDEM_SETTINGS - doc/architecture.md;
+// a test-only kind with history is added that way
+// (tests/arch/check_kind_files.py counts the files).
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -22,6 +25,8 @@
 
 namespace qdem {
 
+struct WorldState;
+
 class PieceContactPhase;
 struct PieceContactState;
 
@@ -30,11 +35,16 @@ struct KindStep {
     double dt;
     bool friction;                     // settings.frictionOn
     const PieceContactData& world;     // what the phase declares of the world, read-only to kinds
+    // The phase's services to its kinds: which pieces are frozen (asleep
+    // among sleepers), the deepest contact per thread, the start check.
     PieceContactPhase& phase;
     const PieceContactState& lists;    // neighbour pieces (nbrStart/nbrs), active pieces, Verlet lists
     // Per thread, 3 per surface node (index into World::surfNodes): the
     // forces this step's kinds add; summed into the nodes after the last kind.
     std::vector<std::vector<double>>& threadForce;
+    // Per thread, 2 per surface node: the contacts' stiffness and dashpot
+    // load (ContactLoad.hpp), summed with the forces.
+    std::vector<std::vector<double>>& threadLoad;
     // Tallies: dissipated by dashpots and sliding [J], largest overlap [m].
     double eDamp = 0, eSlip = 0, maxOverlap = 0;
 };
@@ -47,8 +57,23 @@ public:
     virtual long run(KindStep& s) = 0;
     // Growth of its history with the surfaces (pieces added).
     virtual void piecesAdded(const PieceContactData&) {}
+    // Its history as restart columns (rows: SurfaceNode or Edge, so MPI
+    // migration moves them with their owner), and state that is no column.
     virtual void stateColumns(StateColumns&) {}
+    virtual void saveFields(WorldState&) const {}
+    virtual void checkFields(const WorldState&) const {}
+    virtual void loadFields(const WorldState&, const PieceContactData&) {}
     virtual void report(PhaseReport&) const {}
+    // Every step, before any kind runs (or none does): its own counters zeroed.
+    virtual void newStep() {}
+    // Under MPI, the halo it needs [m]: every node a contact reads lies
+    // within this distance of the node whose owner computes the contact.
+    // rMax: the largest particle radius; hMax: the longest surface edge.
+    virtual double haloReach(double /*rMax*/, double /*hMax*/) const { return 0; }
+    // Its share of the partition's load weights (Domain::partitionInput),
+    // once per rebalance: `work` per contact of the last step, added to
+    // perNode (indexed by node) at the nodes whose owner computes it.
+    virtual void addLoadWeights(const PieceContactData&, double* /*perNode*/, double /*work*/) const {}
 };
 
 // What a kind needs the broad phase to register (bits of ContactKindRow::lists):

@@ -2,34 +2,19 @@
 // against piece surfaces are the SpherePhase's (the spheres are YADE's
 // bodies, not pieces): doc/architecture.md lists that kind beside these.
 #include "ContactKind.hpp"
-#include "PieceContactPhase.hpp"
+#include "EdgeEdgeKind.hpp"
+#include "PointPolygonKind.hpp"
 
 namespace qdem {
 
+std::unique_ptr<ContactKind> makeNodeSpringKind();  // NodeSpringKind.cpp (test-only)
+
 namespace {
 
-// The kernel of the seed's two kinds: the phase's point-polygon or edge-edge
-// pass, with or without friction.
-enum class SeedKind { PointPolygon, EdgeEdge };
-
-template <SeedKind K>
-class SeedKernel final : public ContactKind {
-public:
-    long run(KindStep& s) override {
-        long n = 0;
-        if constexpr (K == SeedKind::PointPolygon) {
-            if (s.friction) s.phase.pointPolygon<true>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-            else s.phase.pointPolygon<false>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        } else {
-            if (s.friction) s.phase.edgeEdge<true>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-            else s.phase.edgeEdge<false>(s.dt, s.eDamp, s.eSlip, n, s.maxOverlap);
-        }
-        return n;
-    }
-};
-
-std::unique_ptr<ContactKind> makePointPolygon() { return std::make_unique<SeedKernel<SeedKind::PointPolygon>>(); }
-std::unique_ptr<ContactKind> makeEdgeEdge() { return std::make_unique<SeedKernel<SeedKind::EdgeEdge>>(); }
+template <class Kind>
+std::unique_ptr<ContactKind> make() {
+    return std::make_unique<Kind>();
+}
 
 std::vector<ContactKindRow>& table() {
     static std::vector<ContactKindRow> rows = {
@@ -38,11 +23,14 @@ std::vector<ContactKindRow>& table() {
          "A/B/C: tetrahedra)",
          "6 slots per surface node: other piece, 8 x local triangle + feature, tangential spring, born-deep "
          "reference",
-         &Settings::pointPolygonOn, &makePointPolygon, RegisterSurfaceTriangles},
+         &Settings::pointPolygonOn, &make<PointPolygonKind>, RegisterSurfaceTriangles},
         {"edgeEdge", "feature edges near other pieces (box grids, Verlet lists of each registered edge)",
          "4 slots per surface edge (owned by the lower piece): other piece, local edge, side, tangential spring, "
          "born-deep reference",
-         &Settings::edgeEdgeOn, &makeEdgeEdge, RegisterFeatureEdges},
+         &Settings::edgeEdgeOn, &make<EdgeEdgeKind>, RegisterFeatureEdges},
+        {"nodeSpringTest", "nothing (surface nodes of neighbour pieces, all pairs)",
+         "4 slots per surface node: other piece, its surface node, rest length", &Settings::nodeSpringTestOn,
+         &makeNodeSpringKind, RegisterNothing},
     };
     return rows;
 }

@@ -486,6 +486,13 @@ void ObstaclePhase::stateColumns(StateColumns& c) {
     c.add("slotSide", slotSide_, Rows::SurfaceNode);
 }
 
+void ObstaclePhase::addLoadWeights(double* perNode, double work) const {
+    const std::size_t ns = w_.surfNodes.size();
+    for (std::size_t i = 0; i < ns; ++i)
+        for (int j = 0; j < kSlots; ++j)
+            if (slotBody_[kSlots * i + j] >= 0) perNode[w_.surfNodes[i]] += work;
+}
+
 void ObstaclePhase::piecesAdded() {
     const std::size_t ns = w_.surfNodes.size();
     slotBody_.resize(kSlots * ns, -1);

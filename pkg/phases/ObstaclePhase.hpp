@@ -57,6 +57,8 @@ public:
     }
     void stateColumns(StateColumns& c) override;
     void piecesAdded() override;
+    // `work` per slot holding a wall contact, on its node.
+    void addLoadWeights(double* perNode, double work) const override;
     // A loaded state continues a run: its contacts with obstacles are not a
     // set-up mistake (a new obstacle list still gets checked).
     void stateLoaded() override;

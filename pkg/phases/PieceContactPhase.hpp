@@ -1,8 +1,9 @@
-// Piece-piece surface contacts (seed paper §3-4): which pieces can touch
-// (sweep and prune on their boxes), registration of surface elements in cell
-// lists, Verlet lists, then the contact kinds: point-polygon
-// (PointPolygon.cpp) and edge-edge (EdgeEdge.cpp).  Owns the lists and the
-// contact histories.  Derivations and rules: doc/contacts.md.
+// Piece-piece surface contacts (seed paper §3-4): its broad phase
+// (PieceBroadPhase: which pieces can touch, cell lists, Verlet lists), then
+// the contact kinds of the table (ContactKind.hpp), each a class owning its
+// history: point-polygon (PointPolygonKind), edge-edge (EdgeEdgeKind); then
+// their per-thread forces summed into the nodes.  Derivations and rules:
+// doc/contacts.md.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -19,6 +20,7 @@
 #include "../step/Phase.hpp"
 #include "ContactKind.hpp"
 #include "ContactLoad.hpp"
+#include "PieceBroadPhase.hpp"
 #include "PieceContactData.hpp"
 #include "PieceContactState.hpp"
 
@@ -82,8 +84,7 @@ public:
         return frozen_[piece] != 0 && sleepSeen_[piece] == w_.sleeping.changes(piece);
     }
 
-    // The narrow phases of the seed's two kinds (their rows' kernels call
-    // them: ContactKinds.cpp).
+    // What the kinds use of the phase (KindStep::phase).
     // The deepest contact of a thread in this step (see maxDepthRatio), and
     // the deepest of those past the reach that the per-step check judges:
     // depth of the node (edge crossing) behind the other surface, reach,
@@ -105,11 +106,34 @@ public:
         d.depth = depth, d.reach = reach, d.vn = vn, d.node = node, d.pa = pa, d.pb = pb, d.edge = edge;
     }
     DeepContact& threadDeep(int thread) { return threadDeep_[thread]; }
-
-    template <bool Friction>
-    void pointPolygon(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
-    template <bool Friction>
-    void edgeEdge(double dt, double& eDamp, double& eSlip, long& count, double& maxOv);
+    // Per piece: asleep with all its neighbours asleep this step (its
+    // contacts are skipped, their history kept: the kind stamps it).
+    const uint8_t* frozenFlags() const { return frozen_.data(); }
+    // The start check (PieceStartOverlap.cpp) runs this step: a kind that
+    // sees a node inside another piece notes the pair (noteStartSeen), one
+    // whose springs start pressed notes their energy (notePress); pairs of
+    // two checked pieces (startChecked) are not noted.
+    bool startPending() const { return startPending_; }
+    const uint8_t* startCheckedFlags() const { return startChecked_.data(); }
+    void noteStartSeen(int32_t pa, int32_t pb) {
+        auto& seen = threadStartSeen_[omp_get_thread_num()];
+        const std::pair<int32_t, int32_t> ab{std::min(pa, pb), std::max(pa, pb)};
+        if (seen.empty() || seen.back() != ab) seen.push_back(ab);
+    }
+    void notePress(int32_t pa, int32_t pb, double energy, double overlap) {
+        auto& v = threadStartPress_[omp_get_thread_num()];
+        const int32_t a = std::min(pa, pb), b = std::max(pa, pb);
+        if (v.empty() || v.back().a != a || v.back().b != b) v.push_back({a, b, 0.0, 0.0});
+        v.back().energy += energy;
+        v.back().overlap = std::max(v.back().overlap, overlap);
+    }
+    // The kind of the table named `name` (nullptr: none), e.g. to read its history.
+    const ContactKind* kind(const char* name) const;
+    // Under MPI (Domain): the halo the switched-on kinds need [m] (0: none
+    // on, or fewer than two pieces), and their contacts of the last step.
+    double haloReach(double rMax, double hMax) const;
+    long contacts() const;
+    void addLoadWeights(double* perNode, double work) const override;
 
     const Data& data() const { return w_; }
     // Some kind of the table is switched on (pieces then have neighbour lists).
@@ -125,7 +149,6 @@ public:
 
 private:
     Data w_;
-    long listDomainVersion_ = -1;  // Domain::currentVersion the Verlet lists were built for
     struct Kind {
         const ContactKindRow* row;
         std::unique_ptr<ContactKind> kernel;
@@ -138,6 +161,9 @@ private:
     unsigned listsWanted() const;
 
     PieceContactState st_;
+    PieceBroadPhase broad_;  // fills st_ (after it: constructed with it)
+    // After the kinds: the thread buffers into the nodes' forces and loads.
+    void sumForces(double dt, const KindStep& ks);
     // Fills st_.surfSpin for this step (SurfaceSpin.hpp); its time and nodes.
     void surfaceSpins();
     double spinSeconds_ = 0;
@@ -169,28 +195,13 @@ private:
         double energy, overlap;
     };
     std::vector<std::vector<StartPress>> threadStartPress_;
-    void notePress(int32_t pa, int32_t pb, double energy, double overlap) {
-        auto& v = threadStartPress_[omp_get_thread_num()];
-        const int32_t a = std::min(pa, pb), b = std::max(pa, pb);
-        if (v.empty() || v.back().a != a || v.back().b != b) v.push_back({a, b, 0.0, 0.0});
-        v.back().energy += energy;
-        v.back().overlap = std::max(v.back().overlap, overlap);
-    }
-    long interiorFaceTests_ = 0, interiorFaceNear_ = 0;
-    // Point-polygon from the Verlet lists: triangles listed for the nodes.
-    long listedTriangles_ = 0;
     std::vector<uint8_t> frozen_;        // per piece: asleep with all neighbours asleep (contacts skipped)
-    std::vector<uint8_t> normalsFresh_;  // per piece: asleep, triangle normals computed since it stopped
-    // Per piece: the awake set's change count (AwakeSet::changes) last seen,
-    // and whether the Verlet lists were rebuilt since (its moved2 is then 0).
+    // Per piece: the awake set's change count (AwakeSet::changes) last seen.
     std::vector<uint32_t> sleepSeen_;
-    std::vector<uint8_t> listsSinceSleep_;
     // Before anything reads them: a piece that fell asleep or woke since the
     // last run has its normals and frozen flag cleared, and its displacement
     // since the lists (AwakeSet::moved2) counts until they are rebuilt.
     void noteSleepChanges();
-    std::vector<PairConst> matPairLaw_;  // per step: the law's constants per pair of materials (a, b)
-    std::vector<uint8_t> matPairDone_;   // and which of them this step has computed
 
     // A piece that starts inside another piece deeper than the contact can
     // see is refused (PieceStartOverlap.cpp), once per piece: the first step

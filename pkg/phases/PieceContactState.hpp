@@ -40,7 +40,6 @@ struct PieceContactState {
     // friction on, for the nodes of active pieces (under MPI the current ones).
     std::vector<double> surfSpin;
     std::vector<uint8_t> spinPiece;  // per piece: its surface spins are computed this step
-    std::vector<long> ppStamp, eeStamp;         // step at which a history slot set was last used
 
     // Verlet lists (default broad phase): per surface node, the triangles of
     // other pieces within reach + skin at the last rebuild.  Valid until some
@@ -128,35 +127,7 @@ struct PieceContactState {
     // no log or root per contact.
     std::vector<PairConst> nbrLaw;
     std::vector<double> pieceRadius;
-
-    // Contact histories are keyed by stable ids (the other piece, and a local
-    // id within it: ContactDetail.hpp historyKey), never by global array
-    // index, so they survive renumbering (pieces added, MPI migration).
-    // Point-polygon history: kPP slots per surface node.
-    static constexpr int kPP = 6;
-    Column<int32_t> ppKey, ppPiece;   // key = 8 * local triangle + feature; -1 = empty
-    Column<double> ppShear;
-    Column<double> ppRef;             // reference overlap of a contact born deep (0: none), doc/contacts.md §5
-    // Edge-edge history: kEE slots per surface edge (owned by the lower edge id).
-    static constexpr int kEE = 4;
-    Column<int32_t> eeOther, eePiece;  // the other edge: local edge id, piece; -1 = empty
-    Column<int8_t> eeSide;
-    Column<double> eeShear;
-    Column<double> eeRef;
-
-    void resizeHistory(std::size_t nSurfNodes, std::size_t nEdges) {
-        ppStamp.resize(nSurfNodes, -2);
-        eeStamp.resize(nEdges, -2);
-        ppKey.resize(kPP * nSurfNodes, -1);
-        ppPiece.resize(kPP * nSurfNodes, -1);
-        ppShear.resize(3 * kPP * nSurfNodes, 0.0);
-        ppRef.resize(kPP * nSurfNodes, 0.0);
-        eeOther.resize(kEE * nEdges, -1);
-        eePiece.resize(kEE * nEdges, -1);
-        eeSide.resize(kEE * nEdges, 0);
-        eeShear.resize(3 * kEE * nEdges, 0.0);
-        eeRef.resize(kEE * nEdges, 0.0);
-    }
+    // (The contact histories are the kinds': PointPolygonKind.hpp, EdgeEdgeKind.hpp.)
 };
 
 }  // namespace qdem

@@ -87,6 +87,10 @@ public:
     virtual void loadFields(const WorldState&) {}
     // A saved state was loaded (columns and fields): derived data is stale.
     virtual void stateLoaded() {}
+    // The partition's load weights (Domain::partitionInput), once per
+    // rebalance: `work` per contact of the last step, added to perNode
+    // (indexed by node) at the nodes whose owner computes the contact.
+    virtual void addLoadWeights(double* /*perNode*/, double /*work*/) const {}
 };
 
 }  // namespace qdem

@@ -161,7 +161,11 @@ inline SettingRange oneOf(std::vector<std::string> names) {
       "strain it by more than this (dimensionless): the change summed over its nodes, over 2 E A (E its softest "   \
       "Young modulus, A its volume over its largest extent).  A piece rocking on its support shifts about its "     \
       "weight (strain ~ rho g l / E) and stays rigid; a hit at speed v strains it far more.  0 = the load test "   \
-      "alone (doc/formulation.md, 'Adaptive rigidity').")
+      "alone (doc/formulation.md, 'Adaptive rigidity').")  \
+    X(bool, nodeSpringTestOn, "nodeSpringTest", false, anyValue(),                                                   \
+      "A test-only contact kind between pieces (doc/architecture.md, 'Add a contact kind'): surface nodes of "      \
+      "different pieces closer than r_a + r_b bond at their distance then, with a spring k = E r / 10 [N/m] that "  \
+      "breaks when stretched to r_a + r_b. Not a physical model: it proves a kind with history is one file.")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../core/Errors.hpp"
@@ -29,20 +30,12 @@ PartitionInput Domain::partitionInput(World& w, std::vector<int32_t>& pieceBegin
     in.tetNodes = w.tetNodes.data();
     in.nPieces = static_cast<int32_t>(w.pieces.size());
     in.pieceNodeBegin = pieceBegin.data();
-    // The contact work of each surface node: its contacts of the last step,
-    // read from the history columns (slots holding a contact are >= 0).
+    // The contact work of each node: its contacts of the last step, as the
+    // phases count them in their histories (Phase::addLoadWeights).
     extra.clear();
     if (w.settings.contactWork > 0 && w.iter > 0) {
         extra.assign(w.nNodes(), 0.0);
-        const std::size_t ns = w.surfNodes.size();
-        for (const auto& c : w.stateColumns().refs) {
-            if ((c.name != "slotBody" && c.name != "ppKey") || ns == 0) continue;
-            const auto* key = static_cast<const int32_t*>(c.data);
-            const std::size_t k = c.count / ns;
-            for (std::size_t i = 0; i < ns; ++i)
-                for (std::size_t j = 0; j < k; ++j)
-                    if (key[i * k + j] >= 0) extra[w.surfNodes[i]] += w.settings.contactWork;
-        }
+        for (const Phase* p : std::as_const(w).phases()) p->addLoadWeights(extra.data(), w.settings.contactWork);
         in.nodeExtraWeight = extra.data();
     }
     return in;
@@ -75,8 +68,7 @@ void Domain::build(const PartitionOptions& opt) {
     elementGhost_.assign(w_.nNodes(), 0);
     for (const auto& g : halo_.recv)
         for (const int32_t n : g) elementGhost_[n] = 1;
-    contactHalo_ = (w_.pieces.size() > 1 && (w_.settings.pointPolygonOn || w_.settings.edgeEdgeOn)) ||
-                   sphereRadius() > 0;
+    contactHalo_ = (w_.pieces.size() > 1 && w_.phases_->pieceContact.anyKindOn()) || sphereRadius() > 0;
     // The owned nodes the contact halo may send: those the contact phase
     // reads of another piece.  With the default broad phase, the surface
     // nodes; with the seed's cases (Settings.hpp BroadPhase) the nodes of the
@@ -298,15 +290,16 @@ void Domain::sendContactHalo() {
     comm_->allgather(mine, 8, all.data());
     double hMax = 0, rMax = 0;
     for (int r = 0; r < P; ++r) hMax = std::max(hMax, all[8 * r + 6]), rMax = std::max(rMax, all[8 * r + 7]);
-    // 5 % over the width: positions are the same on both sides, this is no
-    // skin, only room for rounding in the box tests.
-    double width = 1.05 * (2 * rMax + 2 * hMax);
+    // The reach the switched-on contact kinds declare (ContactKind::haloReach),
+    // 5 % over: positions are the same on both sides, this is no skin, only
+    // room for rounding in the box tests.
+    double width = 1.05 * w_.phases_->pieceContact.haloReach(rMax, hMax);
     // The seed's broad phases: a tet is a candidate when its bounding sphere
     // (radius <= its longest edge h) grown by 2r holds the node, so its nodes
     // lie within 2r + 2h of it; its surface face's neighbours read one edge
     // further: 2r + 3h.
     if (!haloTets_.empty() || w_.settings.broadPhase != BroadPhase::Triangles)
-        width = 1.05 * (2 * rMax + 3 * hMax);
+        width = std::max(width, 1.05 * (2 * rMax + 3 * hMax));
     // YADE spheres: a pair is computed by the owner of the lowest node of the
     // triangles whose bounding sphere (radius <= 2h/3 of its longest edge)
     // comes within R + r of the sphere's centre.  Their nodes lie within
@@ -627,7 +620,7 @@ double Domain::load() const {
     long contacts = 0;
     if (w_.settings.contactWork > 0) {
         const PhaseReport r = w_.report();
-        contacts = r.count("wall") + r.count("pointPolygon") + r.count("edgeEdge");
+        contacts = r.count("wall") + w_.phases_->pieceContact.contacts();
     }
     return static_cast<double>(halo_.ownedTets.size()) + w_.settings.contactWork * static_cast<double>(contacts);
 }

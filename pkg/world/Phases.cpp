@@ -2,6 +2,8 @@
 // World hands out of them.
 #include "Phases.hpp"
 
+#include "../phases/PointPolygonKind.hpp"
+
 #include "World.hpp"
 
 namespace qdem {
@@ -86,8 +88,12 @@ long World::verletRebuilds() const { return phases_->pieceContact.state().listBu
 long World::verletWindowSteps() const { return phases_->pieceContact.state().windowSteps; }
 bool World::verletWindowOpen() const { return phases_->pieceContact.state().windowNext >= 0; }
 const PieceContactState& World::pieceContactState() const { return phases_->pieceContact.state(); }
-const Column<int32_t>& World::pointPolygonKeys() const { return phases_->pieceContact.state().ppKey; }
-const Column<int32_t>& World::pointPolygonKeyPieces() const { return phases_->pieceContact.state().ppPiece; }
+const Column<int32_t>& World::pointPolygonKeys() const {
+    return static_cast<const PointPolygonKind*>(phases_->pieceContact.kind("pointPolygon"))->keys();
+}
+const Column<int32_t>& World::pointPolygonKeyPieces() const {
+    return static_cast<const PointPolygonKind*>(phases_->pieceContact.kind("pointPolygon"))->keyPieces();
+}
 double World::maxPieceOverlap() const { return phases_->pieceContact.maxOverlap(); }
 double World::maxPieceDepthRatio() const { return phases_->pieceContact.maxDepthRatio(); }
 

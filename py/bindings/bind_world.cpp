@@ -10,6 +10,7 @@
 #include "core/Errors.hpp"
 #include "core/Format.hpp"
 #include "phases/PieceContactState.hpp"
+#include "phases/PointPolygonKind.hpp"
 #include "world/World.hpp"
 
 namespace py = pybind11;
@@ -412,7 +413,7 @@ void bindWorld(py::module_& m) {
                 const auto& kpiece = w.pointPolygonKeyPieces();
                 const auto& triStart = w.surfaceIndex().pieceTriStart;
                 std::vector<int32_t> out;
-                const int K = PieceContactState::kPP;
+                const int K = PointPolygonKind::kSlots;
                 for (std::size_t s = 0; s < w.surfNodes.size(); ++s)
                     for (int k = 0; k < K; ++k) {
                         const int32_t key = keys[K * s + k];

@@ -42,7 +42,7 @@
 #include "element/ElementKernel.hpp"
 #include "element/MaterialLaw.hpp"
 #include "mesh/BoxMesh.hpp"
-#include "phases/PieceContactState.hpp"
+#include "phases/PointPolygonKind.hpp"
 #include "world/World.hpp"
 
 using namespace qdem;
@@ -444,7 +444,7 @@ TEST(StableStepProperty, PiecesRestingOnPieces) {
         // node's direction from the triangle point, tangential across it.
         int contacts = 0, bottom = 0;
         const SurfaceIndex& S = w.surfaceIndex();
-        constexpr int KP = PieceContactState::kPP;
+        constexpr int KP = PointPolygonKind::kSlots;
         for (std::size_t s = 0; s < w.surfNodes.size(); ++s)
             for (int slot = 0; slot < KP; ++slot) {
                 const int32_t key = w.pointPolygonKeys()[KP * s + slot];
