@@ -119,20 +119,21 @@ struct ContactStep {
 };
 
 // The sequence, with the step's constants: Friction is the kernel's compile-
-// time switch (friction on in the settings); a contact has friction when
-// also its pair's coefficient is positive.
+// time switch (friction on in the settings), frictionOn the same at run time
+// for a kernel compiled once for both; a contact has friction when both are
+// on and its pair's coefficient is positive.
 template <bool Friction, Reference Ref = Reference::Kept, class Model = MixedPairModel,
           class Law = SpringDashpotLaw>
 class ContactLoop {
 public:
-    ContactLoop(double dt, bool regularized, double regVelocity)
-        : dt_(dt), regularized_(regularized), regVelocity_(regVelocity) {}
+    ContactLoop(double dt, bool regularized, double regVelocity, bool frictionOn = true)
+        : dt_(dt), regularized_(regularized), frictionOn_(frictionOn), regVelocity_(regVelocity) {}
 
     double dt() const { return dt_; }
     bool regularized() const { return regularized_; }
     // Whether the contact's spring turns (and so whether the kind need
     // measure its spin): friction on, a positive coefficient, the spring law.
-    bool turns(const PairConst& c) const { return Friction && c.mu > 0 && !regularized_; }
+    bool turns(const PairConst& c) const { return Friction && frictionOn_ && c.mu > 0 && !regularized_; }
 
     // One contact: its reference (born deep, handed over), its force, its
     // new history slot (pushed onto `out`), its energy: the stored energy
@@ -157,7 +158,8 @@ public:
             if (h.handed > 0) s.ref = contact_detail::handOverRef(g.overlap, s.ref, h.handed);
             delta = g.overlap - s.ref;
         }
-        s.r = Law::force(Friction && s.p.friction > 0, regularized_, s.p, g.n, delta, g.vRel, dt_, sh, g.spin);
+        const bool friction = Friction && frictionOn_ && s.p.friction > 0;
+        s.r = Law::force(friction, regularized_, s.p, g.n, delta, g.vRel, dt_, sh, g.spin);
         out.shear[out.n] = h.shearScale != 0 ? Eigen::Vector3d(sh * h.shearScale) : sh;
         out.ref[out.n] = s.ref;
         ++out.n;
@@ -172,6 +174,7 @@ public:
 private:
     double dt_;
     bool regularized_;
+    bool frictionOn_;
     double regVelocity_;
 };
 

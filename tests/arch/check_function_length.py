@@ -21,9 +21,7 @@ LIMIT = 150
 ALLOWED = {
     "PieceContactPhase::run": 561,            # broad phase, Verlet lists (pkg/phases/PieceContactPhase.cpp)
     "PieceContactPhase::pointPolygon": 415,   # pkg/phases/PointPolygon.cpp
-    "ObstaclePhase::run": 322,                # pkg/phases/ObstaclePhase.cpp
     "PieceContactPhase::edgeEdge": 243,       # pkg/phases/EdgeEdge.cpp
-    "SpherePhase::sphereContacts": 192,       # pkg/phases/SpherePhase.cpp
 }
 
 CONTROL = {"if", "for", "while", "switch", "catch", "return", "sizeof", "decltype", "alignof", "static_assert",
