@@ -110,14 +110,6 @@ struct SpringDashpotLaw {
     }
 };
 
-// One contact's outcome, for what the kind does beyond the shared sequence
-// (its forces on its nodes, contact loads, depth checks).
-struct ContactStep {
-    ContactResult r;  // force on the query side, energies
-    ContactParams p;  // the constants the law used
-    double ref;       // the reference overlap kept: the spring acts on overlap - ref
-};
-
 // The sequence, with the step's constants: Friction is the kernel's compile-
 // time switch (friction on in the settings), frictionOn the same at run time
 // for a kernel compiled once for both; a contact has friction when both are
@@ -136,39 +128,43 @@ public:
     bool turns(const PairConst& c) const { return Friction && frictionOn_ && c.mu > 0 && !regularized_; }
 
     // One contact: its reference (born deep, handed over), its force, its
-    // new history slot (pushed onto `out`), its energy: the stored energy
-    // into *elastic (the piece's ledger entry, a thread tally; nullptr: not
-    // booked), dissipation into `tally` (nullptr: not booked).
+    // new history slot (pushed onto `out`: the reference kept is
+    // out.ref[out.n - 1], the spring acts on overlap - reference), its
+    // energy: the stored energy into *elastic (the piece's ledger entry, a
+    // thread tally; nullptr: not booked), dissipation into `tally` (nullptr:
+    // not booked).  Returns the force on the query side and the energies;
+    // the constants the law used go to *used (contact loads, dynamic
+    // obstacles; nullptr: not wanted).  (A plain ContactResult back, not a
+    // struct with the constants: returning those too changed how the
+    // compiler paired the callers' cross products into vector FMAs, and
+    // with it the last bits of a sphere's torque.)
     template <int K>
-    ContactStep touch(const PairConst& c, const ContactGeometry& g, const ContactHistory& h, NewSlots<K>& out,
-                      double* elastic, EnergyTally* tally) const {
-        ContactStep s;
-        s.p = Model::params(c, g, regVelocity_);
+    ContactResult touch(const PairConst& c, const ContactGeometry& g, const ContactHistory& h, NewSlots<K>& out,
+                        double* elastic, EnergyTally* tally, ContactParams* used = nullptr) const {
+        const ContactParams p = Model::params(c, g, regVelocity_);
         Eigen::Vector3d sh = Eigen::Vector3d::Zero();
         if (h.shear) {
             sh = Eigen::Vector3d(h.shear[0], h.shear[1], h.shear[2]);
             if (h.shearScale != 0) sh /= h.shearScale;
         }
-        double delta = g.overlap;
-        s.ref = 0.0;
+        double ref = 0.0;
         if constexpr (Ref == Reference::Kept) {
-            const bool carried = h.shear != nullptr;
-            s.ref = contact_detail::bornDeepRef(carried, carried ? *h.ref : 0.0, h.watched, g.overlap, h.threshold,
-                                                g.vRel.dot(g.n), dt_);
-            if (h.handed > 0) s.ref = contact_detail::handOverRef(g.overlap, s.ref, h.handed);
-            delta = g.overlap - s.ref;
+            ref = contact_detail::bornDeepRef(h.shear != nullptr, h.shear ? *h.ref : 0.0, h.watched, g.overlap,
+                                              h.threshold, g.vRel.dot(g.n), dt_);
+            if (h.handed > 0) ref = contact_detail::handOverRef(g.overlap, ref, h.handed);
         }
-        const bool friction = Friction && frictionOn_ && s.p.friction > 0;
-        s.r = Law::force(friction, regularized_, s.p, g.n, delta, g.vRel, dt_, sh, g.spin);
+        const bool friction = Friction && frictionOn_ && p.friction > 0;
+        const ContactResult r = Law::force(friction, regularized_, p, g.n, g.overlap - ref, g.vRel, dt_, sh, g.spin);
         out.shear[out.n] = h.shearScale != 0 ? Eigen::Vector3d(sh * h.shearScale) : sh;
-        out.ref[out.n] = s.ref;
+        out.ref[out.n] = ref;
         ++out.n;
-        if (elastic) *elastic += s.r.elastic;
+        if (elastic) *elastic += r.elastic;
         if (tally) {
-            tally->damp += s.r.dampPower * dt_;
-            tally->slip += s.r.slipWork;
+            tally->damp += r.dampPower * dt_;
+            tally->slip += r.slipWork;
         }
-        return s;
+        if (used) *used = p;
+        return r;
     }
 
 private:

@@ -15,6 +15,7 @@
 #include "../core/ThreadPartials.hpp"
 #include "../core/Format.hpp"
 #include "../step/AwakeSet.hpp"
+#include "ContactKind.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -254,9 +255,9 @@ inline void ObstaclePhase::NodePass::node(int32_t s) {
         if (slot >= 0) h.shear = shear + 3 * slot;
         newBody[news.n] = o.bodyId;
         newSide[news.n] = static_cast<int8_t>(hit.side);
-        const ContactStep st = loop.touch(pairConsts[j], geo, h, news, pe ? pe + 3 * ip + 1 : nullptr,
-                                          energyOn ? &tally : nullptr);
-        const ContactResult& r = st.r;
+        ContactParams cp;
+        const ContactResult r = loop.touch(pairConsts[j], geo, h, news, pe ? pe + 3 * ip + 1 : nullptr,
+                                           energyOn ? &tally : nullptr, &cp);
         if (hit.overlap > deepest->ratio * m.radius)
             *deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
         ++nWall;
@@ -265,7 +266,7 @@ inline void ObstaclePhase::NodePass::node(int32_t s) {
         if (dyn && o.dynamic()) {
             // Its springs and dashpots on the obstacle's mobility at the
             // contact point, and on the node's mass.
-            const double k = std::max(st.p.kn, st.p.kt), c = std::max(st.p.cn, st.p.ct);
+            const double k = std::max(cp.kn, cp.kt), c = std::max(cp.cn, cp.ct);
             double* D = dyn + kDyn * j;
             D[0] += g * k;
             D[1] += g * c;
@@ -314,6 +315,13 @@ void ObstaclePhase::run(double dt) {
     pairConst_.clear();
     pairReaction_.clear();
     contacts_ = 0;
+    if (!kindSwitchedOn(contactKind(ContactFamily::PieceObstacle), w_.settings)) {
+        // Switched off (QdemEngine couple=False): no contact, no push of a
+        // sleeping piece, and no spring carried over to when it is on again.
+        for (auto& o : w_.obstacles) o.reactionForce.setZero(), o.reactionTorque.setZero();
+        slotBody_.fill(-1);
+        return;
+    }
     if (nObs == 0 || w_.surfNodes.size() == 0) return;
 
     listReachable();

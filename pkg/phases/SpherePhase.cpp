@@ -24,6 +24,7 @@
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
+#include "ContactKind.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -355,6 +356,7 @@ void SpherePhase::run(double dt) {
     std::fill(S.pairForceTorque.begin(), S.pairForceTorque.end(), 0.0);
     std::fill(S.pairComputed.begin(), S.pairComputed.end(), 0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
+    if (!kindSwitchedOn(contactKind(ContactFamily::PieceSphere), w_.settings)) return;  // (QdemEngine spheres=False)
     buildGrids();
     w_.contacts.begin();
     const int nth = omp_get_max_threads();
@@ -531,7 +533,7 @@ long pairContacts(const SpherePhase::Data& w, const ContactLoop<Friction>& loop,
         h.threshold = slot < 0 && touched ? 0.0 : pc.reach;
         h.handed = handed[k];
         newKey[news.n] = historyKey(c.tri - t0, c.cp.feature);
-        const ContactResult r = loop.touch(pc, g, h, news, &tally.elastic, &tally).r;
+        const ContactResult r = loop.touch(pc, g, h, news, &tally.elastic, &tally);
         F += r.force;
         T += arm.cross(r.force);
         for (int j = 0; j < 3; ++j)

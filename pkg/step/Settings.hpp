@@ -153,7 +153,13 @@ inline SettingRange oneOf(std::vector<std::string> names) {
     X(double, rigidWakeLoad, "rigidWakeLoad", 0.1, positive(),                                                       \
       "rigidify: a rigid piece becomes deformable again when the load deforming it (its nodes' forces less their "  \
       "share of the rigid acceleration, in the body frame) differs from the one it was made rigid under by more "   \
-      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")
+      "than this fraction of max(that load, its weight), summed over its nodes (dimensionless).")                  \
+    X(bool, obstaclesOn, "couple", true, anyValue(),                                                                 \
+      "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again whenever the number of bodies "          \
+      "changes): the contact kind 'wall' of the contact-kinds table.")                                               \
+    X(bool, spheresOn, "spheres", true, anyValue(),                                                                  \
+      "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): needs an InsertionSortCollider in "  \
+      "O.engines, before this engine.  The contact kind 'sphere' of the contact-kinds table.")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;
