@@ -14,6 +14,9 @@ Scenes (core worlds, no YADE: the sphere states are set once and held):
   spheres  one cube of edge 2 m (8^3 cells) on the floor, 144 spheres of
            radius 0.08 m pressed 2 cm into its top face and sliding over it at
            0.3 m/s with a spin (sphere young 1e8, friction 0.4).
+Valgrind does not decode AVX-512: build both with `-DQDEM_NATIVE=OFF
+-DCMAKE_CXX_FLAGS=-march=haswell` (AVX2 and FMA, as the native build
+contracts) into a separate build directory, e.g. build-cg.
 Reported per build and scene: instructions inside World::step per step, and
 the inclusive instructions of ObstaclePhase::run and SpherePhase::run.
 """
