@@ -89,6 +89,17 @@ enum Registration : unsigned {
     RegisterFeatureEdges = 1u << 1,
 };
 
+// Which phase runs a kind: the phases keep their places in the step
+// (obstacles first, then elements, piece contacts, spheres) and each runs
+// the switched-on rows of its family.  Rows of the other families have no
+// ContactKind object (make = nullptr): their phase is their kernel, and the
+// row gives them their switch, history and counter in the one table.
+enum class ContactFamily : int {
+    PiecePiece = 0,     // PieceContactPhase: surface nodes and edges of two pieces
+    PieceObstacle = 1,  // ObstaclePhase: surface nodes against YADE walls, boxes and facets
+    PieceSphere = 2,    // SpherePhase: YADE spheres and clump members against piece surfaces
+};
+
 struct ContactKindRow {
     const char* name;       // its counter and timing name
     const char* registers;  // what the broad phase registers for it (in words, for the docs)
@@ -96,11 +107,17 @@ struct ContactKindRow {
     bool Settings::*on;     // its switch; nullptr: always on
     std::unique_ptr<ContactKind> (*make)();
     unsigned lists = RegisterNothing;  // Registration bits: the broad-phase lists it reads
+    ContactFamily family = ContactFamily::PiecePiece;
 };
 
-// The table: the seed's point-polygon and edge-edge kinds, then rows added
-// with addContactKind (worlds created afterwards run them).
+// The table: the seed's point-polygon and edge-edge kinds, the node-obstacle
+// and sphere-triangle kinds, then rows added with addContactKind (worlds
+// created afterwards run them).
 const std::vector<ContactKindRow>& contactKinds();
+// The row of a family that has one kind (obstacles, spheres).
+const ContactKindRow& contactKind(ContactFamily family);
+// Is the kind switched on in these settings?
+inline bool kindSwitchedOn(const ContactKindRow& row, const Settings& s) { return !row.on || s.*(row.on); }
 void addContactKind(const ContactKindRow& row);
 void removeContactKind(const std::string& name);  // (tests)
 

@@ -1,9 +1,13 @@
-// The table of piece-piece contact kinds (ContactKind.hpp).  YADE spheres
-// against piece surfaces are the SpherePhase's (the spheres are YADE's
-// bodies, not pieces): doc/architecture.md lists that kind beside these.
+// The table of contact kinds (ContactKind.hpp): between pieces (run by
+// PieceContactPhase), surface nodes against YADE obstacles (ObstaclePhase)
+// and YADE spheres against piece surfaces (SpherePhase).
 #include "ContactKind.hpp"
 #include "EdgeEdgeKind.hpp"
 #include "PointPolygonKind.hpp"
+
+#include "../core/Errors.hpp"
+#include "../core/Format.hpp"
+#include "PieceContactPhase.hpp"
 
 namespace qdem {
 
@@ -31,6 +35,13 @@ std::vector<ContactKindRow>& table() {
         {"nodeSpringTest", "nothing (surface nodes of neighbour pieces, all pairs)",
          "4 slots per surface node: other piece, its surface node, rest length", &Settings::nodeSpringTestOn,
          &makeNodeSpringKind, RegisterNothing},
+        {"wall", "YADE walls, boxes and facets near each piece (bounding boxes grown by the node radius)",
+         "4 slots per surface node: YADE body id, side, tangential spring",
+         &Settings::obstaclesOn, nullptr, RegisterNothing, ContactFamily::PieceObstacle},
+        {"sphere", "YADE spheres near each piece (YADE's collider, through proxy bodies), the piece's surface "
+         "triangles binned per step",
+         "4 slots per (sphere, piece) pair: 8 x local triangle + feature, tangential spring, born-deep reference",
+         &Settings::spheresOn, nullptr, RegisterNothing, ContactFamily::PieceSphere},
     };
     return rows;
 }
@@ -39,7 +50,18 @@ std::vector<ContactKindRow>& table() {
 
 const std::vector<ContactKindRow>& contactKinds() { return table(); }
 
-void addContactKind(const ContactKindRow& row) { table().push_back(row); }
+const ContactKindRow& contactKind(ContactFamily family) {
+    for (const ContactKindRow& row : table())
+        if (row.family == family) return row;
+    throw InputError("contact kinds: no row of this family (internal error)");
+}
+
+void addContactKind(const ContactKindRow& row) {
+    if (row.family != ContactFamily::PiecePiece || !row.make)
+        throw InputError(cat("addContactKind: '", row.name, "' must be a piece-piece kind with a kernel (make); ",
+                             "obstacles and spheres have one kind each, run by their phases"));
+    table().push_back(row);
+}
 
 void removeContactKind(const std::string& name) {
     auto& t = table();

@@ -9,11 +9,13 @@
 #include <cmath>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactLoop.hpp"
 #include "../contact/ContactModel.hpp"
 #include "../core/Errors.hpp"
 #include "../core/ThreadPartials.hpp"
 #include "../core/Format.hpp"
 #include "../step/AwakeSet.hpp"
+#include "ContactKind.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -54,6 +56,239 @@ namespace {
 
 }  // namespace
 
+// One thread's pass over its surface nodes: each node's touches with the
+// obstacles its piece can reach, one touch per surface, the contacts
+// (ContactLoop.hpp) with their history, reactions and energies.  The
+// world's arrays as raw pointers in members of a local: the loop stores
+// through int8_t pointers, which may alias anything, so members read
+// through w_ would be reloaded.
+struct ObstaclePhase::NodePass {
+    const int32_t* surfNodes;
+    const int32_t* nodePiece;
+    const double* X;
+    const double* V;
+    const double* M;
+    const double* W;
+    const PieceInfo* pieces;
+    const Material* materials;
+    const Obstacle* obstacles;
+    const int* pieceObstacles;
+    const int* pieceObstacleBegin;
+    const PairConst* pairConsts;
+    int32_t* slotBody;
+    double* slotShear;
+    int8_t* slotSide;
+    double* Fc;
+    const double* extent;
+    ContactLoop<true, Reference::None> loop;
+    bool energyOn;
+    // this thread's
+    Through* through;
+    Deepest* deepest;
+    double* react;  // per (piece, obstacle) pair, 6 each
+    double* pe;     // per piece energies (nullptr: energy not tracked)
+    double* dyn;    // per (piece, obstacle) pair, kDyn each (nullptr: no dynamic obstacle)
+    EnergyTally tally;
+    double eBound = 0;
+    long nWall = 0;
+
+    NodePass(ObstaclePhase& ph, double dt, int th, std::size_t reactStride, std::size_t dynStride)
+        : surfNodes(ph.w_.surfNodes.data()),
+          nodePiece(ph.w_.nodePiece.data()),
+          X(ph.w_.pos.data()),
+          V(ph.w_.vel.data()),
+          M(ph.w_.mass.data()),
+          W(ph.w_.surfWeight.data()),
+          pieces(ph.w_.pieces.data()),
+          materials(ph.w_.materials.data()),
+          obstacles(ph.w_.obstacles.data()),
+          pieceObstacles(ph.pieceObstacles_.data()),
+          pieceObstacleBegin(ph.pieceObstacleBegin_.data()),
+          pairConsts(ph.pairConst_.data()),
+          slotBody(ph.slotBody_.data()),
+          slotShear(ph.slotShear_.data()),
+          slotSide(ph.slotSide_.data()),
+          Fc(ph.w_.contacts.force.data()),
+          extent(ph.pieceExtent_.data()),
+          loop(dt, ph.w_.settings.frictionModel == FrictionModel::Regularized, ph.w_.settings.frictionRegVelocity,
+               ph.w_.settings.frictionOn),
+          energyOn(ph.w_.settings.trackEnergy),
+          through(&ph.threadThrough_[th]),
+          deepest(&ph.threadDeepest_[th]),
+          react(ph.threadReaction_.data() + static_cast<std::size_t>(th) * reactStride),
+          pe(energyOn ? ph.w_.threadPieceEnergy[th].data() : nullptr),
+          dyn(dynStride ? ph.threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr) {}
+
+    struct Touch {
+        int j, slot;
+        ObstacleHit hit;
+    };
+    __attribute__((always_inline)) int findTouches(int32_t s, int32_t node, int ip, double radius,
+                                                   const int32_t* body, const int8_t* side, Touch* touch);
+    __attribute__((always_inline)) uint32_t sameSurface(const Touch* touch, int nt, double radius) const;
+    __attribute__((always_inline)) void node(int32_t s);
+};
+
+// The obstacles node (surface node s, piece ip) touches; notes the first
+// node that went through one.
+inline int ObstaclePhase::NodePass::findTouches(int32_t s, int32_t node, int ip, double radius, const int32_t* body,
+                                               const int8_t* side, Touch* touch) {
+    const double dt = loop.dt();
+    const Eigen::Map<const Eigen::Vector3d> x(X + 3 * node);
+    const Eigen::Map<const Eigen::Vector3d> v(V + 3 * node);
+    int nt = 0;
+    for (int j = pieceObstacleBegin[ip]; j < pieceObstacleBegin[ip + 1]; ++j) {
+        const int io = pieceObstacles[j];
+        const Obstacle& o = obstacles[io];
+        const int slot = matchSlot(kSlots, [&](int k) { return body[k] == o.bodyId; });
+        // Went through it?  (Checked before the contact: a node that
+        // jumped past a thin obstacle is not touching it any more.)
+        // (Thin ones only for nodes that did not touch them last
+        // step: side memory holds those that did.)
+        if (through->node < 0 || node < through->node) {
+            const bool thinKind = o.kind == ObstacleKind::Facet || (o.kind == ObstacleKind::Wall && o.sense == 0);
+            const bool thin = slot < 0 && thinKind && crossedThin(o, x - dt * (v - o.velocityAt(x, dt)), x);
+            const double depth = depthBehind(o, x);
+            if (thin || depth > extent[ip]) {
+                const double speed = (v - o.velocityAt(x, dt)).norm();
+                *through = Through{node, ip, io, thin, dt * speed, depth, speed, M[node],
+                                   W[s] * pairLaw(pairConsts[j], M[node]).kn};
+            }
+        }
+        if (nt == kTouches) continue;  // (more than kTouches bodies at once: never seen)
+        // Out of the body's box grown by the radius, and no history
+        // with it (side memory may hold a node pushed deep): no touch.
+        // Every obstacle near the piece is visited per node: a block on
+        // the 64-facet fan of a facetCylinder's bottom spent ~25 ns on
+        // each (node, facet) pair, where this test costs a few.
+        if (slot < 0 && o.kind != ObstacleKind::Wall &&
+            ((x.array() + radius < o.lo.array()).any() || (x.array() - radius > o.hi.array()).any()))
+            continue;
+        if (touchObstacle(o, x, radius, slot >= 0 ? side[slot] : 0, touch[nt].hit)) {
+            touch[nt].j = j;
+            touch[nt].slot = slot;
+            ++nt;
+        }
+    }
+    return nt;
+}
+
+// One surface made of several bodies (an STL's facets, boxes side by side, a
+// facet on a wall's plane) is touched once: a touch whose contact point lies
+// on another touched body's surface, that body being nearer (larger overlap;
+// equal: the first), is that body's touch seen again (the closest point on
+// the edge they share).  Each body counted for itself, a node near a seam of
+// a flat facet floor was pushed by both facets: the seams were stiffer, a
+// block rested tilted and a frictionless block slid slower over them (a
+// tester).  A touch at a point of its own (a concave corner, a gap between
+// two boxes) stays.  Returns the touches dropped, as bits.
+inline uint32_t ObstaclePhase::NodePass::sameSurface(const Touch* touch, int nt, double radius) const {
+    uint32_t dropped = 0;
+    const double onSurface = 1e-6 * radius;
+    for (int a = 0; a < nt; ++a)
+        for (int b = 0; b < nt; ++b) {
+            if (b == a) continue;
+            const double oa = touch[a].hit.overlap, ob = touch[b].hit.overlap;
+            if (ob > oa || (ob == oa && b < a))
+                if (distanceToSurface(obstacles[pieceObstacles[touch[b].j]], touch[a].hit.point) <= onSurface) {
+                    dropped |= 1u << a;
+                    break;
+                }
+        }
+    return dropped;
+}
+
+// Surface node s's contacts with the obstacles.
+inline void ObstaclePhase::NodePass::node(int32_t s) {
+    const double dt = loop.dt();
+    const int32_t node = surfNodes[s];
+    const int ip = nodePiece[node];
+    int32_t* body = slotBody + kSlots * s;
+    double* shear = slotShear + 3 * kSlots * s;
+    int8_t* side = slotSide + kSlots * s;
+    if (pieceObstacleBegin[ip] == pieceObstacleBegin[ip + 1]) {  // nothing near this piece: forget the history
+        for (int k = 0; k < kSlots; ++k) body[k] = -1;
+        return;
+    }
+    const Material& m = materials[pieces[ip].material];
+    const Eigen::Map<const Eigen::Vector3d> v(V + 3 * node);
+    // The obstacles this node touches, then which of them are one touch of
+    // one surface.
+    Touch touch[kTouches];
+    const int nt = findTouches(s, node, ip, m.radius, body, side, touch);
+    const uint32_t dropped = nt > 1 ? sameSurface(touch, nt, m.radius) : 0;
+    bool oldTaken[kSlots] = {false, false, false, false};
+    for (int t = 0; t < nt; ++t)
+        if (!(dropped >> t & 1u) && touch[t].slot >= 0) oldTaken[touch[t].slot] = true;
+    int32_t newBody[kSlots];
+    int8_t newSide[kSlots];
+    NewSlots<kSlots> news;
+    Eigen::Vector3d fNode = Eigen::Vector3d::Zero();
+    for (int t = 0; t < nt; ++t) {
+        if (dropped >> t & 1u) continue;
+        if (news.full()) break;  // a node never touches more than 4 bodies at once in practice
+        const int j = touch[t].j;
+        const Obstacle& o = obstacles[pieceObstacles[j]];
+        const ObstacleHit& hit = touch[t].hit;
+        int slot = touch[t].slot;
+        if (slot < 0)  // a new touch takes the spring of one that ended this step: a node sliding
+            for (int k = 0; k < kSlots && slot < 0; ++k)  // from facet to facet keeps its friction
+                if (body[k] >= 0 && !oldTaken[k]) oldTaken[slot = k] = true;
+        // Springs scaled by the node's share of the surface area
+        // (surfWeight, World.hpp); the dashpots keep their damping ratio.
+        // Their mass is the node's, reduced with a dynamic obstacle's
+        // at the contact point (1/g: its mobility there), as for two
+        // pieces or a sphere: a node's dashpot on a 2 g box kicked it.
+        // (The regularised friction's implicit drag too.)
+        const double g = o.dynamic() ? o.mobilityAt((hit.point - o.pos).norm()) : 0.0;
+        const double mEff = g > 0 ? M[node] / (1 + M[node] * g) : M[node];
+        const double wa = W[s];
+        const Eigen::Vector3d vo = o.velocityAt(hit.point, dt);
+        ContactGeometry geo;
+        geo.n = hit.normal;
+        geo.overlap = hit.overlap;
+        geo.vRel = v - vo;
+        geo.spin = o.angVel.dot(hit.normal);  // a node is a point: the obstacle's spin alone
+        geo.mass = geo.slipMass = mEff;
+        geo.stiffWeight = wa, geo.dampWeight = std::sqrt(wa);
+        ContactHistory h;
+        if (slot >= 0) h.shear = shear + 3 * slot;
+        newBody[news.n] = o.bodyId;
+        newSide[news.n] = static_cast<int8_t>(hit.side);
+        ContactParams cp;
+        const ContactResult r = loop.touch(pairConsts[j], geo, h, news, pe ? pe + 3 * ip + 1 : nullptr,
+                                           energyOn ? &tally : nullptr, &cp);
+        if (hit.overlap > deepest->ratio * m.radius)
+            *deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
+        ++nWall;
+        fNode += r.force;
+        double* R = react + 6 * j;
+        if (dyn && o.dynamic()) {
+            // Its springs and dashpots on the obstacle's mobility at the
+            // contact point, and on the node's mass.
+            const double k = std::max(cp.kn, cp.kt), c = std::max(cp.cn, cp.ct);
+            double* D = dyn + kDyn * j;
+            D[0] += g * k;
+            D[1] += g * c;
+            D[2] = std::max(D[2], k / M[node]);
+            D[3] = std::max(D[3], c / M[node]);
+            D[4] += 1;
+        }
+        const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
+        for (int d = 0; d < 3; ++d) {
+            R[d] -= r.force[d];
+            R[3 + d] += torque[d];
+        }
+        if (energyOn) eBound -= r.force.dot(vo) * dt;
+    }
+    for (int k = 0; k < kSlots; ++k) {
+        body[k] = k < news.n ? newBody[k] : -1;
+        side[k] = k < news.n ? newSide[k] : 0;
+    }
+    news.store(shear, nullptr);
+    for (int d = 0; d < 3; ++d) Fc[3 * node + d] += fNode[d];
+}
+
 void ObstaclePhase::run(double dt) {
     const int nObs = static_cast<int>(w_.obstacles.size());
     for (auto& o : w_.obstacles) {
@@ -80,9 +315,27 @@ void ObstaclePhase::run(double dt) {
     pairConst_.clear();
     pairReaction_.clear();
     contacts_ = 0;
+    if (!kindSwitchedOn(contactKind(ContactFamily::PieceObstacle), w_.settings)) {
+        // Switched off (QdemEngine couple=False): no contact, no push of a
+        // sleeping piece, and no spring carried over to when it is on again.
+        for (auto& o : w_.obstacles) o.reactionForce.setZero(), o.reactionTorque.setZero();
+        slotBody_.fill(-1);
+        return;
+    }
     if (nObs == 0 || w_.surfNodes.size() == 0) return;
 
-    // Which obstacles can each piece reach this step (bounding boxes + radius)?
+    listReachable();
+    checkStartOverlaps();
+    if (pieceObstacles_.empty()) return;
+    w_.contacts.begin();
+    const int nth = omp_get_max_threads();
+    const std::array<double, 3> energySum = contactPass(dt, nth);
+    finishStep(dt, nth, energySum);
+}
+
+// Which obstacles can each piece reach this step (bounding boxes + radius)?
+void ObstaclePhase::listReachable() {
+    const int nObs = static_cast<int>(w_.obstacles.size());
     pieceObstacleBegin_.assign(w_.pieces.size() + 1, 0);
     pieceObstacles_.clear();
     for (std::size_t ip = 0; ip < w_.pieces.size(); ++ip) {
@@ -112,11 +365,12 @@ void ObstaclePhase::run(double dt) {
         }
         pieceObstacleBegin_[ip + 1] = static_cast<int>(pieceObstacles_.size());
     }
-    checkStartOverlaps();
-    if (pieceObstacles_.empty()) return;
+}
 
-    w_.contacts.begin();
-    const int nth = omp_get_max_threads();
+// The node contacts of the awake pieces, in parallel: forces into
+// ContactForces, reactions per thread and (piece, obstacle) pair; returns
+// the energies (damping, slip, boundary work) added in thread order.
+std::array<double, 3> ObstaclePhase::contactPass(double dt, int nth) {
     // Reactions per thread and (piece, obstacle) pair: a piece that falls
     // asleep keeps its own.
     const std::size_t nPairs = pieceObstacles_.size();
@@ -125,8 +379,6 @@ void ObstaclePhase::run(double dt) {
     // it back and forth on every contact.
     const std::size_t reactStride = (nPairs * 6 + 7) / 8 * 8 + 8;
     threadReaction_.assign(static_cast<std::size_t>(nth) * reactStride, 0.0);
-    const bool energyOn = w_.settings.trackEnergy;
-    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
     // Sleeping pieces' nodes are skipped (their history kept as it is);
     // held pieces' are not (above).  (Their velocities are zero: a held
     // node is a fixed point.)
@@ -134,33 +386,12 @@ void ObstaclePhase::run(double dt) {
     const int32_t* awakeSurf = w_.sleeping.obstacleSurf().data();
     const auto nSurf =
         all ? static_cast<int32_t>(w_.surfNodes.size()) : static_cast<int32_t>(w_.sleeping.obstacleSurf().size());
-    // Raw pointers in locals: the loop stores through int8_t pointers, which
-    // may alias anything, so members read through w_ would be reloaded.
-    const int32_t* surfNodes = w_.surfNodes.data();
-    const int32_t* nodePiece = w_.nodePiece.data();
-    const double* X = w_.pos.data();
-    const double* V = w_.vel.data();
-    const double* M = w_.mass.data();
-    const double* W = w_.surfWeight.data();
-    const PieceInfo* pieces = w_.pieces.data();
-    const Material* materials = w_.materials.data();
-    const Obstacle* obstacles = w_.obstacles.data();
-    const int* pieceObstacles = pieceObstacles_.data();
-    const int* pieceObstacleBegin = pieceObstacleBegin_.data();
-    const PairConst* pairConsts = pairConst_.data();
-    int32_t* slotBody = slotBody_.data();
-    double* slotShear = slotShear_.data();
-    int8_t* slotSide = slotSide_.data();
-    double* Fc = w_.contacts.force.data();
     // Dynamic obstacles: the springs on each (piece, obstacle) pair, per
     // thread (checkDynamicObstacles).
     bool anyDynamic = false;
     for (const Obstacle& o : w_.obstacles) anyDynamic = anyDynamic || o.dynamic();
     const std::size_t dynStride = anyDynamic ? kDyn * nPairs + 8 : 0;
     threadDynamic_.assign(static_cast<std::size_t>(nth) * dynStride, 0.0);
-    const double regVelocity = w_.settings.frictionRegVelocity;
-    const bool frictionOn = w_.settings.frictionOn;
-
     // Each piece's largest extent (its box less the radius it was grown by):
     // a node deeper than that behind a one-sided wall has taken the piece
     // through the solid.  (Not half the thickness, as point-polygon's "past
@@ -178,7 +409,6 @@ void ObstaclePhase::run(double dt) {
         for (int d = 0; d < 3; ++d) e = std::max(e, w_.bounds.hi[3 * ip + d] - w_.bounds.lo[3 * ip + d] - 2 * r);
         pieceExtent_[ip] = std::min(e, restDiagonal_[ip]);
     }
-    const double* extent = pieceExtent_.data();
     threadThrough_.assign(nth, Through{});
     threadDeepest_.assign(nth, Deepest{});
     long nWall = 0;
@@ -186,180 +416,28 @@ void ObstaclePhase::run(double dt) {
 #pragma omp parallel num_threads(nth) reduction(+ : nWall)
     {
         const int th = omp_get_thread_num();
-        double eDampT = 0, eSlipT = 0, eBoundT = 0;
-        Through& through = threadThrough_[th];
-        Deepest& deepest = threadDeepest_[th];
-        double* react = threadReaction_.data() + static_cast<std::size_t>(th) * reactStride;
-        double* pe = energyOn ? w_.threadPieceEnergy[th].data() : nullptr;
-        double* dyn = anyDynamic ? threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr;
+        NodePass pass(*this, dt, th, reactStride, dynStride);
         // Halves of the surface nodes, as the contact sums and the
         // integration split them: each thread meets the force lines it will
         // touch again.  (Chunks dealt round-robin balanced scenes whose floor
         // pieces come first, but cost the 27-cube stack 15-25 % here: lines
         // passed between the cores, bench/logs/obstacle_deal_2026-11-24.txt.)
 #pragma omp for schedule(static) nowait  // (the region ends with the loop: its join is the barrier)
-        for (int32_t i = 0; i < nSurf; ++i) {
-            const int32_t s = all ? i : awakeSurf[i];
-            const int32_t node = surfNodes[s];
-            const int ip = nodePiece[node];
-            const int ob0 = pieceObstacleBegin[ip], ob1 = pieceObstacleBegin[ip + 1];
-            int32_t* body = slotBody + kSlots * s;
-            double* shear = slotShear + 3 * kSlots * s;
-            int8_t* side = slotSide + kSlots * s;
-            if (ob0 == ob1) {  // nothing near this piece: forget the history
-                for (int k = 0; k < kSlots; ++k) body[k] = -1;
-                continue;
-            }
-            const Material& m = materials[pieces[ip].material];
-            const Eigen::Map<const Eigen::Vector3d> x(X + 3 * node);
-            const Eigen::Map<const Eigen::Vector3d> v(V + 3 * node);
-            int32_t newBody[kSlots];
-            int8_t newSide[kSlots];
-            Eigen::Vector3d newShear[kSlots];
-            int used = 0;
-            Eigen::Vector3d fNode = Eigen::Vector3d::Zero();
-            // The obstacles this node touches, then (below) which of them
-            // are one touch of one surface.
-            struct Touch {
-                int j, slot;
-                ObstacleHit hit;
-            } touch[kTouches];
-            int nt = 0;
-            for (int j = ob0; j < ob1; ++j) {
-                const int io = pieceObstacles[j];
-                const Obstacle& o = obstacles[io];
-                int slot = -1;
-                for (int k = 0; k < kSlots; ++k)
-                    if (body[k] == o.bodyId) slot = k;
-                // Went through it?  (Checked before the contact: a node that
-                // jumped past a thin obstacle is not touching it any more.)
-                // (Thin ones only for nodes that did not touch them last
-                // step: side memory holds those that did.)
-                if (through.node < 0 || node < through.node) {
-                    const bool thinKind = o.kind == ObstacleKind::Facet || (o.kind == ObstacleKind::Wall && o.sense == 0);
-                    const bool thin = slot < 0 && thinKind && crossedThin(o, x - dt * (v - o.velocityAt(x, dt)), x);
-                    const double depth = depthBehind(o, x);
-                    if (thin || depth > extent[ip]) {
-                        const double speed = (v - o.velocityAt(x, dt)).norm();
-                        through = Through{node, ip, io, thin, dt * speed, depth, speed, M[node],
-                                          W[s] * pairLaw(pairConsts[j], M[node]).kn};
-                    }
-                }
-                if (nt == kTouches) continue;  // (more than kTouches bodies at once: never seen)
-                // Out of the body's box grown by the radius, and no history
-                // with it (side memory may hold a node pushed deep): no touch.
-                // Every obstacle near the piece is visited per node: a block on
-                // the 64-facet fan of a facetCylinder's bottom spent ~25 ns on
-                // each (node, facet) pair, where this test costs a few.
-                if (slot < 0 && o.kind != ObstacleKind::Wall &&
-                    ((x.array() + m.radius < o.lo.array()).any() || (x.array() - m.radius > o.hi.array()).any()))
-                    continue;
-                if (touchObstacle(o, x, m.radius, slot >= 0 ? side[slot] : 0, touch[nt].hit)) {
-                    touch[nt].j = j;
-                    touch[nt].slot = slot;
-                    ++nt;
-                }
-            }
-            // One surface made of several bodies (an STL's facets, boxes side
-            // by side, a facet on a wall's plane) is touched once: a touch
-            // whose contact point lies on another touched body's surface,
-            // that body being nearer (larger overlap; equal: the first),
-            // is that body's touch seen again (the closest point on the
-            // edge they share).  Each body counted for itself, a node near
-            // a seam of a flat facet floor was pushed by both facets: the
-            // seams were stiffer, a block rested tilted and a frictionless
-            // block slid slower over them (a tester).  A touch at a point
-            // of its own (a concave corner, a gap between two boxes) stays.
-            uint32_t dropped = 0;
-            if (nt > 1) {
-                const double onSurface = 1e-6 * m.radius;
-                for (int a = 0; a < nt; ++a)
-                    for (int b = 0; b < nt; ++b) {
-                        if (b == a) continue;
-                        const double oa = touch[a].hit.overlap, ob = touch[b].hit.overlap;
-                        if (ob > oa || (ob == oa && b < a))
-                            if (distanceToSurface(obstacles[pieceObstacles[touch[b].j]], touch[a].hit.point) <= onSurface) {
-                                dropped |= 1u << a;
-                                break;
-                            }
-                    }
-            }
-            bool oldTaken[kSlots] = {false, false, false, false};
-            for (int t = 0; t < nt; ++t)
-                if (!(dropped >> t & 1u) && touch[t].slot >= 0) oldTaken[touch[t].slot] = true;
-            for (int t = 0; t < nt; ++t) {
-                if (dropped >> t & 1u) continue;
-                if (used == kSlots) break;  // a node never touches more than 4 bodies at once in practice
-                const int j = touch[t].j;
-                const Obstacle& o = obstacles[pieceObstacles[j]];
-                const ObstacleHit& hit = touch[t].hit;
-                int slot = touch[t].slot;
-                if (slot < 0)  // a new touch takes the spring of one that ended this step: a node sliding
-                    for (int k = 0; k < kSlots && slot < 0; ++k)  // from facet to facet keeps its friction
-                        if (body[k] >= 0 && !oldTaken[k]) oldTaken[slot = k] = true;
-                // Springs scaled by the node's share of the surface area
-                // (surfWeight, World.hpp); the dashpots keep their damping ratio.
-                // Their mass is the node's, reduced with a dynamic obstacle's
-                // at the contact point (1/g: its mobility there), as for two
-                // pieces or a sphere: a node's dashpot on a 2 g box kicked it.
-                // (The regularised friction's implicit drag too.)
-                const double g = o.dynamic() ? o.mobilityAt((hit.point - o.pos).norm()) : 0.0;
-                const double mEff = g > 0 ? M[node] / (1 + M[node] * g) : M[node];
-                const PairLaw law = pairLaw(pairConsts[j], mEff);
-                const double wa = W[s], swa = std::sqrt(wa);
-                const double mu = law.mu;
-                ContactParams cp{wa * law.kn, swa * law.cn, wa * law.kt, swa * law.ct, mu, regVelocity, mEff};
-                Eigen::Vector3d sh = Eigen::Vector3d::Zero();
-                if (slot >= 0) sh = Eigen::Map<Eigen::Vector3d>(shear + 3 * slot);
-                const Eigen::Vector3d vo = o.velocityAt(hit.point, dt);
-                const Eigen::Vector3d vRel = v - vo;
-                const ContactResult r =
-                    lawForce(frictionOn && mu > 0, regularized, cp, hit.normal, hit.overlap, vRel, dt, sh,
-                             o.angVel.dot(hit.normal));  // a node is a point: the obstacle's spin alone
-                if (hit.overlap > deepest.ratio * m.radius)
-                    deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
-                newBody[used] = o.bodyId;
-                newSide[used] = static_cast<int8_t>(hit.side);
-                newShear[used] = sh;
-                ++used;
-                ++nWall;
-                fNode += r.force;
-                double* R = react + 6 * j;
-                if (dyn && o.dynamic()) {
-                    // Its springs and dashpots on the obstacle's mobility at the
-                    // contact point, and on the node's mass.
-                    const double k = std::max(cp.kn, cp.kt), c = std::max(cp.cn, cp.ct);
-                    double* D = dyn + kDyn * j;
-                    D[0] += g * k;
-                    D[1] += g * c;
-                    D[2] = std::max(D[2], k / M[node]);
-                    D[3] = std::max(D[3], c / M[node]);
-                    D[4] += 1;
-                }
-                const Eigen::Vector3d torque = (hit.point - o.pos).cross(-r.force);
-                for (int d = 0; d < 3; ++d) {
-                    R[d] -= r.force[d];
-                    R[3 + d] += torque[d];
-                }
-                if (energyOn) {
-                    pe[3 * ip + 1] += r.elastic;
-                    eDampT += r.dampPower * dt;
-                    eSlipT += r.slipWork;
-                    eBoundT -= r.force.dot(vo) * dt;
-                }
-            }
-            for (int k = 0; k < kSlots; ++k) {
-                body[k] = k < used ? newBody[k] : -1;
-                side[k] = k < used ? newSide[k] : 0;
-                if (k < used)
-                    for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
-            }
-            for (int d = 0; d < 3; ++d) Fc[3 * node + d] += fNode[d];
-        }
-        energyParts.set(th, {eDampT, eSlipT, eBoundT});
+        for (int32_t i = 0; i < nSurf; ++i) pass.node(all ? i : awakeSurf[i]);
+        nWall += pass.nWall;
+        energyParts.set(th, {pass.tally.damp, pass.tally.slip, pass.eBound});
     }
-    const std::array<double, 3> energySum = energyParts.sum();
     contacts_ = nWall;
+    return energyParts.sum();
+}
+
+// After the pass: the checks (a soft obstacle, a node through an obstacle,
+// a piece crushed through itself, a dynamic obstacle launched), the
+// reactions summed in thread order, the energies booked.
+void ObstaclePhase::finishStep(double dt, int nth, const std::array<double, 3>& energySum) {
+    const std::size_t nPairs = pieceObstacles_.size();
+    const std::size_t reactStride = threadReaction_.size() / nth;
+    const std::size_t dynStride = threadDynamic_.size() / nth;
     Deepest deepest;
     for (const Deepest& d : threadDeepest_)
         if (d.ratio > deepest.ratio) deepest = d;
@@ -384,7 +462,7 @@ void ObstaclePhase::run(double dt) {
                 deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
             if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
         }
-    if (anyDynamic) checkDynamicObstacles(dt, dynStride);
+    if (dynStride) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)
         for (std::size_t j = 0; j < 6 * nPairs; ++j)
@@ -395,7 +473,7 @@ void ObstaclePhase::run(double dt) {
         o.reactionForce += Eigen::Vector3d(R[0], R[1], R[2]);
         o.reactionTorque += Eigen::Vector3d(R[3], R[4], R[5]);
     }
-    if (energyOn) {
+    if (w_.settings.trackEnergy) {
         w_.energy.contactDamping += energySum[0];
         w_.energy.friction += energySum[1];
         w_.energy.boundaryWork += energySum[2];

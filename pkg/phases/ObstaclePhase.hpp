@@ -2,6 +2,7 @@
 // step.  Owns the node-obstacle contact history and the per-(piece,
 // obstacle) reactions that sleeping pieces keep pushing with.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <set>
 #include <string>
@@ -128,6 +129,14 @@ private:
     std::vector<Deepest> threadDeepest_;
     std::set<std::pair<int, int>> softWarned_;  // (YADE body id, piece) already named
     void warnSoftObstacle(const Deepest& d);
+    // run()'s parts: the obstacles each piece can reach and their pair
+    // constants; the node contacts, one NodePass per thread (ObstaclePhase.cpp),
+    // returning the energies (damping, slip, boundary work); the checks,
+    // reactions and energies after them.
+    struct NodePass;
+    void listReachable();
+    std::array<double, 3> contactPass(double dt, int nth);
+    void finishStep(double dt, int nth, const std::array<double, 3>& energySum);
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
     std::vector<double> restDiagonal_;    // per piece: its rest shape's bounding-box diagonal (piecesAdded)
     void measureRestShapes();

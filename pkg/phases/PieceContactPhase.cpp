@@ -25,7 +25,8 @@ using Eigen::Vector3d;
 using namespace contact_detail;
 
 PieceContactPhase::PieceContactPhase(const Data& data) : w_(data), broad_(w_, st_) {
-    for (const ContactKindRow& row : contactKinds()) kinds_.push_back({&row, row.make()});
+    for (const ContactKindRow& row : contactKinds())
+        if (row.family == ContactFamily::PiecePiece) kinds_.push_back({&row, row.make()});
 }
 
 bool PieceContactPhase::kindOn(const Kind& k) const { return !k.row->on || w_.settings.*(k.row->on); }

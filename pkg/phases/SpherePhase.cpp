@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactLoop.hpp"
 #include "../core/ThreadPartials.hpp"
 #include "../contact/Obstacle.hpp"
 #include "../contact/ContactModel.hpp"
@@ -23,6 +24,7 @@
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
+#include "ContactKind.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -32,16 +34,10 @@ using namespace contact_detail;
 
 namespace {
 
-// Contact parameters of a YADE sphere against a QDEM material: the contact
-// model (ContactModel.hpp) with the sphere's material as one side
-// (doc/spheres.md); the dashpots on the reduced mass of the sphere and the
-// triangle point.
+// A YADE sphere as one side of the contact model (ContactModel.hpp), its
+// material's (doc/spheres.md).
 ContactSide sphereSide(const SphereSet& S, int32_t i) {
     return {S.young[i] * S.radius[i], S.ktRatio[i], S.restitution[i], S.friction[i], S.radius[i]};
-}
-
-PairLaw sphereLaw(const SphereSet& S, int32_t i, const Material& b, double mT) {
-    return pairLaw(mix(sphereSide(S, i), materialSide(b, b.frictionPiece)), S.mass[i], mT);
 }
 
 }  // namespace
@@ -360,6 +356,7 @@ void SpherePhase::run(double dt) {
     std::fill(S.pairForceTorque.begin(), S.pairForceTorque.end(), 0.0);
     std::fill(S.pairComputed.begin(), S.pairComputed.end(), 0);
     if (S.size() == 0 || S.pairPiece.empty()) return;  // no sphere near any piece: nothing to do
+    if (!kindSwitchedOn(contactKind(ContactFamily::PieceSphere), w_.settings)) return;  // (QdemEngine spheres=False)
     buildGrids();
     w_.contacts.begin();
     const int nth = omp_get_max_threads();
@@ -389,227 +386,263 @@ void SpherePhase::run(double dt) {
     }
 }
 
+namespace {
+
+// One sphere as its contacts see it: at the nodes' time level.
+struct SphereAt {
+    int32_t i;
+    Vector3d C, v, w, spinOff;  // centre, velocity, spin, offset to the point it spins about
+    double R;
+};
+
+// The touches of sphere s with piece pb (its centre a query point of reach
+// `reach`): the candidate triangles, the inside test for a centre behind a
+// face, one contact per touch (TouchSelection.hpp).  keep[k] says which of
+// cl's candidates are touches.
+void findTouches(const SpherePhase::Data& w, const SphereAt& s, int32_t pb, double reach, bool overlap, double eps,
+                 double cosFeature, CandidateList& cl, bool* keep) {
+    const SphereSet& S = w.spheres;
+    const SurfaceIndex& surf = w.surface;
+    const double* X = w.pos.data();
+    const Vector3d& C = s.C;
+    Candidate* const cand = cl.c;
+    const int32_t t0 = surf.pieceTriStart[pb];
+    const double qr = S.pieceTriRadius[pb] + reach;
+    cl.clear();
+    const int& nc = cl.n;
+    if (overlap) {
+        const Vector3d lo = C.array() - qr, hi = C.array() + qr;
+        S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+            const int32_t t = t0 + local;
+            if (!S.triCurrent[t]) return;
+            const double Rt = S.triRadius[t] + reach;
+            if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
+            const int32_t* c = &surf.tri[3 * t];
+            cl.consider(C, t, at(X, c[0]), at(X, c[1]), at(X, c[2]),
+                        Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true);
+        });
+    }
+    for (int k = 0; k < nc; ++k) keep[k] = true;
+    // Centre behind a face: inside the piece only if no front-facing
+    // surface point is nearer (as for nodes, PointPolygon.cpp).
+    if (cl.anyBehind)
+        for (int k = 0; k < nc; ++k) {
+            if (!cand[k].behind) continue;
+            const double db = cand[k].dist;
+            const Vector3d lo = C.array() - (S.pieceTriRadius[pb] + db);
+            const Vector3d hi = C.array() + (S.pieceTriRadius[pb] + db);
+            S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+                if (!keep[k]) return;
+                const int32_t t = t0 + local;
+                if (!S.triCurrent[t]) return;
+                const int32_t* c = &surf.tri[3 * t];
+                if (frontFaceNearer(C, at(X, c[0]), at(X, c[1]), at(X, c[2]),
+                                    Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
+                    keep[k] = false;
+            });
+        }
+    selectTouches(C, cand, nc, keep, surf.triPiece.data(), eps, cosFeature);
+}
+
+// The contacts of sphere s with the piece of pair q: their forces (on the
+// sphere into the pair's force and torque, on the triangle nodes into buf),
+// history and energies (ContactLoop.hpp).  Returns how many.
+template <bool Friction>
+long pairContacts(const SpherePhase::Data& w, const ContactLoop<Friction>& loop, const SphereAt& s, int32_t q,
+                  bool overlap, double cosFeature, CandidateList& cl, bool* keep, double* buf, EnergyTally& tally) {
+    SphereSet& S = w.spheres;
+    const SurfaceIndex& surf = w.surface;
+    constexpr int K = SphereSet::kSlots;
+    const double dt = loop.dt();
+    const int32_t i = s.i, pb = S.pairPiece[q];
+    const Material& mb = w.materials[w.pieces[pb].material];
+    const double reach = s.R + mb.radius;
+    const int32_t t0 = surf.pieceTriStart[pb];
+    S.pairComputed[q] = 1;
+    Vector3d F = Vector3d::Zero(), T = Vector3d::Zero();
+    int32_t* key = &S.slotKey[K * static_cast<std::size_t>(q)];
+    double* shear = &S.slotShear[3 * K * static_cast<std::size_t>(q)];
+    double* ref = &S.slotRef[K * static_cast<std::size_t>(q)];
+    const bool watched = S.pairStamp[q] == w.iter - 1;
+    if (!watched)  // history is only valid from the previous step
+        for (int k = 0; k < K; ++k) key[k] = -1;
+    S.pairStamp[q] = w.iter;
+    const double eps = 1e-12 * reach;
+    findTouches(w, s, pb, reach, overlap, eps, cosFeature, cl, keep);
+    const Candidate* cand = cl.c;
+    const int nc = cl.n;
+
+    bool usedOld[K] = {false, false, false, false};
+    int32_t kpiece[K];
+    for (int k = 0; k < K; ++k) kpiece[k] = key[k] >= 0 ? pb : -1;
+    // History slots of the touches, in order, then what touches
+    // that ended while pressing hand over (TouchSelection.hpp).
+    int slotOf[kCandidates];
+    for (int k = 0, nT = 0; k < nc; ++k) {
+        if (!keep[k] || nT == K) continue;
+        const Candidate& c = cand[k];
+        slotOf[k] = historySlot(key, kpiece, usedOld, K, historyKey(c.tri - t0, c.cp.feature), pb, cand, keep, nc,
+                                surf.triPiece.data(), surf.pieceTriStart.data());
+        if (slotOf[k] >= 0) usedOld[slotOf[k]] = true;
+        ++nT;
+    }
+    const bool touched = touchedPiece(key, kpiece, K, pb);
+    double handed[kCandidates];
+    for (int k = 0; k < nc; ++k) handed[k] = 0.0;
+    handOver(s.C, cand, nc, keep, surf.triPiece.data(), surf.pieceTriStart.data(), key, kpiece, ref, usedOld, K, eps,
+             [&](int32_t) { return reach; }, handed);
+    NewSlots<K> news;
+    int32_t newKey[K];
+    long count = 0;
+    for (int k = 0; k < nc; ++k) {
+        if (!keep[k] || news.full()) continue;
+        const Candidate& c = cand[k];
+        const int32_t* tn = &surf.tri[3 * c.tri];
+        double mT;
+        Vector3d vT;
+        trianglePointState(c, tn, w.mass, w.vel, mT, vT);
+        const PairConst pc = mix(sphereSide(S, i), materialSide(mb, mb.frictionPiece));
+        const Vector3d nT(S.triNormal[3 * c.tri], S.triNormal[3 * c.tri + 1], S.triNormal[3 * c.tri + 2]);
+        ContactGeometry g;
+        candidateContact(c, s.C, nT, pc.reach, eps, g.n, g.overlap);
+        // Contact point on the sphere, half the overlap inside it
+        // (YADE's convention): the lever arm of friction.
+        const Vector3d arm = -std::max(s.R - 0.5 * g.overlap, 0.0) * g.n;
+        // Dashpots on the reduced mass of the sphere and the triangle point.
+        g.mass = S.mass[i] * mT / (S.mass[i] + mT);
+        // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
+        // (a clump's is larger: this errs towards less drag, never towards reversing the slip).
+        const double mBall = 2.0 / 7.0 * S.mass[i];
+        g.slipMass = std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT;
+        // The sphere's material point at the nodes' time level, half
+        // a step back along its spin (Obstacle::velocityAt).
+        const Vector3d fromSpin = arm - s.spinOff;
+        g.vRel = s.v + s.w.cross(s.spinOff) + spinVelocity(s.w, fromSpin, dt) - vT;
+        // The spring turns with the ball's spin about n: a rigid
+        // body's, the same on every rank and smooth in time
+        // (doc/formulation.md, "Twist").
+        g.spin = s.w.dot(g.n);
+        // A contact found deep on a sphere already watched was missed,
+        // not made: it stores no energy it was not given (ContactDetail.hpp).
+        // One that splits off a touch of the piece is born at zero force
+        // (threshold 0: TouchSelection.hpp).
+        const int slot = slotOf[k];
+        ContactHistory h;
+        if (slot >= 0) h.shear = shear + 3 * slot, h.ref = ref + slot;
+        h.watched = watched;
+        h.threshold = slot < 0 && touched ? 0.0 : pc.reach;
+        h.handed = handed[k];
+        newKey[news.n] = historyKey(c.tri - t0, c.cp.feature);
+        const ContactResult r = loop.touch(pc, g, h, news, &tally.elastic, &tally);
+        F += r.force;
+        T += arm.cross(r.force);
+        for (int j = 0; j < 3; ++j)
+            if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
+        ++count;
+    }
+    for (int k = 0; k < K; ++k) key[k] = k < news.n ? newKey[k] : -1;
+    news.store(shear, ref);
+    double* ft = &S.pairForceTorque[6 * static_cast<std::size_t>(q)];
+    for (int d = 0; d < 3; ++d) ft[d] = F[d], ft[3 + d] = T[d];
+    return count;
+}
+
+// Under MPI the pair is computed by the owner of the lowest-id node of the
+// triangles within reach of the sphere (bounding spheres within R + r of its
+// centre).  With the contact halo as wide as Domain::sendContactHalo makes
+// it for spheres, that owner sees every such triangle, and a rank that sees
+// another lowest node owns none of them: each pair is computed once
+// (doc/parallel.md).
+bool ownsPair(const SpherePhase::Data& w, const Domain& dom, const SphereAt& s, int32_t pb, double reach) {
+    const SphereSet& S = w.spheres;
+    const SurfaceIndex& surf = w.surface;
+    const int32_t t0 = surf.pieceTriStart[pb];
+    const double qr = S.pieceTriRadius[pb] + reach;
+    int32_t lowest = INT32_MAX;
+    const Vector3d lo = s.C.array() - qr, hi = s.C.array() + qr;
+    S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
+        const int32_t t = t0 + local;
+        if (!S.triCurrent[t]) return;
+        const double Rt = S.triRadius[t] + reach;
+        if ((s.C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
+        for (int k = 0; k < 3; ++k) lowest = std::min(lowest, surf.tri[3 * t + k]);
+    });
+    return lowest != INT32_MAX && dom.owner(lowest) == dom.rank();
+}
+
+// A sphere that moves more than its contact reach in one step near a piece
+// can jump past the piece's surface before any contact sees it (a 2 cm
+// sphere at 500 m/s went through a 0.1 m plate): refused, naming the step
+// that would do.
+[[noreturn]] void reportFastSphere(const SpherePhase::Data& w, int32_t i, int32_t piece, double dt) {
+    const SphereSet& S = w.spheres;
+    const double speed = Vector3d(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]).norm();
+    const double reach = S.radius[i] + w.materials[w.pieces[piece].material].radius;
+    throw StabilityError(cat("QDEM: YADE sphere ", S.id[i], " moves ", speed * dt, " m per step (", speed,
+                             " m/s, dt = ", dt, " s) next to piece ", piece, ", more than its contact reach ", reach,
+                             " m (sphere radius ", S.radius[i], " m + the piece's QdemMat radius): it can ",
+                             "pass the piece's surface before any contact sees it. Lower O.dt below ", reach / speed,
+                             " s, or the speed."));
+}
+
+}  // namespace
+
 template <bool Friction>
 void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& eSlip, long& count) {
     SphereSet& S = w_.spheres;
-    const SurfaceIndex& surf = w_.surface;
     const int32_t n = S.size();
-    constexpr int K = SphereSet::kSlots;
-    const long stamp = w_.iter;
     const double cosFeature = std::cos(w_.settings.edgeFeatureAngle);
     const std::size_t nSurf = w_.surfNodes.size();
-    const bool regularized = w_.settings.frictionModel == FrictionModel::Regularized;
+    const ContactLoop<Friction> loop(dt, w_.settings.frictionModel == FrictionModel::Regularized,
+                                     w_.settings.frictionRegVelocity);
     const Domain* dom = w_.domain.any();
-    const int me = dom ? dom->rank() : 0;
-    const double* X = w_.pos.data();  // (a local: the loop stores through narrow pointers)
 
-    // A sphere that moves more than its contact reach in one step near a
-    // piece can jump past the piece's surface before any contact sees it (a
-    // 2 cm sphere at 500 m/s went through a 0.1 m plate): refused, naming
-    // the step that would do.  The lowest sphere index found, so that every
-    // thread count (and every MPI rank: all hold every sphere) says the same.
+    // Too fast to be seen (reportFastSphere): the lowest sphere index found,
+    // so that every thread count (and every MPI rank: all hold every sphere)
+    // says the same.
     int32_t fastSphere = INT32_MAX, fastPiece = -1;
     ThreadPartials<3> energyParts(omp_get_max_threads());  // elastic, damping, slip: added in thread order
 #pragma omp parallel reduction(+ : count)
     {
-        double eElT = 0, eDampT = 0, eSlipT = 0;
+        EnergyTally tally;
         std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
         bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
         double* buf = bufv.data();
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
-        Candidate* const cand = cl.c;
         bool keep[kCandidates];
         // Static chunks: a sphere goes to the same thread every run, so a given
         // thread count gives the same bits.  nowait: the region ends with the loop.
 #pragma omp for schedule(static, 16) nowait
         for (int32_t i = 0; i < n; ++i) {
-            const Vector3d C(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]);
-            const Vector3d v(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]);
-            const Vector3d w(S.angVel[3 * i], S.angVel[3 * i + 1], S.angVel[3 * i + 2]);
-            const Vector3d spinOff(S.spinOffset[3 * i], S.spinOffset[3 * i + 1], S.spinOffset[3 * i + 2]);
-            const double R = S.radius[i];
+            const SphereAt s{i, Vector3d(S.pos[3 * i], S.pos[3 * i + 1], S.pos[3 * i + 2]),
+                             Vector3d(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]),
+                             Vector3d(S.angVel[3 * i], S.angVel[3 * i + 1], S.angVel[3 * i + 2]),
+                             Vector3d(S.spinOffset[3 * i], S.spinOffset[3 * i + 1], S.spinOffset[3 * i + 2]),
+                             S.radius[i]};
             for (int32_t q = S.pairStart[i]; q < S.pairStart[i + 1]; ++q) {
                 const int32_t pb = S.pairPiece[q];
-                const Material& mb = w_.materials[w_.pieces[pb].material];
-                const double reach = R + mb.radius;
+                const double reach = s.R + w_.materials[w_.pieces[pb].material].radius;
                 bool overlap = true;  // piece box (grown by r) against the sphere's
                 for (int d = 0; d < 3 && overlap; ++d)
-                    overlap = C[d] - R <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= C[d] + R;
-                if (overlap && dt * v.norm() > reach) {
+                    overlap = s.C[d] - s.R <= w_.bounds.hi[3 * pb + d] && w_.bounds.lo[3 * pb + d] <= s.C[d] + s.R;
+                if (overlap && dt * s.v.norm() > reach) {
 #pragma omp critical(qdemFastSphere)
                     if (i < fastSphere) fastSphere = i, fastPiece = pb;
                 }
-                const int32_t t0 = surf.pieceTriStart[pb];
-                const double qr = S.pieceTriRadius[pb] + reach;
-                // Under MPI the pair is computed by the owner of the lowest-id
-                // node of the triangles within reach of the sphere (bounding
-                // spheres within R + r of its centre).  With the contact halo
-                // as wide as Domain::sendContactHalo makes it for spheres,
-                // that owner sees every such triangle, and a rank that sees
-                // another lowest node owns none of them: each pair is
-                // computed once (doc/parallel.md).
                 if (dom) {
                     if (!overlap) continue;  // no contact: unpackPairs clears it on every rank
-                    int32_t lowest = INT32_MAX;
-                    const Vector3d lo = C.array() - qr, hi = C.array() + qr;
-                    S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
-                        const int32_t t = t0 + local;
-                        if (!S.triCurrent[t]) return;
-                        const double Rt = S.triRadius[t] + reach;
-                        if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
-                        for (int k = 0; k < 3; ++k) lowest = std::min(lowest, surf.tri[3 * t + k]);
-                    });
-                    if (lowest == INT32_MAX || dom->owner(lowest) != me) continue;
+                    if (!ownsPair(w_, *dom, s, pb, reach)) continue;
                 }
-                S.pairComputed[q] = 1;
-                Vector3d F = Vector3d::Zero(), T = Vector3d::Zero();
-                int32_t* key = &S.slotKey[K * static_cast<std::size_t>(q)];
-                double* shear = &S.slotShear[3 * K * static_cast<std::size_t>(q)];
-                double* ref = &S.slotRef[K * static_cast<std::size_t>(q)];
-                const bool watched = S.pairStamp[q] == stamp - 1;
-                if (!watched)  // history is only valid from the previous step
-                    for (int k = 0; k < K; ++k) key[k] = -1;
-                S.pairStamp[q] = stamp;
-                cl.clear();
-                const int& nc = cl.n;
-                if (overlap) {
-                    const Vector3d lo = C.array() - qr, hi = C.array() + qr;
-                    S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
-                        const int32_t t = t0 + local;
-                        if (!S.triCurrent[t]) return;
-                        const double Rt = S.triRadius[t] + reach;
-                        if ((C - Eigen::Map<const Vector3d>(&S.triPoint[3 * t])).squaredNorm() > Rt * Rt) return;
-                        const int32_t* c = &surf.tri[3 * t];
-                        cl.consider(C, t, at(X, c[0]), at(X, c[1]), at(X, c[2]),
-                                    Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), reach, true);
-                    });
-                }
-                for (int k = 0; k < nc; ++k) keep[k] = true;
-                // Centre behind a face: inside the piece only if no front-facing
-                // surface point is nearer (as for nodes, PointPolygon.cpp).
-                if (cl.anyBehind)
-                    for (int k = 0; k < nc; ++k) {
-                        if (!cand[k].behind) continue;
-                        const double db = cand[k].dist;
-                        const Vector3d lo = C.array() - (S.pieceTriRadius[pb] + db);
-                        const Vector3d hi = C.array() + (S.pieceTriRadius[pb] + db);
-                        S.triGrid[pb].forRange(lo.data(), hi.data(), [&](int32_t local) {
-                            if (!keep[k]) return;
-                            const int32_t t = t0 + local;
-                            if (!S.triCurrent[t]) return;
-                            const int32_t* c = &surf.tri[3 * t];
-                            if (frontFaceNearer(C, at(X, c[0]), at(X, c[1]), at(X, c[2]),
-                                                Eigen::Map<const Vector3d>(&S.triNormal[3 * t]), db))
-                                keep[k] = false;
-                        });
-                    }
-                const double eps = 1e-12 * reach;
-                selectTouches(C, cand, nc, keep, surf.triPiece.data(), eps, cosFeature);
-
-                int32_t newKey[K];
-                double newRef[K];
-                Vector3d newShear[K];
-                bool usedOld[K] = {false, false, false, false};
-                int32_t kpiece[K];
-                for (int k = 0; k < K; ++k) kpiece[k] = key[k] >= 0 ? pb : -1;
-                // History slots of the touches, in order, then what touches
-                // that ended while pressing hand over (TouchSelection.hpp).
-                int slotOf[kCandidates];
-                for (int k = 0, nT = 0; k < nc; ++k) {
-                    if (!keep[k] || nT == K) continue;
-                    const Candidate& c = cand[k];
-                    slotOf[k] = historySlot(key, kpiece, usedOld, K, historyKey(c.tri - t0, c.cp.feature), pb, cand,
-                                            keep, nc, surf.triPiece.data(), surf.pieceTriStart.data());
-                    if (slotOf[k] >= 0) usedOld[slotOf[k]] = true;
-                    ++nT;
-                }
-                const bool touched = touchedPiece(key, kpiece, K, pb);
-                double handed[kCandidates];
-                for (int k = 0; k < nc; ++k) handed[k] = 0.0;
-                handOver(C, cand, nc, keep, surf.triPiece.data(), surf.pieceTriStart.data(), key, kpiece, ref, usedOld,
-                         K, eps, [&](int32_t) { return reach; }, handed);
-                int nNew = 0;
-                for (int k = 0; k < nc; ++k) {
-                    if (!keep[k] || nNew == K) continue;
-                    const Candidate& c = cand[k];
-                    const int32_t* tn = &surf.tri[3 * c.tri];
-                    double mT;
-                    Vector3d vT;
-                    trianglePointState(c, tn, w_.mass, w_.vel, mT, vT);
-                    const PairLaw law = sphereLaw(S, i, mb, mT);
-                    const Vector3d nT(S.triNormal[3 * c.tri], S.triNormal[3 * c.tri + 1], S.triNormal[3 * c.tri + 2]);
-                    Vector3d nrm;
-                    double ov;
-                    candidateContact(c, C, nT, law.reach, eps, nrm, ov);
-                    // Contact point on the sphere, half the overlap inside it
-                    // (YADE's convention): the lever arm of friction.
-                    const Vector3d arm = -std::max(R - 0.5 * ov, 0.0) * nrm;
-                    const int32_t kk = historyKey(c.tri - t0, c.cp.feature);
-                    const int slot = slotOf[k];
-                    Vector3d sh = Vector3d::Zero();
-                    if (slot >= 0) {
-                        sh = Vector3d(shear[3 * slot], shear[3 * slot + 1], shear[3 * slot + 2]);
-                    }
-                    // Tangential mass of a solid ball at its surface: 1/m + R^2/I = 7/(2m)
-                    // (a clump's is larger: this errs towards less drag, never towards reversing the slip).
-                    const double mBall = 2.0 / 7.0 * S.mass[i];
-                    const ContactParams prm{law.kn, law.cn, law.kt, law.ct, law.mu, w_.settings.frictionRegVelocity,
-                                            std::isfinite(mBall) ? mBall * mT / (mBall + mT) : mT};
-                    // The sphere's material point at the nodes' time level, half
-                    // a step back along its spin (Obstacle::velocityAt).
-                    const Vector3d fromSpin = arm - spinOff;
-                    const Vector3d vRel = v + w.cross(spinOff) + spinVelocity(w, fromSpin, dt) - vT;
-                    // A contact found deep on a sphere already watched was missed,
-                    // not made: it stores no energy it was not given (ContactDetail.hpp).
-                    // One that splits off a touch of the piece is born at zero force
-                    // (threshold 0: TouchSelection.hpp).
-                    double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, watched, ov,
-                                            slot < 0 && touched ? 0.0 : law.reach, vRel.dot(nrm), dt);
-                    if (handed[k] > 0) r0 = handOverRef(ov, r0, handed[k]);
-                    // The spring turns with the ball's spin about n: a rigid
-                    // body's, the same on every rank and smooth in time
-                    // (doc/formulation.md, "Twist").
-                    const ContactResult r =
-                        lawForce(Friction && law.mu > 0, regularized, prm, nrm, ov - r0, vRel, dt, sh, w.dot(nrm));
-                    newKey[nNew] = kk;
-                    newRef[nNew] = r0;
-                    newShear[nNew] = sh;
-                    ++nNew;
-                    F += r.force;
-                    T += arm.cross(r.force);
-                    for (int j = 0; j < 3; ++j)
-                        if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
-                    eElT += r.elastic;
-                    eDampT += r.dampPower * dt;
-                    eSlipT += r.slipWork;
-                    ++count;
-                }
-                for (int k = 0; k < K; ++k) {
-                    key[k] = k < nNew ? newKey[k] : -1;
-                    ref[k] = k < nNew ? newRef[k] : 0.0;
-                    if (k < nNew)
-                        for (int d = 0; d < 3; ++d) shear[3 * k + d] = newShear[k][d];
-                }
-                double* ft = &S.pairForceTorque[6 * static_cast<std::size_t>(q)];
-                for (int d = 0; d < 3; ++d) ft[d] = F[d], ft[3 + d] = T[d];
+                count += pairContacts<Friction>(w_, loop, s, q, overlap, cosFeature, cl, keep, buf, tally);
             }
         }
-        energyParts.set(omp_get_thread_num(), {eElT, eDampT, eSlipT});
+        energyParts.set(omp_get_thread_num(), {tally.elastic, tally.damp, tally.slip});
     }
     const std::array<double, 3> energySum = energyParts.sum();
     eEl += energySum[0];
     eDamp += energySum[1];
     eSlip += energySum[2];
-    if (fastSphere != INT32_MAX) {
-        const int32_t i = fastSphere;
-        const double speed = Vector3d(S.vel[3 * i], S.vel[3 * i + 1], S.vel[3 * i + 2]).norm();
-        const double reach = S.radius[i] + w_.materials[w_.pieces[fastPiece].material].radius;
-        throw StabilityError(cat("QDEM: YADE sphere ", S.id[i], " moves ", speed * dt, " m per step (", speed,
-                                 " m/s, dt = ", dt, " s) next to piece ", fastPiece, ", more than its contact reach ",
-                                 reach, " m (sphere radius ", S.radius[i], " m + the piece's QdemMat radius): it can ",
-                                 "pass the piece's surface before any contact sees it. Lower O.dt below ",
-                                 reach / speed, " s, or the speed."));
-    }
+    if (fastSphere != INT32_MAX) reportFastSphere(w_, fastSphere, fastPiece, dt);
 }
 
 template void SpherePhase::sphereContacts<true>(double, double&, double&, double&, long&);

@@ -165,7 +165,13 @@ inline SettingRange oneOf(std::vector<std::string> names) {
     X(bool, nodeSpringTestOn, "nodeSpringTest", false, anyValue(),                                                   \
       "A test-only contact kind between pieces (doc/architecture.md, 'Add a contact kind'): surface nodes of "      \
       "different pieces closer than r_a + r_b bond at their distance then, with a spring k = E r / 10 [N/m] that "  \
-      "breaks when stretched to r_a + r_b. Not a physical model: it proves a kind with history is one file.")
+      "breaks when stretched to r_a + r_b. Not a physical model: it proves a kind with history is one file.")  \
+    X(bool, obstaclesOn, "couple", true, anyValue(),                                                                 \
+      "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again whenever the number of bodies "          \
+      "changes): the contact kind 'wall' of the contact-kinds table.")                                               \
+    X(bool, spheresOn, "spheres", true, anyValue(),                                                                  \
+      "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): needs an InsertionSortCollider in "  \
+      "O.engines, before this engine.  The contact kind 'sphere' of the contact-kinds table.")
 
 struct Settings {
 #define QDEM_SETTING_MEMBER(T, name, engineName, def, range, doc) T name = def;

@@ -63,8 +63,6 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
     ratio of the latest episode).  A law that cannot push an inverted element
     back (law='saintVenantKirchhoff') stops the run with qdem.StabilityError."""
 
-    couple = Attr(True, "Couple QDEM nodes to YADE Wall, Box and Facet bodies (scanned again "
-                        "whenever the number of bodies changes).", boolean)
     checkDt = Attr(True, "Refuse to step when O.dt is above the stable time step "
                          "(raises qdem.StabilityError naming the limit).", boolean)
     checkPeriod = Attr(100, "Every this many steps, count inverted elements (see inverted) and (with "
@@ -88,8 +86,6 @@ class QdemEngine(FollowsDefaultWorld, PyRunner, metaclass=EngineMeta):
                           integer(0, extra=" (0 = silent)"))
     threads = Attr(0, "OpenMP threads for QDEM (0 = YADE's own count, from yade -j).  YADE keeps its "
                       "own count either way.", integer(0, extra=" (0 = YADE's own count)"))
-    spheres = Attr(True, "Couple QDEM pieces with YADE spheres and clump members (doc/spheres.md): "
-                         "needs an InsertionSortCollider in O.engines, before this engine.", boolean)
     sphereMask = Attr(-1, "groupMask of the proxy bodies that find spheres near pieces: only spheres "
                           "whose mask shares a bit with it touch QDEM pieces (-1 = all).",
                       integer(-2**31, 2**31 - 1, extra=" (a YADE groupMask; -1 = all)"))
