@@ -13,6 +13,7 @@
 
 #include "../contact/ContactDetail.hpp"
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactLoop.hpp"
 #include "../contact/Geometry.hpp"
 #include "../core/ThreadPartials.hpp"
 #include "../parallel/Domain.hpp"
@@ -94,7 +95,8 @@ struct EdgeEdgeKind::Step {
 
 // One thread's buffers and tallies.
 struct EdgeEdgeKind::Thread {
-    double eDamp = 0, eSlip = 0, maxOv = 0;
+    EnergyTally energy{};  // damping and slip [J] (the elastic energy goes to the piece's ledger entry)
+    double maxOv = 0;
     long count = 0;
     double* buf;
     double* load;
@@ -116,9 +118,7 @@ struct EdgeEdgeKind::Edge {
     bool watched;
     int32_t newOther[K], newOtherPiece[K];
     int8_t newSide[K];
-    Vector3d newShear[K];
-    double newRef[K];
-    int nNew = 0;
+    NewSlots<K> slots;  // the kept pairs' springs and references
 };
 
 namespace {
@@ -252,9 +252,12 @@ QDEM_INLINE void pairForce(const Step& P, Thread& T, Edge& E, const PairGeometry
     const Vector3d& n = G.n;
     const double m1 = (1 - sp.s) * M[a0] + sp.s * M[a1];
     const double m2 = (1 - sp.t) * M[b0] + sp.t * M[b1];
-    const PairLaw law = pairLaw(*E.ma, *G.mb, m1, m2);
-    const Vector3d vRel = ((1 - sp.s) * at(V, a0) + sp.s * at(V, a1)) - ((1 - sp.t) * at(V, b0) + sp.t * at(V, b1));
-    Vector3d sh = Vector3d::Zero();
+    const PairConst pc = pairConst(*E.ma, *G.mb);
+    ContactGeometry g;
+    g.n = n;
+    g.overlap = overlap;
+    g.vRel = ((1 - sp.s) * at(V, a0) + sp.s * at(V, a1)) - ((1 - sp.t) * at(V, b0) + sp.t * at(V, b1));
+    g.mass = g.slipMass = m1 * m2 / (m1 + m2);
     // Area weight (doc/contacts.md, "Area weights"): the mean of
     // the two crossing points' weights, each interpolated along
     // its edge, so it varies continuously as the crossing slides
@@ -263,14 +266,24 @@ QDEM_INLINE void pairForce(const Step& P, Thread& T, Edge& E, const PairGeometry
     const double aw = 0.5 * ((1 - sp.s) * sw[S.surfIndexOfNode[a0]] + sp.s * sw[S.surfIndexOfNode[a1]] +
                              (1 - sp.t) * sw[S.surfIndexOfNode[b0]] + sp.t * sw[S.surfIndexOfNode[b1]]);
     const double saw = std::sqrt(aw);
-    if (slot >= 0) {
-        sh = Vector3d(E.shear[3 * slot], E.shear[3 * slot + 1], E.shear[3 * slot + 2]);
-        if (!regularized) sh /= std::sqrt(w * aw);  // (stored times sqrt(w aw), below)
+    g.stiffWeight = w * aw;
+    g.dampWeight = w * saw;
+    const ContactLoop<Friction> loop(dt, regularized, P.w.settings.frictionRegVelocity);
+    // Turned at the mean spin of the two edges at their
+    // crossing points, each interpolated along its edge
+    // (doc/formulation.md, "Twist").
+    if (loop.turns(pc)) {
+        const double* om = P.L.surfSpin.data();
+        const int32_t* si = S.surfIndexOfNode.data();
+        g.spin = 0.5 * ((1 - sp.s) * at(om, si[a0]) + sp.s * at(om, si[a1]) + (1 - sp.t) * at(om, si[b0]) +
+                        sp.t * at(om, si[b1]))
+                           .dot(n);
     }
-    const ContactParams cp{w * aw * law.kn, w * saw * law.cn, w * aw * law.kt, w * saw * law.ct, law.mu,
-                           P.w.settings.frictionRegVelocity, m1 * m2 / (m1 + m2)};
+    ContactHistory h;
+    if (slot >= 0) h.shear = &E.shear[3 * slot], h.ref = &E.ref[slot];
+    h.watched = E.watched;
     // Born deep (doc/contacts.md §5), with the edge-edge
-    // threshold: a crossing is made at the reach, so a new
+    // threshold 0: a crossing is made at the reach, so a new
     // pair deeper than this step's approach did not come by
     // an approach but by its closest points entering both
     // edges' interiors at depth -- typically the crossing
@@ -278,19 +291,16 @@ QDEM_INLINE void pairForce(const Step& P, Thread& T, Edge& E, const PairGeometry
     // where the end fades differ.  Born with its full spring
     // it brought 1/2 kn w aw delta^2 from nowhere (+13 % at
     // 30 degrees, test_crossed_bars_conserve_energy).
-    const double r0 = bornDeepRef(slot >= 0, slot >= 0 ? E.ref[slot] : 0.0, E.watched, overlap, 0.0, vRel.dot(n), dt);
-    // Turned at the mean spin of the two edges at their
-    // crossing points, each interpolated along its edge
-    // (doc/formulation.md, "Twist").
-    double spin = 0;
-    if (Friction && law.mu > 0 && !regularized) {
-        const double* om = P.L.surfSpin.data();
-        const int32_t* si = S.surfIndexOfNode.data();
-        spin = 0.5 * ((1 - sp.s) * at(om, si[a0]) + sp.s * at(om, si[a1]) + (1 - sp.t) * at(om, si[b0]) +
-                      sp.t * at(om, si[b1]))
-                         .dot(n);
-    }
-    const ContactResult r = lawForce(Friction && law.mu > 0, regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
+    h.threshold = 0.0;
+    // Kept as sqrt(w aw) times the elongation: carried to a
+    // step where the weight differs, the spring keeps the energy
+    // it stored, 1/2 kt w aw |shear|^2, instead of gaining or
+    // losing 1/2 kt d(w aw) |shear|^2 unbooked.
+    h.shearScale = regularized ? 0.0 : std::sqrt(w * aw);
+    ContactParams cp;
+    const ContactResult r = loop.touch(pc, g, h, E.slots, T.pe ? &T.pe[3 * pa + 2] : nullptr, &T.energy, &cp);
+    const double r0 = E.slots.ref[E.slots.n - 1];
+    const Vector3d& vRel = g.vRel;
     // The spring's stiffness w aw kn varies with the geometry
     // (the fades, the area weight), so kn w aw delta n alone is
     // not the gradient of the energy 1/2 kn w aw delta^2 it
@@ -304,20 +314,13 @@ QDEM_INLINE void pairForce(const Step& P, Thread& T, Edge& E, const PairGeometry
         weightGradient(E.p1, E.q1, G.p2, G.q2, sp, reach, P.sinFade2, G.fade, G.endS, G.endT, aw,
                        0.5 * (sw[S.surfIndexOfNode[a1]] - sw[S.surfIndexOfNode[a0]]),
                        0.5 * (sw[S.surfIndexOfNode[b1]] - sw[S.surfIndexOfNode[b0]]), fw);
-        const double c = -0.5 * law.kn * del * del;
+        const double c = -0.5 * pc.kn * del * del;
         for (auto& f : fw) f *= c;
     }
-    const int nNew = E.nNew;
+    const int nNew = E.slots.n - 1;
     E.newOther[nNew] = G.local2;
     E.newOtherPiece[nNew] = pb;
     E.newSide[nNew] = static_cast<int8_t>(G.sUse);
-    // Kept as sqrt(w aw) times the elongation: carried to a
-    // step where the weight differs, the spring keeps the energy
-    // it stored, 1/2 kt w aw |shear|^2, instead of gaining or
-    // losing 1/2 kt d(w aw) |shear|^2 unbooked.
-    E.newShear[nNew] = regularized ? sh : Vector3d(sh * std::sqrt(w * aw));
-    E.newRef[nNew] = r0;
-    ++E.nNew;
     double* buf = T.buf;
     addTo(buf, S.surfIndexOfNode[a0], (1 - sp.s) * r.force + fw[0]);
     addTo(buf, S.surfIndexOfNode[a1], sp.s * r.force + fw[1]);
@@ -325,19 +328,16 @@ QDEM_INLINE void pairForce(const Step& P, Thread& T, Edge& E, const PairGeometry
     addTo(buf, S.surfIndexOfNode[b1], -sp.t * r.force + fw[3]);
     {
         double* load = T.load;
-        const bool tangential = Friction && law.mu > 0 && !regularized;
+        const bool tangential = loop.turns(pc);
         const double ra = 0.5 * (m1 + m2) / m2, rb = 0.5 * (m1 + m2) / m1;  // (1 + theta, 1 + 1/theta) / 2
         addContactLoad(load, S.surfIndexOfNode[a0], (1 - sp.s) * ra, cp, tangential);
         addContactLoad(load, S.surfIndexOfNode[a1], sp.s * ra, cp, tangential);
         addContactLoad(load, S.surfIndexOfNode[b0], (1 - sp.t) * rb, cp, tangential);
         addContactLoad(load, S.surfIndexOfNode[b1], sp.t * rb, cp, tangential);
     }
-    if (T.pe) T.pe[3 * pa + 2] += r.elastic;
     // Edges crossed (overlap past the reach): how far behind
     // the other edge, against the reach (the per-step check).
     P.phase.noteDepth(T.deep, overlap - reach, reach, vRel.dot(n), a0, pa, pb, true);
-    T.eDamp += r.dampPower * dt;
-    T.eSlip += r.slipWork;
     ++T.count;
     T.maxOv = std::max(T.maxOv, overlap);
 }
@@ -371,7 +371,7 @@ QDEM_INLINE void edgeContacts(const Step& P, Thread& T, int32_t ie) {
     E.len1 = (E.q1 - E.p1).norm();
     // One pair of edges: je indexes the registered edges.
     auto pair = [&](int32_t je) {
-        if (E.nNew == K) return;
+        if (E.slots.full()) return;
         PairGeometry G;
         if (pairGeometry(P, E, je, G)) pairForce<Friction>(P, T, E, G);
     };
@@ -395,16 +395,14 @@ QDEM_INLINE void edgeContacts(const Step& P, Thread& T, int32_t ie) {
             st.edgeGrid[pb].forOverlapping(lo, hi, [&](int32_t local) { pair(j0 + local); });
         }
     }
-    const int nNew = E.nNew;
+    const int nNew = E.slots.n;
     if (nNew == 0 && E.other[0] < 0) return;  // no touch, none before (slots fill from 0): nothing to store
     for (int k = 0; k < K; ++k) {
         E.other[k] = k < nNew ? E.newOther[k] : -1;
         E.otherPiece[k] = k < nNew ? E.newOtherPiece[k] : -1;
         E.side[k] = k < nNew ? E.newSide[k] : 0;
-        E.ref[k] = k < nNew ? E.newRef[k] : 0.0;
-        if (k < nNew)
-            for (int d = 0; d < 3; ++d) E.shear[3 * k + d] = E.newShear[k][d];
     }
+    E.slots.store(E.shear, E.ref);
 }
 
 }  // namespace
@@ -456,7 +454,7 @@ long EdgeEdgeKind::sweep(KindStep& ks) {
         // thread buffer).  nowait: the region ends with the loop.
 #pragma omp for schedule(static, 64) nowait
         for (int32_t ie = 0; ie < P.ne; ++ie) edgeContacts<Friction>(P, T, ie);
-        energyParts.set(th, {T.eDamp, T.eSlip});
+        energyParts.set(th, {T.energy.damp, T.energy.slip});
         count += T.count;
         maxOv = std::max(maxOv, T.maxOv);
     }

@@ -16,6 +16,7 @@
 
 #include "../contact/ContactDetail.hpp"
 #include "../contact/ContactLaw.hpp"
+#include "../contact/ContactLoop.hpp"
 #include "../contact/Geometry.hpp"
 #include "../contact/PointTriangle.hpp"
 #include "../contact/TouchSelection.hpp"
@@ -75,7 +76,8 @@ struct PointPolygonKind::Step {
 // One thread's buffers and tallies.
 struct PointPolygonKind::Thread {
     Thread(double* b, double* l, double* p, PieceContactPhase::DeepContact& d) : buf(b), load(l), pe(p), deep(d) {}
-    double eDamp = 0, eSlip = 0, maxOv = 0;
+    EnergyTally energy;  // damping and slip [J] (the elastic energy goes to the piece's ledger entry)
+    double maxOv = 0;
     long count = 0, interiorTests = 0, interiorNear = 0, listed = 0;
     double* buf;
     double* load;
@@ -377,8 +379,8 @@ QDEM_INLINE void applyTouches(const Step& P, Thread& T, Node& N, uint32_t touche
     double* ref = N.ref;
     const double dt = P.dt;
     int32_t newKey[K], newPiece[K];
-    Vector3d newShear[K];
-    double newRef[K];
+    NewSlots<K> slots;  // the kept contacts' springs and references
+    const ContactLoop<Friction> loop(dt, P.regularized, w.settings.frictionRegVelocity);
     bool usedOld[K] = {false, false, false, false, false, false};
     // History slots of the touches, in order, then what touches that
     // ended while pressing hand over (TouchSelection.hpp).
@@ -402,9 +404,8 @@ QDEM_INLINE void applyTouches(const Step& P, Thread& T, Node& N, uint32_t touche
                                  eps, [&](int32_t pb) { return lawOf(P, T, N, pb).reach; }, handed);
         }
     }
-    int nNew = 0;
     Vector3d fA = Vector3d::Zero();
-    for (uint32_t m = touches; m && nNew < K; m &= m - 1) {  // the kept candidates in order
+    for (uint32_t m = touches; m && !slots.full(); m &= m - 1) {  // the kept candidates in order
         const int i = std::countr_zero(m);
         const Candidate& c = cand[i];
         const int32_t* tn = &S.tri[3 * c.tri];
@@ -412,55 +413,50 @@ QDEM_INLINE void applyTouches(const Step& P, Thread& T, Node& N, uint32_t touche
         double mT;
         Vector3d vT;
         trianglePointState(c, tn, w.mass, w.vel, mT, vT);
-        const PairLaw law = pairLaw(lawOf(P, T, N, pb), w.mass[node], mT);
+        const PairConst pc = lawOf(P, T, N, pb);
+        const double reach = pc.reach;
         const Vector3d nT(P.L.triNormal[3 * c.tri], P.L.triNormal[3 * c.tri + 1], P.L.triNormal[3 * c.tri + 2]);
-        Vector3d n;
-        double overlap;
-        candidateContact(c, N.A, nT, law.reach, eps, n, overlap);
+        ContactGeometry g;
+        candidateContact(c, N.A, nT, reach, eps, g.n, g.overlap);
         // Tangential history: same surface feature, else inherited from
         // a contact with the same piece that ended this step (a node
         // sliding onto the next triangle keeps its spring).
-        const int32_t kk = historyKey(c.tri - S.pieceTriStart[pb], c.cp.feature);
         const int slot = slotOf[i];
-        Vector3d sh = Vector3d::Zero();
-        if (slot >= 0) sh = Vector3d(N.shear[3 * slot], N.shear[3 * slot + 1], N.shear[3 * slot + 2]);
-        const double wt = w.surfWeight[s], sw = std::sqrt(wt);  // the query node's area weight
-        const ContactParams cp{wt * law.kn, sw * law.cn, wt * law.kt, sw * law.ct, law.mu, w.settings.frictionRegVelocity,
-                               w.mass[node] * mT / (w.mass[node] + mT)};
-        const Vector3d vRel = at(w.vel, node) - vT;
-        // A touch that splits off one with the same piece starts from zero
-        // force (threshold 0, TouchSelection.hpp); one missed by the
-        // detection from its present overlap (threshold the reach).
-        const bool split = slot < 0 && touchedPiece(key, kpiece, K, pb);
-        double r0 = bornDeepRef(slot >= 0, slot >= 0 ? ref[slot] : 0.0, N.watched, overlap, split ? 0.0 : law.reach,
-                                vRel.dot(n), dt);
-        if (anyHanded && handed[i] > 0) r0 = handOverRef(overlap, r0, handed[i]);
+        g.vRel = at(w.vel, node) - vT;
+        g.mass = g.slipMass = w.mass[node] * mT / (w.mass[node] + mT);
+        g.stiffWeight = w.surfWeight[s];  // the query node's area weight
+        g.dampWeight = std::sqrt(g.stiffWeight);
         // The spring turns with the contact about n at the mean spin
         // of its two sides: the node's own, and the triangle's at the
         // contact point, interpolated from its corners' (surface spins
         // continuous over the surface: SurfaceSpin.hpp, doc/formulation.md
         // "Twist").
-        double spin = 0;
-        if (Friction && law.mu > 0 && !P.regularized) {
+        if (loop.turns(pc)) {
             const double* om = P.L.surfSpin.data();
             Vector3d wSum = at(om, s);
             for (int k = 0; k < 3; ++k) wSum += c.cp.w[k] * at(om, S.surfIndexOfNode[tn[k]]);
-            spin = 0.5 * wSum.dot(n);
+            g.spin = 0.5 * wSum.dot(g.n);
         }
-        const ContactResult r = lawForce(Friction && law.mu > 0, P.regularized, cp, n, overlap - r0, vRel, dt, sh, spin);
+        // A touch that splits off one with the same piece starts from zero
+        // force (threshold 0, TouchSelection.hpp); one missed by the
+        // detection from its present overlap (threshold the reach).
+        ContactHistory h;
+        if (slot >= 0) h.shear = &N.shear[3 * slot], h.ref = &ref[slot];
+        h.watched = N.watched;
+        h.threshold = slot < 0 && touchedPiece(key, kpiece, K, pb) ? 0.0 : reach;
+        h.handed = anyHanded ? handed[i] : 0.0;
+        ContactParams cp;
+        const ContactResult r = loop.touch(pc, g, h, slots, T.pe ? &T.pe[3 * pa + 2] : nullptr, &T.energy, &cp);
         // How deep the node is behind pb's surface (overlap - reach:
         // > 0 behind it), against the reach: the per-step check.
-        P.phase.noteDepth(T.deep, overlap - law.reach, law.reach, vRel.dot(n), node, pa, pb, false);
+        P.phase.noteDepth(T.deep, g.overlap - reach, reach, g.vRel.dot(g.n), node, pa, pb, false);
         if (P.startPending && !(P.startChecked[pa] && P.startChecked[pb]))
-            P.phase.notePress(pa, pb, r.elastic, overlap);  // placed pressed in: the start warning's energy
-        newKey[nNew] = kk;
-        newPiece[nNew] = pb;
-        newShear[nNew] = sh;
-        newRef[nNew] = r0;
-        ++nNew;
+            P.phase.notePress(pa, pb, r.elastic, g.overlap);  // placed pressed in: the start warning's energy
+        newKey[slots.n - 1] = historyKey(c.tri - S.pieceTriStart[pb], c.cp.feature);
+        newPiece[slots.n - 1] = pb;
         fA += r.force;
         // (the tangential spring and dashpot act with the spring law only)
-        const bool tangential = Friction && law.mu > 0 && !P.regularized;
+        const bool tangential = loop.turns(pc);
         // (theta = m_node / m_T: ContactLoad.hpp)
         const double mSum = w.mass[node] + mT;
         addContactLoad(T.load, s, 0.5 * mSum / mT, cp, tangential);  // (adds 2 x share)
@@ -469,20 +465,15 @@ QDEM_INLINE void applyTouches(const Step& P, Thread& T, Node& N, uint32_t touche
                 addTo(T.buf, S.surfIndexOfNode[tn[k]], -c.cp.w[k] * r.force);
                 addContactLoad(T.load, S.surfIndexOfNode[tn[k]], 0.5 * c.cp.w[k] * mSum / w.mass[node], cp, tangential);
             }
-        if (T.pe) T.pe[3 * pa + 2] += r.elastic;
-        T.eDamp += r.dampPower * dt;
-        T.eSlip += r.slipWork;
         ++T.count;
-        T.maxOv = std::max(T.maxOv, overlap);
+        T.maxOv = std::max(T.maxOv, g.overlap);
     }
     addTo(T.buf, s, fA);
     for (int k = 0; k < K; ++k) {
-        key[k] = k < nNew ? newKey[k] : -1;
-        kpiece[k] = k < nNew ? newPiece[k] : -1;
-        ref[k] = k < nNew ? newRef[k] : 0.0;
-        if (k < nNew)
-            for (int d = 0; d < 3; ++d) N.shear[3 * k + d] = newShear[k][d];
+        key[k] = k < slots.n ? newKey[k] : -1;
+        kpiece[k] = k < slots.n ? newPiece[k] : -1;
     }
+    slots.store(N.shear, ref);
 }
 
 // Surface node s: its candidates, the inside test, its touches.
@@ -615,7 +606,7 @@ long PointPolygonKind::sweep(KindStep& ks) {
         // thread buffer).  nowait: the region ends with the loop.
 #pragma omp for schedule(static, 64) nowait
         for (int32_t s = 0; s < P.ns; ++s) nodeContacts<Friction>(P, T, s);
-        energyParts.set(th, {T.eDamp, T.eSlip});
+        energyParts.set(th, {T.energy.damp, T.energy.slip});
         count += T.count, interiorTests += T.interiorTests, interiorNear += T.interiorNear, listed += T.listed;
         maxOv = std::max(maxOv, T.maxOv);
     }
