@@ -14,6 +14,8 @@
 #include "../core/ThreadPartials.hpp"
 #include "../core/Format.hpp"
 #include "../step/AwakeSet.hpp"
+#include "ContactLoad.hpp"
+#include "ObstacleCrushCheck.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -179,6 +181,7 @@ void ObstaclePhase::run(double dt) {
         pieceExtent_[ip] = std::min(e, restDiagonal_[ip]);
     }
     const double* extent = pieceExtent_.data();
+    double* const load = w_.contacts.beginLoad();  // each node's springs: the run-time stable step (ContactLoad.hpp)
     threadThrough_.assign(nth, Through{});
     threadDeepest_.assign(nth, Deepest{});
     long nWall = 0;
@@ -324,6 +327,7 @@ void ObstaclePhase::run(double dt) {
                 ++used;
                 ++nWall;
                 fNode += r.force;
+                addObstacleContactLoad(load, s, M[node] * g, cp, frictionOn && mu > 0 && !regularized);
                 double* R = react + 6 * j;
                 if (dyn && o.dynamic()) {
                     // Its springs and dashpots on the obstacle's mobility at the
@@ -384,6 +388,9 @@ void ObstaclePhase::run(double dt) {
                 deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
             if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
         }
+    // Inner nodes through a box, facet or two-sided wall: the same, where no
+    // depth says it (ObstacleCrushCheck.cpp).
+    checkInnerNodesThrough(w_, pieceObstacles_, pieceObstacleBegin_, pairConst_, surfaceNode_, dt);
     if (anyDynamic) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)

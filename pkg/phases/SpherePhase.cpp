@@ -23,6 +23,7 @@
 #include "../contact/TouchSelection.hpp"
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
+#include "ContactLoad.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -364,6 +365,7 @@ void SpherePhase::run(double dt) {
     w_.contacts.begin();
     const int nth = omp_get_max_threads();
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
+    if (static_cast<int>(S.threadLoad.size()) != nth) S.threadLoad.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
     long count = 0;
     if (w_.settings.frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
@@ -377,6 +379,7 @@ void SpherePhase::run(double dt) {
         for (int32_t s = s0; s < s1; ++s)
             for (int th = 0; th < nth; ++th)
                 for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+        addThreadLoads(S.threadLoad, s0, s1, w_.contacts.beginLoad());  // (ContactLoad.hpp)
     }
     contacts_ = count;
     // Under MPI each rank holds only the pairs it computed: the sums come
@@ -416,6 +419,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
         std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
         bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
         double* buf = bufv.data();
+        std::vector<double>& loadv = S.threadLoad[omp_get_thread_num()];
+        loadv.assign(2 * nSurf, 0.0);
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
         Candidate* const cand = cl.c;
         bool keep[kCandidates];
@@ -579,6 +584,9 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     T += arm.cross(r.force);
                     for (int j = 0; j < 3; ++j)
                         if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
+                    const int32_t si[3] = {surf.surfIndexOfNode[tn[0]], surf.surfIndexOfNode[tn[1]],
+                                           surf.surfIndexOfNode[tn[2]]};
+                    addSphereContactLoad(loadv.data(), si, c.cp.w, mT, S.mass[i], prm, Friction && law.mu > 0 && !regularized);
                     eElT += r.elastic;
                     eDampT += r.dampPower * dt;
                     eSlipT += r.slipWork;
