@@ -12,7 +12,9 @@
 // the two passed the check and blew up.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 
@@ -160,19 +162,20 @@ TEST(StableStepWalls, NodesSqueezedBetweenAPieceAndTheFloor) {
 // piece-piece springs alone give: the run stops in its first step, naming
 // the node and the step that would do, instead of blowing up.
 TEST(StableStepWalls, ARunBetweenThePieceOnlyAndTheTrueLimitStops) {
+    std::mt19937_64 g(31);
     Squeeze q;
-    q.radius = 0.05, q.friction = 0, q.poisson = 0.3, q.restitution = 1.0, q.dy = 0.0;
+    for (int trial = 0; trial <= 38; ++trial) q = sample(g, trial);  // r = 6.4 cm, friction, 6 tets per cell
     World probe;
     build(probe, q);
     probe.step(1e-12);
     const double reported = probe.stableDt().combined;
     const double exact = exactStep(probe, q, reported);
-    ASSERT_LE(reported, exact * (1 + 1e-6));
-    const double dt = 1.05 * exact;  // above the true limit
+    EXPECT_LE(reported, exact * (1 + 1e-6));
     World w;
     build(w, q);
-    // The estimate before the run lets it through (one spring per node).
-    ASSERT_NO_THROW(w.checkDt(dt)) << "dt " << dt << " s, exact " << exact << " s";
+    // Above the true limit, below the estimate before the run (one spring per node).
+    const double dt = std::min(1.05 * exact, 0.999 * w.stableDt().combined);
+    ASSERT_GT(dt, exact);
     bool threw = false;
     std::string message;
     double fastest = 0;
@@ -194,20 +197,3 @@ TEST(StableStepWalls, ARunBetweenThePieceOnlyAndTheTrueLimitStops) {
     EXPECT_EQ(steps, 0) << message;  // in the step the springs act, not later
 }
 
-TEST(StableStepWalls, Explore) {
-    for (double r : {0.003, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2})
-        for (int tpc : {5, 6})
-            for (double fr : {0.0, 0.3})
-                for (double nu : {-0.5, 0.3, 0.45}) {
-                    Squeeze q;
-                    q.radius = r, q.tpc = tpc, q.friction = fr, q.poisson = nu, q.restitution = 1.0, q.dy = 0;
-                    World a;
-                    build(a, q);
-                    const double before = a.stableDt().combined;
-                    a.step(1e-12);
-                    const StableDt d = a.stableDt();
-                    const double exact = exactStep(a, q, d.combined);
-                    std::printf("r %.3f tpc %d fr %.1f nu %.2f: before %.4g after %.4g (pc %.4g) exact %.4g  before/exact %.3f\n", r, tpc, fr,
-                                nu, before, d.combined, d.pieceContact, exact, before / exact);
-                }
-}

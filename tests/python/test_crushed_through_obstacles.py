@@ -22,7 +22,7 @@ def _spec(obstacle, law="stableNeoHookean"):
             "obstacle": dict(obstacle, frictionAngle=0.0), "incidence": 0.0}
 
 
-@pytest.mark.parametrize("obstacle,name", [({"kind": "facets"}, "facet"), ({"kind": "box"}, "box")])
+@pytest.mark.parametrize("obstacle,name", [({"kind": "box"}, "box"), ({"kind": "wall", "axis": 2, "sense": 0}, "wall")])
 def test_a_cube_crushed_through_a_facet_or_a_box_stops_naming_it(scene, obstacle, name):
     out = fuzzscene.runScene(_spec(obstacle))
     print(out)
