@@ -138,7 +138,9 @@ Squeeze sample(std::mt19937_64& g, int trial) {
 }  // namespace
 
 // Sampled squeezes: the step the engine accepts after one step (stableDt's
-// combined, with the contacts as they are) is never above the exact one.
+// combined, with the contacts as they are) is never above the exact one
+// (largest ratio 0.928; with the piece-piece springs alone 6 of the 40 were
+// above it, up to 1.187x).
 TEST(StableStepWalls, NodesSqueezedBetweenAPieceAndTheFloor) {
     std::mt19937_64 g(31);
     double worst = 0;
@@ -160,7 +162,10 @@ TEST(StableStepWalls, NodesSqueezedBetweenAPieceAndTheFloor) {
 
 // A squeeze run at a step between the exact limit and the one the
 // piece-piece springs alone give: the run stops in its first step, naming
-// the node and the step that would do, instead of blowing up.
+// the node and the step that would do, instead of blowing up.  (With the
+// piece-piece springs alone the reported step was 0.0005995 s against the
+// exact 0.0005391 s; at 0.0005661 s the cubes, at rest, reached 90.7 m/s in
+// two steps and the depth check named a piece sunk into the other.)
 TEST(StableStepWalls, ARunBetweenThePieceOnlyAndTheTrueLimitStops) {
     std::mt19937_64 g(31);
     Squeeze q;
