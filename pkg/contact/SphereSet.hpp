@@ -64,6 +64,7 @@ struct SphereSet {
     std::vector<uint8_t> pieceUsed;      // per piece: some sphere may touch it
     std::vector<uint8_t> triCurrent;     // per surface triangle: its nodes are current here (MPI)
     std::vector<std::vector<double>> threadForce;  // per thread, 3 per surface node
+    std::vector<std::vector<double>> threadLoad;   // per thread, 2 per surface node (ContactLoad.hpp)
 
     int32_t size() const { return static_cast<int32_t>(id.size()); }
 };

@@ -16,6 +16,8 @@
 #include "../core/Format.hpp"
 #include "../step/AwakeSet.hpp"
 #include "ContactKind.hpp"
+#include "ContactLoad.hpp"
+#include "ObstacleCrushCheck.hpp"
 #include "ObstaclePhase.hpp"
 
 namespace qdem {
@@ -88,11 +90,12 @@ struct ObstaclePhase::NodePass {
     double* react;  // per (piece, obstacle) pair, 6 each
     double* pe;     // per piece energies (nullptr: energy not tracked)
     double* dyn;    // per (piece, obstacle) pair, kDyn each (nullptr: no dynamic obstacle)
+    double* load;   // each surface node's contact springs (ContactForces::load; a node is one thread's)
     EnergyTally tally;
     double eBound = 0;
     long nWall = 0;
 
-    NodePass(ObstaclePhase& ph, double dt, int th, std::size_t reactStride, std::size_t dynStride)
+    NodePass(ObstaclePhase& ph, double dt, int th, std::size_t reactStride, std::size_t dynStride, double* loadRows)
         : surfNodes(ph.w_.surfNodes.data()),
           nodePiece(ph.w_.nodePiece.data()),
           X(ph.w_.pos.data()),
@@ -117,7 +120,8 @@ struct ObstaclePhase::NodePass {
           deepest(&ph.threadDeepest_[th]),
           react(ph.threadReaction_.data() + static_cast<std::size_t>(th) * reactStride),
           pe(energyOn ? ph.w_.threadPieceEnergy[th].data() : nullptr),
-          dyn(dynStride ? ph.threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr) {}
+          dyn(dynStride ? ph.threadDynamic_.data() + static_cast<std::size_t>(th) * dynStride : nullptr),
+          load(loadRows) {}
 
     struct Touch {
         int j, slot;
@@ -262,6 +266,7 @@ inline void ObstaclePhase::NodePass::node(int32_t s) {
             *deepest = Deepest{hit.overlap / m.radius, pieceObstacles[j], static_cast<int>(ip)};
         ++nWall;
         fNode += r.force;
+        addObstacleContactLoad(load, s, M[node] * g, cp, loop.turns(pairConsts[j]));
         double* R = react + 6 * j;
         if (dyn && o.dynamic()) {
             // Its springs and dashpots on the obstacle's mobility at the
@@ -409,6 +414,7 @@ std::array<double, 3> ObstaclePhase::contactPass(double dt, int nth) {
         for (int d = 0; d < 3; ++d) e = std::max(e, w_.bounds.hi[3 * ip + d] - w_.bounds.lo[3 * ip + d] - 2 * r);
         pieceExtent_[ip] = std::min(e, restDiagonal_[ip]);
     }
+    double* const load = w_.contacts.beginLoad();  // each node's springs: the run-time stable step (ContactLoad.hpp)
     threadThrough_.assign(nth, Through{});
     threadDeepest_.assign(nth, Deepest{});
     long nWall = 0;
@@ -416,7 +422,7 @@ std::array<double, 3> ObstaclePhase::contactPass(double dt, int nth) {
 #pragma omp parallel num_threads(nth) reduction(+ : nWall)
     {
         const int th = omp_get_thread_num();
-        NodePass pass(*this, dt, th, reactStride, dynStride);
+        NodePass pass(*this, dt, th, reactStride, dynStride, load);
         // Halves of the surface nodes, as the contact sums and the
         // integration split them: each thread meets the force lines it will
         // touch again.  (Chunks dealt round-robin balanced scenes whose floor
@@ -462,6 +468,9 @@ void ObstaclePhase::finishStep(double dt, int nth, const std::array<double, 3>& 
                 deep |= o.sense * x[3 * static_cast<std::size_t>(n)] < limit;
             if (deep) reportCrushedThrough(w_, ip, pieceObstacles_[j], pairConst_[j], pieceExtent_[ip]);
         }
+    // Inner nodes through a box, facet or two-sided wall: the same, where no
+    // depth says it (ObstacleCrushCheck.cpp).
+    checkInnerNodesThrough(w_, pieceObstacles_, pieceObstacleBegin_, pairConst_, surfaceNode_, dt);
     if (dynStride) checkDynamicObstacles(dt, dynStride);
     pairReaction_.assign(6 * nPairs, 0.0);
     for (int th = 0; th < nth; ++th)

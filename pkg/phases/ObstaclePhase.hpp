@@ -139,6 +139,7 @@ private:
     void finishStep(double dt, int nth, const std::array<double, 3>& energySum);
     std::vector<double> pieceExtent_;     // per piece: its largest extent (this step)
     std::vector<double> restDiagonal_;    // per piece: its rest shape's bounding-box diagonal (piecesAdded)
+    std::vector<uint8_t> surfaceNode_;    // per node: on the surface (checkInnerNodesThrough)
     void measureRestShapes();
 
     Data w_;

@@ -130,11 +130,6 @@ void PieceContactPhase::run(double dt) {
     maxOverlap_ = maxDepthRatio_ = 0;
     stepLimit_ = ContactStepLimit{};
     const std::size_t np = w_.pieces.size();
-    // Under MPI the loads travel with the forces whenever contacts may be:
-    // decided alike on every rank (the messages' sizes depend on it), zero
-    // where this rank sums none.
-    loadsSummed_ = w_.domain.built() && np >= 2 && anyKindOn();
-    if (loadsSummed_) nodeLoad_.assign(2 * w_.surfNodes.size(), 0.0);
     noteSleepChanges();
     std::fill(frozen_.begin(), frozen_.end(), 0);
     if (np < 2 || !anyKindOn()) {  // no contacts: no overlap to refuse either
@@ -166,13 +161,12 @@ void PieceContactPhase::run(double dt) {
     finishStartCheck();
     for (const DeepContact& d : threadDeep_) maxDepthRatio_ = std::max(maxDepthRatio_, d.ratio);
     if (maxDepthRatio_ > 1) checkContactDepth(dt);
-    sumForces(dt, ks);
+    sumForces(ks);
 }
 
 // The thread buffers summed into the node contact forces, with each node's
 // contact load and its stable step; the step's tallies booked.
-void PieceContactPhase::sumForces(double dt, const KindStep& ks) {
-    const std::size_t np = w_.pieces.size();
+void PieceContactPhase::sumForces(const KindStep& ks) {
     const Domain* dom = w_.domain.built();
     const bool all = w_.sleeping.everything();
     const int nth = static_cast<int>(st_.threadForce.size());
@@ -187,54 +181,27 @@ void PieceContactPhase::sumForces(double dt, const KindStep& ks) {
     const int32_t* surfNodes = w_.surfNodes.data();
     const int32_t* summedIds = summed.data();
     const double* const* tf = st_.threadForceData.data();
-    // With the forces, each node's contact load (ContactLoad.hpp) and its
-    // stable step with its piece's elements: the leapfrog condition
-    // 1 - dt/2 (beta w_e^2 + C/m) - dt^2/4 (w_e^2 + K/m) > 0 on that node
-    // (doc/formulation.md, "Piece-piece contacts as they are").
+    // With the forces, each node's contact load (ContactLoad.hpp), added to
+    // the obstacles' on it; its stable step is taken once the spheres' are
+    // in too (contactStepLimit; under MPI by the owners, ownedStepLimit).
     const double* const* tl = st_.threadLoadData.data();
-    const double* M = w_.mass.data();
     const int32_t* nodePiece = w_.nodePiece.data();
-    const bool measure = w_.pieceElementW2.size() == np && w_.pieceElementRate.size() == np;
-    const double* w2e = w_.pieceElementW2.data();
-    const double* rateE = w_.pieceElementRate.data();
-    ContactStepLimit best;
-    // Under MPI the loads are kept for their owners (mpiNodeLoad) instead.
-    double* const L = loadsSummed_ ? nodeLoad_.data() : nullptr;
-#pragma omp parallel num_threads(nth)
-    {
-        ContactStepLimit mine;
-#pragma omp for schedule(static) nowait
-        for (int32_t j = 0; j < ns; ++j) {
-            const int32_t s = all ? j : summedIds[j];
-            const int32_t node = surfNodes[s];
-            double* f = Fc + 3 * node;
-            double k = 0, c = 0;
-            for (int th = 0; th < nth; ++th) {
-                for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
-                k += tl[th][2 * s], c += tl[th][2 * s + 1];
-            }
-            if (L) {
-                // (A sleeping piece's rows are neither zeroed nor moved: serially
-                // only awake nodes are summed, so only theirs count here too.)
-                const bool awake = all || !w_.sleeping.asleep(static_cast<std::size_t>(nodePiece[node]));
-                L[2 * s] = awake ? k : 0.0, L[2 * s + 1] = awake ? c : 0.0;
-                continue;
-            }
-            if (!(k > 0) || !measure) continue;
-            const int32_t p = nodePiece[node];
-            const double w2 = w2e[p] + k / M[node], w = std::sqrt(w2);
-            const double limit = leapfrogLimit(w, (rateE[p] + c / M[node]) / (2 * w));
-            if (limit < mine.limit) mine = ContactStepLimit{limit, node, p, k, c, w_.iter};
+    double* const L = w_.contacts.beginLoad();
+#pragma omp parallel for schedule(static) num_threads(nth)
+    for (int32_t j = 0; j < ns; ++j) {
+        const int32_t s = all ? j : summedIds[j];
+        const int32_t node = surfNodes[s];
+        double* f = Fc + 3 * node;
+        double k = 0, c = 0;
+        for (int th = 0; th < nth; ++th) {
+            for (int d = 0; d < 3; ++d) f[d] += tf[th][3 * s + d];
+            k += tl[th][2 * s], c += tl[th][2 * s + 1];
         }
-#pragma omp critical(qdemContactStepLimit)
-        if (mine.limit < best.limit || (mine.limit == best.limit && mine.node < best.node)) best = mine;
+        // (A sleeping piece's rows are neither zeroed nor moved: serially
+        // only awake nodes are summed, so only theirs count under MPI too.)
+        if (all || !w_.sleeping.asleep(static_cast<std::size_t>(nodePiece[node]))) L[2 * s] += k, L[2 * s + 1] += c;
     }
-    // Under MPI a rank holds only its share of a node's load: the limit is
-    // taken by the owners once the shares are summed (ownedStepLimit), the
-    // stop by every rank at the step's end (World::step).
-    stepLimit_ = dom ? ContactStepLimit{} : best;
     sumSeconds_ = omp_get_wtime() - tSum;
-    if (stepLimit_.limit < dt) checkStepLimit(dt);
     maxOverlap_ = ks.maxOverlap;
     const double eDamp = ks.eDamp, eSlip = ks.eSlip;
     if (w_.settings.trackEnergy) {  // (the elastic energy is summed per piece)
@@ -262,12 +229,12 @@ double PieceContactPhase::nodeStepLimit(int32_t node, double k, double c) const 
 void PieceContactPhase::ownedStepLimit() {
     stepLimit_ = ContactStepLimit{};
     const Domain* dom = w_.domain.built();
-    if (!loadsSummed_ || !dom) return;
+    if (!w_.contacts.loadActive || !dom) return;
     ContactStepLimit& best = stepLimit_;
     for (const int32_t s : dom->currentSurf()) {
         const int32_t node = w_.surfNodes[s];
-        const double k = nodeLoad_[2 * s], c = nodeLoad_[2 * s + 1];
-        if (!(k > 0) || !dom->owns(node)) continue;
+        const double k = w_.contacts.load[2 * s], c = w_.contacts.load[2 * s + 1];
+        if (!(k > 0) || !dom->owns(node) || w_.sleeping.asleep(static_cast<std::size_t>(w_.nodePiece[node]))) continue;
         const double limit = nodeStepLimit(node, k, c);
         if (limit < best.limit || (limit == best.limit && node < best.node))
             best = ContactStepLimit{limit, node, w_.nodePiece[node], k, c, w_.iter};
@@ -298,13 +265,13 @@ void PieceContactPhase::checkStepLimit(double dt) const {
     const ContactStepLimit& l = stepLimit_;
     const double m = w_.mass[l.node];
     throw StabilityError(cat(
-        "QDEM: during step ", l.step + 1, " the piece-piece contacts on node ", l.node - w_.pieces[l.piece].nodeBegin,
+        "QDEM: during step ", l.step + 1, " the contacts on node ", l.node - w_.pieces[l.piece].nodeBegin,
         " of piece ", l.piece, " make its stable time step ", l.limit, " s, below O.dt = ", dt, " s by a factor ",
-        dt / l.limit, ": the springs on it, as a node pressed on the other piece and as a corner of the faces the "
-        "other piece's nodes press on, load it with ", l.stiffness, " N/m on its ", m, " kg (with its elements' ",
-        std::sqrt(w_.pieceElementW2[l.piece]), " rad/s). The stable step before the run counts one contact per "
-        "node (doc/formulation.md, \"Stable time step\"). Lower O.dt below ", l.limit,
-        " s, or make the contact softer (a smaller QdemMat young or radius)."));
+        dt / l.limit, ": the springs on it, as a node pressed on another piece, a wall, box or facet, and as a "
+        "corner of the faces other pieces' nodes and YADE spheres press on, load it with ", l.stiffness,
+        " N/m on its ", m, " kg (with its elements' ", std::sqrt(w_.pieceElementW2[l.piece]),
+        " rad/s). The stable step before the run counts one contact per node (doc/formulation.md, \"Stable time "
+        "step\"). Lower O.dt below ", l.limit, " s, or make the contact softer (a smaller QdemMat young or radius)."));
 }
 
 void PieceContactPhase::piecesAdded() {

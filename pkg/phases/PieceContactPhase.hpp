@@ -45,21 +45,25 @@ public:
     // behind).  Above 1 the run stops (checkContactDepth).
     double maxDepthRatio() const { return maxDepthRatio_; }
     // The stable step of the last step's contacts as they act on each node
-    // with its piece's elements (ContactLoad.hpp); infinite when none.  A step
-    // whose contacts make it below dt stops the run (StabilityError).
+    // with its piece's elements (ContactLoad.hpp): piece-piece contacts, and
+    // the walls, boxes, facets and YADE spheres on the same nodes
+    // (ContactForces::load, which every contact phase adds to); infinite
+    // when none.  A step whose contacts make it below dt stops the run
+    // (StabilityError).
     const ContactStepLimit& stepLimit() const { return stepLimit_; }
     // Refuses the step when stepLimit() is below dt (StabilityError naming
     // the node, its piece, its load and the fix).
     void checkStepLimit(double dt) const;
+    // Serially, after the contact phases (World::step): the smallest limit
+    // over the awake surface nodes' loads, refused below dt.
+    void contactStepLimit(double dt);
     // Under MPI a rank sums only the contacts it computed: its share of each
-    // current surface node's load.  This step's shares (2 per surface node:
-    // stiffness, dashpot; null when the contacts summed none) go with the
-    // forces to the nodes' owners (Domain::returnGhostForces), which add them
-    // to their rows; then ownedStepLimit() takes this rank's smallest limit
-    // over the nodes it owns, and the end-of-step reduction carries every
-    // rank's (packStepLimit, kLimitValues per rank, no message of its own),
-    // so every rank holds, reports and stops on the same node.
-    double* mpiNodeLoad() { return loadsSummed_ ? nodeLoad_.data() : nullptr; }
+    // current surface node's load.  Its shares go with the forces to the
+    // nodes' owners (Domain::returnGhostForces), which add them to their
+    // rows; then ownedStepLimit() takes this rank's smallest limit over the
+    // nodes it owns, and the end-of-step reduction carries every rank's
+    // (packStepLimit, kLimitValues per rank, no message of its own), so
+    // every rank holds, reports and stops on the same node.
     void ownedStepLimit();
     static constexpr int kLimitValues = 6;
     void packStepLimit(double* v, int rank) const;
@@ -163,7 +167,7 @@ private:
     PieceContactState st_;
     PieceBroadPhase broad_;  // fills st_ (after it: constructed with it)
     // After the kinds: the thread buffers into the nodes' forces and loads.
-    void sumForces(double dt, const KindStep& ks);
+    void sumForces(const KindStep& ks);
     // Fills st_.surfSpin for this step (SurfaceSpin.hpp); its time and nodes.
     void surfaceSpins();
     double spinSeconds_ = 0;
@@ -174,8 +178,6 @@ private:
     // The stable step of a node with contact load k [N/m], c [N s/m] and its
     // piece's elements (infinite when the element modes are not measured).
     double nodeStepLimit(int32_t node, double k, double c) const;
-    std::vector<double> nodeLoad_;  // under MPI: 2 per surface node (mpiNodeLoad)
-    bool loadsSummed_ = false;
     // Is a contact of pieces pa, pb past its reach judged by the per-step
     // check?  Not while the start check judges the pair (a new piece), nor
     // for a pair the start check accepted interpenetrated (startOverlap_):

@@ -25,6 +25,7 @@
 #include "../parallel/Domain.hpp"
 #include "../step/WorldState.hpp"
 #include "ContactKind.hpp"
+#include "ContactLoad.hpp"
 #include "SpherePhase.hpp"
 
 namespace qdem {
@@ -361,6 +362,7 @@ void SpherePhase::run(double dt) {
     w_.contacts.begin();
     const int nth = omp_get_max_threads();
     if (static_cast<int>(S.threadForce.size()) != nth) S.threadForce.assign(nth, {});
+    if (static_cast<int>(S.threadLoad.size()) != nth) S.threadLoad.assign(nth, {});
     double eEl = 0, eDamp = 0, eSlip = 0;
     long count = 0;
     if (w_.settings.frictionOn) sphereContacts<true>(dt, eEl, eDamp, eSlip, count);
@@ -374,6 +376,7 @@ void SpherePhase::run(double dt) {
         for (int32_t s = s0; s < s1; ++s)
             for (int th = 0; th < nth; ++th)
                 for (int d = 0; d < 3; ++d) w_.contacts.force[3 * w_.surfNodes[s] + d] += S.threadForce[th][3 * s + d];
+        addThreadLoads(S.threadLoad, s0, s1, w_.contacts.beginLoad());  // (ContactLoad.hpp)
     }
     contacts_ = count;
     // Under MPI each rank holds only the pairs it computed: the sums come
@@ -449,7 +452,8 @@ void findTouches(const SpherePhase::Data& w, const SphereAt& s, int32_t pb, doub
 // history and energies (ContactLoop.hpp).  Returns how many.
 template <bool Friction>
 long pairContacts(const SpherePhase::Data& w, const ContactLoop<Friction>& loop, const SphereAt& s, int32_t q,
-                  bool overlap, double cosFeature, CandidateList& cl, bool* keep, double* buf, EnergyTally& tally) {
+                  bool overlap, double cosFeature, CandidateList& cl, bool* keep, double* buf, double* load,
+                  EnergyTally& tally) {
     SphereSet& S = w.spheres;
     const SurfaceIndex& surf = w.surface;
     constexpr int K = SphereSet::kSlots;
@@ -533,11 +537,16 @@ long pairContacts(const SpherePhase::Data& w, const ContactLoop<Friction>& loop,
         h.threshold = slot < 0 && touched ? 0.0 : pc.reach;
         h.handed = handed[k];
         newKey[news.n] = historyKey(c.tri - t0, c.cp.feature);
-        const ContactResult r = loop.touch(pc, g, h, news, &tally.elastic, &tally);
+        ContactParams prm;
+        const ContactResult r = loop.touch(pc, g, h, news, &tally.elastic, &tally, &prm);
         F += r.force;
         T += arm.cross(r.force);
         for (int j = 0; j < 3; ++j)
             if (c.cp.w[j] != 0) addTo(buf, surf.surfIndexOfNode[tn[j]], -c.cp.w[j] * r.force);
+        // The springs on the triangle's corners in their run-time load rows
+        // (ContactLoad.hpp; the ball's own side: StableDt's sphere part).
+        const int32_t si[3] = {surf.surfIndexOfNode[tn[0]], surf.surfIndexOfNode[tn[1]], surf.surfIndexOfNode[tn[2]]};
+        addSphereContactLoad(load, si, c.cp.w, mT, S.mass[i], prm, loop.turns(pc));
         ++count;
     }
     for (int k = 0; k < K; ++k) key[k] = k < news.n ? newKey[k] : -1;
@@ -608,6 +617,8 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
         std::vector<double>& bufv = S.threadForce[omp_get_thread_num()];
         bufv.assign(3 * nSurf, 0.0);  // capacity kept: allocates on growth only
         double* buf = bufv.data();
+        std::vector<double>& loadv = S.threadLoad[omp_get_thread_num()];
+        loadv.assign(2 * nSurf, 0.0);
         CandidateList cl;  // the one candidate policy (PointTriangle.hpp)
         bool keep[kCandidates];
         // Static chunks: a sphere goes to the same thread every run, so a given
@@ -633,7 +644,7 @@ void SpherePhase::sphereContacts(double dt, double& eEl, double& eDamp, double& 
                     if (!overlap) continue;  // no contact: unpackPairs clears it on every rank
                     if (!ownsPair(w_, *dom, s, pb, reach)) continue;
                 }
-                count += pairContacts<Friction>(w_, loop, s, q, overlap, cosFeature, cl, keep, buf, tally);
+                count += pairContacts<Friction>(w_, loop, s, q, overlap, cosFeature, cl, keep, buf, loadv.data(), tally);
             }
         }
         energyParts.set(omp_get_thread_num(), {tally.elastic, tally.damp, tally.slip});

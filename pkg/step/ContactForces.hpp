@@ -17,8 +17,20 @@ public:
         : pieces_(pieces), surfNodes_(surfNodes), sleeping_(sleeping) {}
     Column<double> force;  // 3 per node
     bool active = false;   // force holds this step's contacts (else the integration skips it)
+    // The contact springs and dashpots on each surface node this step, 2 per
+    // surface node (stiffness [N/m], dashpot [N s/m]; ContactLoad.hpp): the
+    // obstacle, piece-contact and sphere phases add their shares, the
+    // run-time stable step reads the sums (PieceContactPhase::stepLimit).
+    std::vector<double> load;
+    bool loadActive = false;  // load holds this step's shares (else it is stale)
     // A new step: nothing added yet.
-    void reset() { active = false; }
+    void reset() { active = loadActive = false; }
+    // Before the first share of a step: every row to zero (16 bytes per
+    // surface node, once per step).  Returns the rows.
+    double* beginLoad() {
+        if (!loadActive) load.assign(2 * surfNodes_.size(), 0.0), loadActive = true;
+        return load.data();
+    }
     // Before the first addition of a step: the awake pieces' surface nodes to
     // zero (a sleeping piece is not integrated: its forces are not read).
     void begin();

@@ -444,7 +444,7 @@ double World::pieceBeta(std::size_t i) const {
 // viscous operator is beta times the stiffness at rest; implicit: none).
 // O(pieces) a step; the frequencies themselves once per piece added.
 void World::refreshElementModes() {
-    if (pieces.size() < 2) return;  // no piece-piece contact
+    if (pieces.empty()) return;
     ensureElementOmegas();
     pieceElementW2_.resize(pieces.size());
     pieceElementRate_.resize(pieces.size());
@@ -544,7 +544,7 @@ StableDt World::stableDt() const {
         mode = std::min(mode, pc.limit);
         if (pc.limit < r.combined)
             r.combined = pc.limit,
-            r.limitedBy = cat("the piece-piece contacts on node ", r.pieceContactNode, " of piece ", pc.piece,
+            r.limitedBy = cat("the contacts on node ", r.pieceContactNode, " of piece ", pc.piece,
                               " (as they were in step ", pc.step + 1, ")");
     }
     return r;

@@ -94,13 +94,19 @@ void World::step(double dt) {
     refreshElementModes();  // (what the piece contacts' run-time step adds to)
     run(ph.pieceContact);
     run(ph.sphere);
+    // Every contact's springs on each node (ContactForces::load): the
+    // run-time stable step of the contacts as they are, serially here.
+    if (!domain_) ph.pieceContact.contactStepLimit(dt);
     run(ph.element);
     // Under MPI: partial forces on ghosts to their owners.
-    // The piece contacts' loads with them: the owners then hold each node's
-    // whole load and take their nodes' run-time stable step.
+    // The contacts' loads with them whenever contacts may be (decided alike
+    // on every rank: the messages' sizes depend on it): the owners then hold
+    // each node's whole load and take their nodes' run-time stable step.
     if (domain_) {
+        const bool loads = (pieces.size() >= 2 && ph.pieceContact.anyKindOn()) || !obstacles.empty() ||
+                           spheres.size() > 0;
         domain_->returnGhostForces(ph.element.layout(), contactForces_.force.data(), contactForces_.active,
-                                   ph.pieceContact.mpiNodeLoad());
+                                   loads ? contactForces_.beginLoad() : nullptr);
         ph.pieceContact.ownedStepLimit();
     }
     // Motion, the energy states of the step, the clock.

@@ -31,7 +31,7 @@ def test_contact_step_limit_and_stop_as_serial(P):
     # by their contacts as they are, and on every rank in the same step with
     # the same message.
     assert s["stop"]["stopped"], s["stop"]
-    assert "piece-piece contacts on node" in s["stop"]["message"]
+    assert "contacts on node" in s["stop"]["message"]
     for rank in r["perRank"]:
         st = rank["stop"]
         assert st["stopped"] and st["message"] == s["stop"]["message"], (st, s["stop"])

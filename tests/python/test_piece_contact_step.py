@@ -47,13 +47,13 @@ def test_a_pressed_pair_reports_the_limit_of_its_contacts():
     assert d["pieceContact"] < before["combined"] / 1.1
     assert d["combined"] == d["pieceContact"]
     assert d["combinedExplicit"] == d["pieceContact"]
-    assert "piece-piece contacts" in d["limitedBy"]
+    assert "contacts on node" in d["limitedBy"]
     assert d["pieceContactPiece"] in (0, 1) and d["pieceContactNode"] >= 0
 
 
 def test_a_step_above_the_contacts_limit_stops_naming_the_node():
     w, a, b = _pressedPair(0.05)
     before = w.stableDt()["combined"]
-    with pytest.raises(qdem.StabilityError, match=r"piece-piece contacts on node \d+ of piece [01] make its stable "
+    with pytest.raises(qdem.StabilityError, match=r"contacts on node \d+ of piece [01] make its stable "
                                                   r"time step .* Lower O.dt below"):
         w.core.step(0.99 * before, 1)
