@@ -32,9 +32,6 @@ std::vector<ContactKindRow>& table() {
          "4 slots per surface edge (owned by the lower piece): other piece, local edge, side, tangential spring, "
          "born-deep reference",
          &Settings::edgeEdgeOn, &make<EdgeEdgeKind>, RegisterFeatureEdges},
-        {"nodeSpringTest", "nothing (surface nodes of neighbour pieces, all pairs)",
-         "4 slots per surface node: other piece, its surface node, rest length", &Settings::nodeSpringTestOn,
-         &makeNodeSpringKind, RegisterNothing},
         {"wall", "YADE walls, boxes and facets near each piece (bounding boxes grown by the node radius)",
          "4 slots per surface node: YADE body id, side, tangential spring",
          &Settings::obstaclesOn, nullptr, RegisterNothing, ContactFamily::PieceObstacle},
@@ -42,6 +39,9 @@ std::vector<ContactKindRow>& table() {
          "triangles binned per step",
          "4 slots per (sphere, piece) pair: 8 x local triangle + feature, tangential spring, born-deep reference",
          &Settings::spheresOn, nullptr, RegisterNothing, ContactFamily::PieceSphere},
+        {"nodeSpringTest", "nothing (surface nodes of neighbour pieces, all pairs)",
+         "4 slots per surface node: other piece, its surface node, rest length", &Settings::nodeSpringTestOn,
+         &makeNodeSpringKind, RegisterNothing},
     };
     return rows;
 }

@@ -185,7 +185,7 @@ def test_meshsurface_refuses_a_plate_thinner_than_its_cells_at_once():
     import time
     t0 = time.time()
     with pytest.raises(ValueError, match=r"too thin for cellSize 0.1: parts of it are 0.001\d* thick .*need "
-                                         r"tetrahedra of about 0.0005.*Thicken those parts, or mesh a plate as "
+                                         r"tetrahedra of about 0.00033.*Thicken those parts, or mesh a plate as "
                                          r"qdem.boxMesh"):
         qdem.meshSurface((_CUBE_V * (1, 1, 1e-3), _CUBE_F), 0.1)
     with pytest.raises(ValueError, match=r"too thin for surfaceSize 0.1"):
