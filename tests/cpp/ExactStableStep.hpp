@@ -135,4 +135,15 @@ inline void assembleElements(const World& w, MatX& K, MatX& C) {
 // Adds k g g' to K for a constraint row g.
 inline void addSpring(MatX& K, const VecX& g, double k) { K += k * g * g.transpose(); }
 
+// A fixed floor under the scene: a one-sided wall facing +z at height z.
+inline void addFloor(World& w, double z) {
+    Obstacle floor;
+    floor.kind = ObstacleKind::Wall;
+    floor.axis = 2;
+    floor.sense = 1;
+    floor.pos = Eigen::Vector3d(0, 0, z);
+    floor.updateDerived();
+    w.setObstacles({floor});
+}
+
 }  // namespace qdem::exact_step

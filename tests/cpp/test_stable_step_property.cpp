@@ -195,13 +195,7 @@ TEST(StableStepProperty, PiecesOnARigidWall) {
         m.viscosity = trial % 2 ? 0.0 : std::pow(10.0, -1 + 3 * u(g));
         World w;
         w.addPiece(boxMesh(nc, nc, nc, 0.1, 0.1, 0.1, tpc), w.addMaterial(m));
-        Obstacle floor;
-        floor.kind = ObstacleKind::Wall;
-        floor.axis = 2;
-        floor.sense = 1;
-        floor.pos = Eigen::Vector3d(0, 0, -0.05 - 0.5 * m.radius);
-        floor.updateDerived();
-        w.setObstacles({floor});
+        addFloor(w, -0.05 - 0.5 * m.radius);
         const double reported = w.stableDt().combined;
         MatX K, C;
         assembleElements(w, K, C);

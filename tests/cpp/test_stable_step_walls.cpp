@@ -54,13 +54,7 @@ void build(World& w, const Squeeze& q) {
     TetMesh b = boxMesh(1, 1, 1, 0.1, 0.1, 0.1, q.tpc == 5 ? 6 : 5);
     for (std::size_t a = 0; a < b.nNodes(); ++a) b.nodes[3 * a] += 0.1 + q.radius, b.nodes[3 * a + 1] += q.dy;
     w.addPiece(b, mat);
-    Obstacle floor;
-    floor.kind = ObstacleKind::Wall;
-    floor.axis = 2;
-    floor.sense = 1;
-    floor.pos = Eigen::Vector3d(0, 0, -0.05 - 0.5 * q.radius);
-    floor.updateDerived();
-    w.setObstacles({floor});
+    addFloor(w, -0.05 - 0.5 * q.radius);
 }
 
 Eigen::Vector3d at(const World& w, int32_t a) { return Eigen::Vector3d(w.pos[3 * a], w.pos[3 * a + 1], w.pos[3 * a + 2]); }
